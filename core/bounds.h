@@ -1,0 +1,52 @@
+#pragma once
+/// Bounding volumes that clip quadric patches, and the per-quadric backface culling tests
+/// ([Stoll06] §4.4.4, eq. 17–19).
+#include <array>
+
+#include <Eigen/Core>
+
+#include "core/quadric.h"
+
+namespace quadrix {
+
+struct Sphere {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 1.0;
+  bool contains(const Eigen::Vector3d& p, double eps = 0.0) const {
+    return (p - centre).squaredNorm() <= (radius + eps) * (radius + eps);
+  }
+};
+
+/// Tetrahedron with inward face planes, precomputed for containment tests.
+class Tetrahedron {
+public:
+  explicit Tetrahedron(const std::array<Eigen::Vector3d, 4>& corners);
+  const std::array<Eigen::Vector3d, 4>& corners() const { return p_; }
+  /// Signed volume (positive when corners 1,2,3 are counter-clockwise seen from corner 0).
+  double signed_volume() const;
+  /// Barycentric coordinates of x.
+  Eigen::Vector4d barycentric(const Eigen::Vector3d& x) const;
+  /// True when every barycentric coordinate is ≥ −eps (eps relative: 1e-12 is a tight default).
+  bool contains(const Eigen::Vector3d& x, double eps = 1e-12) const;
+  /// Largest edge length.
+  double diameter() const;
+
+private:
+  std::array<Eigen::Vector3d, 4> p_;
+  Eigen::Matrix<double, 4, 4> inv_;  // maps (x,1) to barycentric coordinates
+};
+
+/// True when the tetrahedron is degenerate: |volume| ≤ rel_eps · diameter³.
+bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = 1e-12);
+
+/// Per-quadric backface test for a bounding sphere ([Stoll06] eq. 18): q_eye is the quadric in
+/// eye-at-origin coordinates (Quadric::translated_to_origin), centre_eye the sphere centre
+/// relative to the eye. True means no ray from the eye meets the quadric front-facing inside
+/// the sphere, so the patch may be culled: c′ < −c′ₛₚₕᵀb′ − r‖b′‖.
+bool sphere_backfacing(const Quadric& q_eye, const Eigen::Vector3d& centre_eye, double radius);
+
+/// Per-quadric backface test for a bounding tetrahedron ([Stoll06] eq. 19):
+/// c′ < −maxᵢ p′ᵢᵀb′ with corners relative to the eye.
+bool tetrahedron_backfacing(const Quadric& q_eye, const std::array<Eigen::Vector3d, 4>& corners_eye);
+
+}  // namespace quadrix

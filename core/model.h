@@ -1,0 +1,90 @@
+#pragma once
+/// Model: the primitive sets every Quadrix module shares (DESIGN §4).
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/quadric.h"
+
+namespace quadrix {
+
+/// 8-bit sRGB colour.
+using Rgb = std::array<std::uint8_t, 3>;
+
+/// Clip plane in a primitive's local frame: points with nᵀu + d ≥ 0 are kept.
+struct ClipPlane {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  double d = 0.0;
+  bool keeps(const Eigen::Vector3d& u) const { return n.dot(u) + d >= 0.0; }
+};
+
+/// One SLIM patch (Ohtake et al. 2005): a ball (centre, support radius R) and a quadric g
+/// written in local coordinates u = (x − centre) / R, so ‖u‖ ≤ 1 inside the ball.
+/// The surface is the per-ray blend of the patches (core/slim.h).
+struct SlimPatch {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< world units
+  double radius = 1.0;                               ///< support radius R, world units, > 0
+  Quadric local;                                     ///< g(u), u = (x − centre)/R
+  std::optional<ClipPlane> clip;                     ///< sharp features: in local u coordinates
+  std::optional<Rgb> colour;
+  /// The patch's quadric in world coordinates.
+  Quadric world() const { return local.from_local(centre, radius); }
+};
+
+/// A quadric clipped by a tetrahedron ([Stoll06] §5): converted quads, skin and volume cells.
+struct TetPatch {
+  std::array<Eigen::Vector3d, 4> corners;  ///< world units
+  Quadric quadric;                         ///< world coordinates
+  std::optional<Rgb> colour;
+};
+
+enum class GlyphKind : std::uint8_t { sphere = 0, ellipsoid = 1, cylinder = 2 };
+
+/// [Sigg06] glyphs. sphere: centre, radius. ellipsoid: centre and three semi-axis vectors
+/// (the columns of axes). cylinder: centre, radius, axes.col(0) = half the axis (end caps at
+/// centre ± axes.col(0)), closed by flat discs.
+struct Glyph {
+  GlyphKind kind = GlyphKind::sphere;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 1.0;
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  std::optional<Rgb> colour;
+};
+
+/// Axis-aligned box; empty when min > max.
+struct Box3 {
+  Eigen::Vector3d min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d max = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  bool empty() const { return (min.array() > max.array()).any(); }
+  void extend(const Eigen::Vector3d& p) { min = min.cwiseMin(p); max = max.cwiseMax(p); }
+  void extend(const Box3& o) { min = min.cwiseMin(o.min); max = max.cwiseMax(o.max); }
+  Eigen::Vector3d centre() const { return 0.5 * (min + max); }
+  double diagonal() const { return empty() ? 0.0 : (max - min).norm(); }
+};
+
+/// Everything a .qxm file holds.
+struct Model {
+  std::vector<SlimPatch> slims;
+  std::vector<TetPatch> tets;
+  std::vector<Glyph> glyphs;
+  /// Header metadata (`comment key value` lines): producer, units, max_error, …
+  std::map<std::string, std::string> metadata;
+
+  std::size_t size() const { return slims.size() + tets.size() + glyphs.size(); }
+  bool empty() const { return size() == 0; }
+};
+
+/// Bounds of one primitive's bounding volume (ball, tetrahedron, glyph extent).
+Box3 bounds(const SlimPatch& s);
+Box3 bounds(const TetPatch& t);
+Box3 bounds(const Glyph& g);
+/// Bounds of the whole model (empty box for an empty model).
+Box3 bounds(const Model& m);
+
+}  // namespace quadrix

@@ -1,0 +1,73 @@
+#pragma once
+/// The CPU reference ray caster (double, TBB-parallel): the truth every renderer test compares
+/// with. Per pixel, the nearest hit over tetrahedron patches and glyphs, and the per-ray SLIM
+/// blend ([Stoll06] §5.1.1, DESIGN §2, §6), through a BVH over all primitives.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/model.h"
+#include "core/slim.h"
+
+namespace quadrix {
+
+enum class PrimitiveKind : std::uint8_t { none = 0, slim = 1, tet = 2, glyph = 3 };
+
+/// What a ray sees first.
+struct SurfaceHit {
+  double t = 0;                                      ///< distance along the ray (unit dir)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit, facing the viewer
+  PrimitiveKind kind = PrimitiveKind::none;
+  int index = -1;                                    ///< into the model's vector of that kind
+  Rgb colour{200, 200, 200};
+};
+
+struct TraceOptions {
+  bool cull_backfaces = true;  ///< per-fragment culling: front-facing roots only ([Stoll06] eq. 14)
+  SlimBlendOptions slim;
+};
+
+/// A model prepared for ray queries (BVH built once; thread-safe const queries).
+class ReferenceScene {
+public:
+  explicit ReferenceScene(const Model& model);
+  ~ReferenceScene();
+  ReferenceScene(ReferenceScene&&) noexcept;
+  ReferenceScene& operator=(ReferenceScene&&) noexcept;
+
+  /// Nearest surface along the ray within (tmin, tmax). The model must outlive the scene.
+  std::optional<SurfaceHit> trace(const Ray& ray, double tmin, double tmax, const TraceOptions& options) const;
+  const Model& model() const;
+  std::size_t bvh_node_count() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Per-pixel buffers, row-major, row 0 at the top.
+struct ReferenceImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> coverage;  ///< 1 where a surface was hit
+  std::vector<float> depth;            ///< eye-space depth (distance along the view axis); +inf background
+  std::vector<float> distance;         ///< distance from the eye along the ray; +inf background
+  std::vector<Eigen::Vector3f> normal;  ///< unit world-space normal facing the viewer; 0 background
+  std::vector<std::int32_t> primitive; ///< index encoded as kind·2²⁸ + index; −1 background
+  std::vector<Rgb> albedo;             ///< primitive colour
+};
+
+struct ReferenceRenderOptions {
+  TraceOptions trace;
+  /// Called with the fraction done (0..1) from worker threads at most every few rows.
+  std::function<void(double)> progress;
+};
+
+/// Renders every pixel of the camera (TBB-parallel over rows).
+ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camera,
+                                const ReferenceRenderOptions& options = {});
+
+}  // namespace quadrix
