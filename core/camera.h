@@ -23,8 +23,8 @@ struct Camera {
   Eigen::Matrix4d view() const;
   /// OpenGL projection (clip z in [−w, w] between near and far).
   Eigen::Matrix4d projection() const;
-  /// Primary ray through the centre of pixel (px, py), py = 0 at the top row; dir has unit
-  /// length, so t is the distance from the eye.
+  /// Primary ray through image point (px, py) in pixels, y down from the top edge; pixel (i, j)
+  /// has its centre at (i + ½, j + ½). dir has unit length, so t is the distance from the eye.
   Ray pixel_ray(double px, double py) const;
   /// Unit viewing direction.
   Eigen::Vector3d forward() const { return (target - eye).normalized(); }

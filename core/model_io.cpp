@@ -1,1 +1,421 @@
-// placeholder: being written
+#include "core/model_io.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+
+#include <Eigen/LU>
+#include <fmt/format.h>
+
+#include "core/atomic_file.h"
+#include "core/bounds.h"
+#include "core/error.h"
+#include "core/ply.h"
+
+namespace quadrix {
+namespace {
+
+constexpr std::array<const char*, 10> kCoefficientNames = {"k_xx", "k_yy", "k_zz", "k_xy", "k_yz",
+                                                           "k_zx", "k_x",  "k_y",  "k_z",  "k_1"};
+constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_nz", "clip_d"};
+constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
+constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
+                                                      "x2", "y2", "z2", "x3", "y3", "z3"};
+constexpr std::array<const char*, 9> kAxisNames = {"a0x", "a0y", "a0z", "a1x", "a1y", "a1z", "a2x", "a2y", "a2z"};
+
+std::vector<std::string> names(std::initializer_list<std::span<const char* const>> groups) {
+  std::vector<std::string> out;
+  for (const auto& g : groups)
+    for (const char* n : g) out.emplace_back(n);
+  return out;
+}
+
+bool has_whitespace(std::string_view s) {
+  return std::any_of(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c) != 0; });
+}
+
+std::string single_line(std::string v) {
+  for (char& c : v)
+    if (c == '\n' || c == '\r') c = ' ';
+  return v;
+}
+
+// ---------------------------------------------------------------- writer
+
+void check_finite(bool ok, std::string_view what, std::size_t i, const std::filesystem::path& path) {
+  if (!ok) throw InvalidInput(fmt::format("{}: cannot write {} {}: it holds non-finite values", path.string(), what, i));
+}
+
+void append_doubles(std::string& out, std::initializer_list<double> vs) {
+  for (double v : vs) ply::append_le(out, ply::Type::float64, v);
+}
+
+void append_colour(std::string& out, const std::optional<Rgb>& c) {
+  const Rgb rgb = c.value_or(Rgb{0, 0, 0});
+  for (auto v : rgb) out.push_back(static_cast<char>(v));
+}
+
+ply::Element element(std::string name, std::size_t count, const std::vector<std::string>& doubles, bool colour,
+                     bool glyph_kind = false) {
+  ply::Element e;
+  e.name = std::move(name);
+  e.count = count;
+  if (glyph_kind) e.properties.push_back({"kind", ply::Type::uint8});
+  for (const auto& n : doubles) e.properties.push_back({n, ply::Type::float64});
+  if (colour)
+    for (const char* n : kColourNames) e.properties.push_back({n, ply::Type::uint8});
+  return e;
+}
+
+// ---------------------------------------------------------------- reader
+
+/// Access to one table's columns by name with optional groups and per-value error messages.
+class Rows {
+public:
+  Rows(const ply::File& file, const ply::Table& table) : file_(file), t_(table) {}
+  std::size_t size() const { return t_.rows; }
+  double get(std::size_t row, std::size_t col) const { return t_(row, col); }
+  [[noreturn]] void fail(std::size_t row, std::size_t col, std::string_view what) const {
+    throw FormatError(file_.message(t_.element, static_cast<std::int64_t>(row), t_.properties[col],
+                                    t_.byte_offset(row, col), what));
+  }
+  [[noreturn]] void fail_row(std::size_t row, std::string_view what) const {
+    throw FormatError(file_.message(t_.element, static_cast<std::int64_t>(row), {}, t_.byte_offset(row, 0), what));
+  }
+  /// Reads a finite value.
+  double finite(std::size_t row, std::size_t col) const {
+    const double v = t_(row, col);
+    if (!std::isfinite(v)) fail(row, col, fmt::format("value {} is not finite", v));
+    return v;
+  }
+  Eigen::Vector3d vec3(std::size_t row, std::size_t col) const {
+    return {finite(row, col), finite(row, col + 1), finite(row, col + 2)};
+  }
+  QuadricCoefficients coefficients(std::size_t row, std::size_t col) const {
+    QuadricCoefficients k;
+    for (std::size_t i = 0; i < 10; ++i) k[i] = finite(row, col + i);
+    return k;
+  }
+  Rgb colour(std::size_t row, std::size_t col) const {
+    Rgb c;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double v = finite(row, col + i);
+      if (v < 0 || v > 255 || v != std::floor(v)) fail(row, col + i, fmt::format("colour value {} is not in 0..255", v));
+      c[i] = static_cast<std::uint8_t>(v);
+    }
+    return c;
+  }
+
+private:
+  const ply::File& file_;
+  const ply::Table& t_;
+};
+
+/// Whether element e has all of the names (true), none (false); a partial group is an error.
+bool optional_group(const ply::File& f, const ply::Element& e, std::span<const char* const> group) {
+  std::size_t found = 0;
+  for (const char* n : group) found += e.find(n) >= 0;
+  if (found == 0) return false;
+  if (found == group.size()) return true;
+  for (const char* n : group)
+    if (e.find(n) < 0)
+      throw FormatError(f.message(e.name, -1, n, ply::kNoByte, "property missing from an optional group (all or none must be present)"));
+  return true;
+}
+
+std::vector<std::string> required(const ply::File& f, const ply::Element& e, std::vector<std::string> props) {
+  for (const auto& p : props)
+    if (e.find(p) < 0) throw FormatError(f.message(e.name, -1, p, ply::kNoByte, "required property is missing from the header"));
+  return props;
+}
+
+Model read_qxm(const ply::File& f) {
+  const ply::Header& h = f.header();
+  Model model;
+  // Format version and metadata from the comments.
+  bool has_version = false;
+  for (const auto& c : h.comments) {
+    const std::size_t sp = std::min(c.find_first_of(" \t"), c.size());
+    const std::string key = c.substr(0, sp);
+    std::string value = c.substr(std::min(c.find_first_not_of(" \t", sp), c.size()));
+    if (key.empty()) continue;
+    if (key == "quadrix-format") {
+      int version = 0;
+      const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), version);
+      if (ec != std::errc() || end != value.data() + value.size())
+        throw FormatError(f.message({}, -1, {}, ply::kNoByte, fmt::format("bad 'comment quadrix-format {}' line", value)));
+      if (version < 1 || version > kQxmFormatVersion)
+        throw FormatError(f.message({}, -1, {}, ply::kNoByte,
+                                    fmt::format("unsupported quadrix-format {} (this build reads 1..{})", version,
+                                                kQxmFormatVersion)));
+      has_version = true;
+      continue;
+    }
+    model.metadata[key] = std::move(value);
+  }
+  if (!has_version) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "not a .qxm file (no 'comment quadrix-format' line)"));
+
+  // Which elements and optional groups are present.
+  const ply::Element* es = h.find("slim");
+  const ply::Element* et = h.find("tet");
+  const ply::Element* eg = h.find("glyph");
+  if (!es && !et && !eg) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "no element 'slim', 'tet' or 'glyph'"));
+
+  std::vector<ply::Request> requests;
+  bool slim_clip = false, slim_colour = false, tet_colour = false, glyph_colour = false;
+  int is = -1, it = -1, ig = -1;
+  if (es) {
+    slim_clip = optional_group(f, *es, kClipNames);
+    slim_colour = optional_group(f, *es, kColourNames);
+    auto props = required(f, *es, names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames}));
+    if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+    if (slim_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+    is = static_cast<int>(requests.size());
+    requests.push_back({"slim", std::move(props)});
+  }
+  if (et) {
+    tet_colour = optional_group(f, *et, kColourNames);
+    auto props = required(f, *et, names({kCornerNames, kCoefficientNames}));
+    if (tet_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+    it = static_cast<int>(requests.size());
+    requests.push_back({"tet", std::move(props)});
+  }
+  if (eg) {
+    glyph_colour = optional_group(f, *eg, kColourNames);
+    auto props = required(f, *eg, names({std::span<const char* const>(std::array<const char*, 5>{"kind", "x", "y", "z", "radius"}), kAxisNames}));
+    if (glyph_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+    ig = static_cast<int>(requests.size());
+    requests.push_back({"glyph", std::move(props)});
+  }
+
+  const std::vector<ply::Table> tables = f.read(requests);
+
+  if (is >= 0) {
+    const Rows r(f, tables[is]);
+    model.slims.resize(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      SlimPatch& s = model.slims[i];
+      s.centre = r.vec3(i, 0);
+      s.radius = r.finite(i, 3);
+      if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
+      s.local = Quadric::from_coefficients(r.coefficients(i, 4));
+      std::size_t c = 14;
+      if (slim_clip) {
+        ClipPlane p;
+        p.n = r.vec3(i, c);
+        p.d = r.finite(i, c + 3);
+        if (p.n != Eigen::Vector3d::Zero()) s.clip = p;
+        c += 4;
+      }
+      if (slim_colour) s.colour = r.colour(i, c);
+    }
+  }
+  if (it >= 0) {
+    const Rows r(f, tables[it]);
+    model.tets.resize(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      TetPatch& t = model.tets[i];
+      for (std::size_t k = 0; k < 4; ++k) t.corners[k] = r.vec3(i, 3 * k);
+      t.quadric = Quadric::from_coefficients(r.coefficients(i, 12));
+      if (is_degenerate_tetrahedron(t.corners)) r.fail_row(i, "degenerate tetrahedron (zero volume)");
+      if (tet_colour) t.colour = r.colour(i, 22);
+    }
+  }
+  if (ig >= 0) {
+    const Rows r(f, tables[ig]);
+    model.glyphs.resize(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      Glyph& g = model.glyphs[i];
+      const double kind = r.get(i, 0);
+      if (kind != 0 && kind != 1 && kind != 2)
+        r.fail(i, 0, fmt::format("glyph kind {} is not 0 (sphere), 1 (ellipsoid) or 2 (cylinder)", kind));
+      g.kind = static_cast<GlyphKind>(static_cast<int>(kind));
+      g.centre = r.vec3(i, 1);
+      g.radius = r.finite(i, 4);
+      for (std::size_t k = 0; k < 3; ++k) g.axes.col(static_cast<Eigen::Index>(k)) = r.vec3(i, 5 + 3 * k);
+      if (g.kind != GlyphKind::ellipsoid && !(g.radius > 0))
+        r.fail(i, 4, fmt::format("value {} must be > 0", g.radius));
+      if (g.kind == GlyphKind::ellipsoid && !(std::abs(g.axes.determinant()) > 0))
+        r.fail(i, 5, "degenerate ellipsoid axes (determinant 0)");
+      if (g.kind == GlyphKind::cylinder && g.axes.col(0) == Eigen::Vector3d::Zero())
+        r.fail(i, 5, "cylinder axis is zero");
+      if (glyph_colour) g.colour = r.colour(i, 14);
+    }
+  }
+  return model;
+}
+
+bool has_extension(const std::filesystem::path& p, std::string_view ext) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return e == ext;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(fmt::format("{}: cannot open for reading", path.string()));
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw IoError(fmt::format("{}: read failed", path.string()));
+  return bytes;
+}
+
+template <class T>
+T load_le(const std::string& b, std::size_t at) {
+  T v;
+  std::memcpy(&v, b.data() + at, sizeof(T));
+  return v;
+}
+
+bool looks_like_slim2t(const std::string& b) {
+  if (b.size() < 12) return false;
+  const std::int32_t d = load_le<std::int32_t>(b, 0);
+  return d == 1 || d == 2 || d == -1 || d == -2;
+}
+
+Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
+  const std::string file = path.string();
+  auto fail = [&](std::int64_t ball, std::size_t byte, std::string_view what) -> void {
+    if (ball >= 0) throw FormatError(fmt::format("{}: ball {} at byte {}: {}", file, ball, byte, what));
+    throw FormatError(fmt::format("{}: at byte {}: {}", file, byte, what));
+  };
+  if (b.size() < 12) fail(-1, 0, fmt::format("truncated .slim2t header ({} bytes, 12 expected)", b.size()));
+  const std::int32_t degree = load_le<std::int32_t>(b, 0);
+  const std::int32_t nballs = load_le<std::int32_t>(b, 4);
+  const std::int32_t nuser = load_le<std::int32_t>(b, 8);
+  if (degree != 1 && degree != 2 && degree != -1 && degree != -2)
+    fail(-1, 0, fmt::format("degree {} is not ±1 or ±2 (not a .slim2t file?)", degree));
+  if (nballs < 0) fail(-1, 4, fmt::format("ball count {} is negative", nballs));
+  if (nuser < 0 || nuser >= 1024) fail(-1, 8, fmt::format("user value count {} is not in 0..1023", nuser));
+  const std::size_t stride = (15 + static_cast<std::size_t>(nuser)) * 4;
+  const std::size_t fits = (b.size() - 12) / stride;
+  if (static_cast<std::size_t>(nballs) > fits)
+    fail(static_cast<std::int64_t>(fits), 12 + fits * stride,
+         fmt::format("truncated: {} balls of {} bytes declared but only {} bytes follow the header", nballs, stride,
+                     b.size() - 12));
+
+  struct Ball {
+    Eigen::Vector3d centre;
+    QuadricCoefficients k;
+    double radius;
+  };
+  std::vector<Ball> balls(static_cast<std::size_t>(nballs));
+  std::vector<char> is_parent(static_cast<std::size_t>(nballs) + 1, 0);
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    const std::size_t at = 12 + i * stride;
+    auto value = [&](std::size_t j, std::string_view what) {
+      const double v = load_le<float>(b, at + 4 * j);
+      if (!std::isfinite(v)) fail(static_cast<std::int64_t>(i), at + 4 * j, fmt::format("{} value {} is not finite", what, v));
+      return v;
+    };
+    Ball& ball = balls[i];
+    for (std::size_t j = 0; j < 3; ++j) ball.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
+    for (std::size_t j = 0; j < 10; ++j) ball.k[j] = value(3 + j, "coefficient");
+    ball.radius = value(13, "radius");
+    if (!(ball.radius > 0)) fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", ball.radius));
+    const std::int32_t parent = load_le<std::int32_t>(b, at + 56);
+    if (parent < -1 || parent > nballs)
+      fail(static_cast<std::int64_t>(i), at + 56, fmt::format("parent id {} is not in [-1, {}]", parent, nballs));
+    if (parent > 0) is_parent[static_cast<std::size_t>(parent)] = 1;
+  }
+  Model model;
+  model.metadata["source_format"] = "slim2t";
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    if (is_parent[i + 1]) continue;  // ids are 1-based
+    SlimPatch s;
+    s.centre = balls[i].centre;
+    s.radius = balls[i].radius;
+    s.local = Quadric::from_coefficients(balls[i].k).to_local(Eigen::Vector3d::Zero(), s.radius);
+    model.slims.push_back(std::move(s));
+  }
+  return model;
+}
+
+}  // namespace
+
+Model read_model(const std::filesystem::path& path) {
+  if (has_extension(path, ".slim2t")) return read_slim2t(path);
+  std::string bytes = read_bytes(path);
+  if (!bytes.starts_with("ply") && looks_like_slim2t(bytes)) return parse_slim2t(bytes, path);
+  return read_qxm(ply::File::from_bytes(std::move(bytes), path));
+}
+
+Model read_slim2t(const std::filesystem::path& path) { return parse_slim2t(read_bytes(path), path); }
+
+void write_model(const Model& model, const std::filesystem::path& path) {
+  for (std::size_t i = 0; i < model.slims.size(); ++i) {
+    const SlimPatch& s = model.slims[i];
+    check_finite(s.centre.allFinite() && std::isfinite(s.radius) && s.local.is_finite() &&
+                     (!s.clip || (s.clip->n.allFinite() && std::isfinite(s.clip->d))),
+                 "slim patch", i, path);
+  }
+  for (std::size_t i = 0; i < model.tets.size(); ++i) {
+    const TetPatch& t = model.tets[i];
+    bool ok = t.quadric.is_finite();
+    for (const auto& p : t.corners) ok = ok && p.allFinite();
+    check_finite(ok, "tet patch", i, path);
+  }
+  for (std::size_t i = 0; i < model.glyphs.size(); ++i) {
+    const Glyph& g = model.glyphs[i];
+    check_finite(g.centre.allFinite() && std::isfinite(g.radius) && g.axes.allFinite(), "glyph", i, path);
+  }
+
+  const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.clip.has_value(); });
+  const bool slim_colour = std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.colour.has_value(); });
+  const bool tet_colour = std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
+  const bool glyph_colour = std::any_of(model.glyphs.begin(), model.glyphs.end(), [](const Glyph& g) { return g.colour.has_value(); });
+
+  ply::Header h;
+  h.encoding = ply::Encoding::binary_little_endian;
+  h.comments.push_back(fmt::format("quadrix-format {}", kQxmFormatVersion));
+  for (const auto& [key, value] : model.metadata) {
+    if (key.empty() || has_whitespace(key) || key == "quadrix-format" || key == "bbox") continue;
+    h.comments.push_back(value.empty() ? key : key + " " + single_line(value));
+  }
+  const Box3 box = bounds(model);
+  if (!box.empty())
+    h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
+                                     box.max.y(), box.max.z()));
+  const bool all = model.empty();  // an empty model still declares the whole profile
+  if (all || !model.slims.empty()) {
+    auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames});
+    if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+    h.elements.push_back(element("slim", model.slims.size(), props, slim_colour));
+  }
+  if (all || !model.tets.empty())
+    h.elements.push_back(element("tet", model.tets.size(), names({kCornerNames, kCoefficientNames}), tet_colour));
+  if (all || !model.glyphs.empty()) {
+    auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kAxisNames});
+    h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, true));
+  }
+
+  std::string out = ply::header_text(h);
+  out.reserve(out.size() + model.slims.size() * 150 + model.tets.size() * 180 + model.glyphs.size() * 110);
+  for (const SlimPatch& s : model.slims) {
+    const auto k = s.local.coefficients();
+    append_doubles(out, {s.centre.x(), s.centre.y(), s.centre.z(), s.radius});
+    for (double v : k) ply::append_le(out, ply::Type::float64, v);
+    if (slim_clip) {
+      const ClipPlane p = s.clip.value_or(ClipPlane{});
+      append_doubles(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
+    }
+    if (slim_colour) append_colour(out, s.colour);
+  }
+  for (const TetPatch& t : model.tets) {
+    for (const auto& p : t.corners) append_doubles(out, {p.x(), p.y(), p.z()});
+    for (double v : t.quadric.coefficients()) ply::append_le(out, ply::Type::float64, v);
+    if (tet_colour) append_colour(out, t.colour);
+  }
+  for (const Glyph& g : model.glyphs) {
+    out.push_back(static_cast<char>(static_cast<std::uint8_t>(g.kind)));
+    append_doubles(out, {g.centre.x(), g.centre.y(), g.centre.z(), g.radius});
+    for (int k = 0; k < 3; ++k) append_doubles(out, {g.axes(0, k), g.axes(1, k), g.axes(2, k)});
+    if (glyph_colour) append_colour(out, g.colour);
+  }
+  write_file_atomically(path, [&](std::ostream& os) { os.write(out.data(), static_cast<std::streamsize>(out.size())); });
+}
+
+}  // namespace quadrix

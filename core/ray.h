@@ -23,6 +23,17 @@ struct RayQuadratic {
 
 RayQuadratic ray_quadratic(const Quadric& q, const Ray& ray);
 
+/// The ray expressed relative to `centre` and restarted at its closest approach to it:
+/// local.origin = ray.at(t0) − centre, local.dir = ray.dir; returns t0. A root λ of a quadric
+/// written relative to `centre` is then t0 + λ along the original ray. Keeps γ = f(origin)
+/// small when the eye is far away, so no digits cancel (DESIGN §5).
+inline double rebase_ray(const Ray& ray, const Eigen::Vector3d& centre, Ray& local) {
+  const double t0 = (centre - ray.origin).dot(ray.dir) / ray.dir.squaredNorm();
+  local.origin = ray.at(t0) - centre;
+  local.dir = ray.dir;
+  return t0;
+}
+
 /// Real roots of αλ² + 2βλ + γ = 0, ascending. Stable q-form: q = −(β + sign(β)√(β²−αγ)),
 /// λ₁ = q/α, λ₂ = γ/q; the linear case (|α| negligible against β and γ) and the tangent case
 /// (one double root) handled explicitly. count is 0, 1 or 2.

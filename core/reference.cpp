@@ -1,1 +1,253 @@
-// placeholder: being written
+#include "core/reference.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "core/bounds.h"
+#include "core/bvh.h"
+#include "core/error.h"
+
+namespace quadrix {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Barycentric tolerance for tetrahedron clipping: neighbours sharing a face both accept a hit
+// on it, so no pixel falls through the crack between them.
+constexpr double kTetEps = 1e-9;
+
+struct PreparedTet {
+  Tetrahedron tet;
+  Eigen::Vector3d centroid;
+  Quadric local;  // f(y + centroid)
+};
+
+struct PreparedGlyph {
+  Eigen::Vector3d centre;
+  Quadric local;  // f(y + centre)
+  Eigen::Vector3d axis = Eigen::Vector3d::Zero();  // cylinder: unit axis
+  double half_length = 0, radius = 0;
+  GlyphKind kind;
+};
+
+struct Ref {
+  PrimitiveKind kind;
+  std::uint32_t index;
+};
+
+PreparedGlyph prepare(const Glyph& g) {
+  PreparedGlyph p;
+  p.centre = g.centre;
+  p.kind = g.kind;
+  switch (g.kind) {
+    case GlyphKind::sphere: p.local = Quadric::sphere(Eigen::Vector3d::Zero(), g.radius); break;
+    case GlyphKind::ellipsoid: {
+      // x = M u, ‖u‖ = 1  ⇔  xᵀ M⁻ᵀM⁻¹ x − 1 = 0.
+      const Eigen::Matrix3d Mi = g.axes.inverse();
+      p.local.A = Mi.transpose() * Mi;
+      p.local.c = -1.0;
+      break;
+    }
+    case GlyphKind::cylinder: {
+      const Eigen::Vector3d a = g.axes.col(0);
+      p.half_length = a.norm();
+      p.axis = a / p.half_length;
+      p.radius = g.radius;
+      // ‖x − (x·â)â‖² − r² = xᵀ(I − ââᵀ)x − r².
+      p.local.A = Eigen::Matrix3d::Identity() - p.axis * p.axis.transpose();
+      p.local.c = -g.radius * g.radius;
+      break;
+    }
+  }
+  return p;
+}
+
+}  // namespace
+
+struct ReferenceScene::Impl {
+  const Model* model;
+  std::vector<PreparedTet> tets;
+  std::vector<PreparedGlyph> glyphs;
+  std::vector<Ref> refs;
+  Bvh bvh;
+
+  bool hit_tet(const PreparedTet& p, const Ray& ray, double tmin, double tmax, bool cull, Hit& hit) const {
+    Ray local;
+    const double t0 = rebase_ray(ray, p.centroid, local);
+    const auto inside = [&](const Eigen::Vector3d& y) { return p.tet.contains(y + p.centroid, kTetEps); };
+    if (!intersect_quadric(p.local, local, tmin - t0, tmax - t0, cull, inside, hit)) return false;
+    hit.t += t0;
+    hit.point = ray.at(hit.t);
+    return true;
+  }
+
+  bool hit_glyph(const PreparedGlyph& p, const Ray& ray, double tmin, double tmax, bool cull, Hit& hit) const {
+    Ray local;
+    const double t0 = rebase_ray(ray, p.centre, local);
+    bool found = false;
+    if (p.kind != GlyphKind::cylinder) {
+      found = intersect_quadric(p.local, local, tmin - t0, tmax - t0, cull, [](const auto&) { return true; }, hit);
+    } else {
+      const auto inside = [&](const Eigen::Vector3d& y) { return std::abs(y.dot(p.axis)) <= p.half_length; };
+      found = intersect_quadric(p.local, local, tmin - t0, tmax - t0, cull, inside, hit);
+      // Flat end caps: planes ±â·y = h with outward normals ±â.
+      const double dn = local.dir.dot(p.axis);
+      if (dn != 0.0) {
+        for (const double s : {1.0, -1.0}) {
+          const double t = (s * p.half_length - local.origin.dot(p.axis)) / dn;
+          const double upper = found ? hit.t : tmax - t0;
+          if (!(t > tmin - t0 && t < upper)) continue;
+          const bool front = s * dn < 0.0;
+          if (cull && !front) continue;
+          const Eigen::Vector3d y = local.at(t);
+          if ((y - y.dot(p.axis) * p.axis).squaredNorm() > p.radius * p.radius) continue;
+          hit.t = t;
+          hit.point = y;
+          hit.gradient = s * p.axis;
+          hit.front_facing = front;
+          found = true;
+        }
+      }
+    }
+    if (!found) return false;
+    hit.t += t0;
+    hit.point = ray.at(hit.t);
+    return true;
+  }
+};
+
+ReferenceScene::ReferenceScene(const Model& model) : impl_(std::make_unique<Impl>()) {
+  impl_->model = &model;
+  std::vector<Box3> boxes;
+  boxes.reserve(model.size());
+  for (std::uint32_t i = 0; i < model.slims.size(); ++i) {
+    impl_->refs.push_back({PrimitiveKind::slim, i});
+    boxes.push_back(bounds(model.slims[i]));
+  }
+  impl_->tets.reserve(model.tets.size());
+  for (std::uint32_t i = 0; i < model.tets.size(); ++i) {
+    const auto& t = model.tets[i];
+    const Eigen::Vector3d c = 0.25 * (t.corners[0] + t.corners[1] + t.corners[2] + t.corners[3]);
+    impl_->tets.push_back({Tetrahedron(t.corners), c, t.quadric.translated_to_origin(c)});
+    impl_->refs.push_back({PrimitiveKind::tet, i});
+    boxes.push_back(bounds(t));
+  }
+  impl_->glyphs.reserve(model.glyphs.size());
+  for (std::uint32_t i = 0; i < model.glyphs.size(); ++i) {
+    impl_->glyphs.push_back(prepare(model.glyphs[i]));
+    impl_->refs.push_back({PrimitiveKind::glyph, i});
+    boxes.push_back(bounds(model.glyphs[i]));
+  }
+  impl_->bvh = Bvh(boxes);
+}
+
+ReferenceScene::~ReferenceScene() = default;
+ReferenceScene::ReferenceScene(ReferenceScene&&) noexcept = default;
+ReferenceScene& ReferenceScene::operator=(ReferenceScene&&) noexcept = default;
+const Model& ReferenceScene::model() const { return *impl_->model; }
+std::size_t ReferenceScene::bvh_node_count() const { return impl_->bvh.nodes().size(); }
+
+std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, double tmax,
+                                                const TraceOptions& options) const {
+  const Model& m = *impl_->model;
+  double best_t = tmax;  // nearest opaque (tet, glyph) hit so far
+  Hit best;
+  Ref best_ref{PrimitiveKind::none, 0};
+  double t_cut = kInf;  // SLIM pass-1 depth: min(tᵢ + offset·Rᵢ)
+  // Small inline buffer: most rays meet a handful of patches.
+  std::vector<SlimSample> samples;
+  const auto bound = [&] { return std::min(best_t, t_cut); };
+  impl_->bvh.traverse(ray, tmin, bound, [&](std::uint32_t item) {
+    const Ref r = impl_->refs[item];
+    Hit h;
+    switch (r.kind) {
+      case PrimitiveKind::slim: {
+        const SlimPatch& p = m.slims[r.index];
+        if (!intersect_slim_patch(p, ray, tmin, best_t, h)) return;
+        const double w = slim_weight((h.point - p.centre).norm() / p.radius);
+        samples.push_back({h, w, p.radius, static_cast<int>(r.index)});
+        t_cut = std::min(t_cut, h.t + options.slim.offset * p.radius);
+        return;
+      }
+      case PrimitiveKind::tet:
+        if (!impl_->hit_tet(impl_->tets[r.index], ray, tmin, best_t, options.cull_backfaces, h)) return;
+        break;
+      case PrimitiveKind::glyph:
+        if (!impl_->hit_glyph(impl_->glyphs[r.index], ray, tmin, best_t, options.cull_backfaces, h)) return;
+        break;
+      case PrimitiveKind::none: return;
+    }
+    best_t = h.t;
+    best = h;
+    best_ref = r;
+  });
+
+  SurfaceHit out;
+  if (!samples.empty()) {
+    // Only patch hits in front of the nearest opaque surface take part (they share one depth test).
+    std::erase_if(samples, [&](const SlimSample& s) { return s.hit.t >= best_t; });
+    if (const auto b = blend_slim_samples(samples, options.slim); b && b->t < best_t) {
+      out.t = b->t;
+      out.point = b->point;
+      out.normal = b->normal;
+      out.kind = PrimitiveKind::slim;
+      out.index = b->first_index;
+      const auto& colour = m.slims[b->first_index].colour;
+      if (colour) out.colour = *colour;
+      return out;
+    }
+  }
+  if (best_ref.kind == PrimitiveKind::none) return std::nullopt;
+  out.t = best.t;
+  out.point = best.point;
+  const double g = best.gradient.norm();
+  out.normal = g > 0 ? Eigen::Vector3d(best.gradient / g) : Eigen::Vector3d(-ray.dir.normalized());
+  if (out.normal.dot(ray.dir) > 0) out.normal = -out.normal;  // two-sided: face the viewer
+  out.kind = best_ref.kind;
+  out.index = static_cast<int>(best_ref.index);
+  const std::optional<Rgb>& colour =
+      best_ref.kind == PrimitiveKind::tet ? m.tets[best_ref.index].colour : m.glyphs[best_ref.index].colour;
+  if (colour) out.colour = *colour;
+  return out;
+}
+
+ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camera,
+                                const ReferenceRenderOptions& options) {
+  if (camera.width <= 0 || camera.height <= 0 || camera.width > 16384 || camera.height > 16384)
+    throw InvalidInput("image size must be between 1 and 16384 pixels per side");
+  ReferenceImage img;
+  img.width = camera.width;
+  img.height = camera.height;
+  const std::size_t n = static_cast<std::size_t>(img.width) * img.height;
+  img.coverage.assign(n, 0);
+  img.depth.assign(n, std::numeric_limits<float>::infinity());
+  img.distance.assign(n, std::numeric_limits<float>::infinity());
+  img.normal.assign(n, Eigen::Vector3f::Zero());
+  img.primitive.assign(n, -1);
+  img.albedo.assign(n, Rgb{0, 0, 0});
+  const Eigen::Vector3d fwd = camera.forward();
+  std::atomic<int> rows_done{0};
+  tbb::parallel_for(tbb::blocked_range<int>(0, img.height, 4), [&](const tbb::blocked_range<int>& rows) {
+    for (int y = rows.begin(); y < rows.end(); ++y) {
+      for (int x = 0; x < img.width; ++x) {
+        const Ray ray = camera.pixel_ray(x + 0.5, y + 0.5);
+        const auto hit = scene.trace(ray, 0.0, kInf, options.trace);
+        if (!hit) continue;
+        const std::size_t i = static_cast<std::size_t>(y) * img.width + x;
+        img.coverage[i] = 1;
+        img.distance[i] = static_cast<float>(hit->t);
+        img.depth[i] = static_cast<float>(hit->t * ray.dir.dot(fwd));
+        img.normal[i] = hit->normal.cast<float>();
+        img.primitive[i] = static_cast<std::int32_t>((static_cast<int>(hit->kind) << 28) | hit->index);
+        img.albedo[i] = hit->colour;
+      }
+    }
+    const int done = rows_done += static_cast<int>(rows.size());
+    if (options.progress) options.progress(static_cast<double>(done) / img.height);
+  });
+  return img;
+}
+
+}  // namespace quadrix

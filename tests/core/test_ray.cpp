@@ -1,1 +1,166 @@
 #include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/ray.h"
+
+using namespace quadrix;
+using Eigen::Vector3d;
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const auto kAnywhere = [](const Vector3d&) { return true; };
+
+Vector3d random_unit(std::mt19937_64& rng) {
+  std::normal_distribution<double> n;
+  return Vector3d(n(rng), n(rng), n(rng)).normalized();
+}
+
+// Nearest positive root of a·t² + 2b·t + c in long double (the textbook form is fine here:
+// the truth is computed in higher precision).
+long double nearest_root(long double a, long double b, long double c) {
+  const long double d = b * b - a * c;
+  if (d < 0) return -1;
+  const long double s = std::sqrt(d);
+  long double t1 = (-b - s) / a, t2 = (-b + s) / a;
+  if (t1 > t2) std::swap(t1, t2);
+  return t1 > 0 ? t1 : t2;
+}
+}  // namespace
+
+TEST(Ray, SphereHitsMatchClosedForm) {
+  std::mt19937_64 rng(1);
+  for (int i = 0; i < 20000; ++i) {
+    const Vector3d c = 10 * random_unit(rng);
+    const double r = std::exp(std::uniform_real_distribution<double>(-3, 3)(rng));
+    const Vector3d o = c + r * (1.5 + 20 * std::uniform_real_distribution<double>(0, 1)(rng)) * random_unit(rng);
+    // Aim at a random point inside the sphere so the ray hits.
+    const Vector3d target = c + 0.99 * r * std::cbrt(std::uniform_real_distribution<double>(0, 1)(rng)) * random_unit(rng);
+    const Vector3d d = (target - o).normalized();
+    // Quadric local to its centre, ray rebased (the library's convention, DESIGN §5).
+    Ray local;
+    const double t0 = rebase_ray({o, d}, c, local);
+    Hit hit;
+    ASSERT_TRUE(intersect_quadric(Quadric::sphere(Vector3d::Zero(), r), local, -t0, kInf, true, kAnywhere, hit));
+    hit.t += t0;
+    const long double b = d.cast<long double>().dot((o - c).cast<long double>());
+    const long double cc = (o - c).cast<long double>().squaredNorm() - (long double)r * r;
+    const long double t = -b - std::sqrt(b * b - cc);
+    EXPECT_LE(std::abs(hit.t - t) / t, 1e-12) << "sphere " << i;
+    EXPECT_TRUE(hit.front_facing);
+    EXPECT_LT(hit.gradient.dot(d), 0.0);
+  }
+}
+
+TEST(Ray, EllipsoidCylinderHyperboloidMatchClosedForm) {
+  std::mt19937_64 rng(2);
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const int kind = i % 3;
+    const Vector3d o = 3.0 * random_unit(rng) * (1.5 + std::uniform_real_distribution<double>(0, 2)(rng));
+    const Vector3d d = (0.3 * random_unit(rng) - o).normalized();
+    Quadric q;
+    const Vector3d s(1.3, 0.7, 0.5);
+    if (kind == 0) {  // ellipsoid (x/1.3)² + (y/0.7)² + (z/0.5)² = 1
+      q.A = s.cwiseInverse().cwiseAbs2().asDiagonal();
+      q.c = -1;
+    } else if (kind == 1) {  // cylinder x² + y² = 0.49
+      q.A = Vector3d(1, 1, 0).asDiagonal();
+      q.c = -0.49;
+    } else {  // one-sheet hyperboloid x² + y² − z² = 0.25
+      q.A = Vector3d(1, 1, -1).asDiagonal();
+      q.c = -0.25;
+    }
+    // Closed form in long double from the diagonal A: α = Σ aᵢdᵢ², β = Σ aᵢoᵢdᵢ, γ = Σ aᵢoᵢ² + c.
+    long double a = 0, b = 0, c = q.c;
+    for (int k = 0; k < 3; ++k) {
+      a += (long double)q.A(k, k) * d[k] * d[k];
+      b += (long double)q.A(k, k) * o[k] * d[k];
+      c += (long double)q.A(k, k) * o[k] * o[k];
+    }
+    Hit hit;
+    const bool found = intersect_quadric(q, {o, d}, 0.0, kInf, false, kAnywhere, hit);
+    const long double t = nearest_root(a, b, c);
+    if (t <= 0) {
+      EXPECT_FALSE(found && hit.t > 1e-9) << i;
+      continue;
+    }
+    ASSERT_TRUE(found) << i;
+    ++hits;
+    EXPECT_LE(std::abs(hit.t - t) / t, 1e-12) << "kind " << kind << " case " << i;
+  }
+  EXPECT_GT(hits, 10000);
+}
+
+TEST(Ray, LinearCaseAlphaZero) {
+  // x² + y² − z² = ¼ along its asymptotic direction: α = 0 exactly, one finite root.
+  Quadric q;
+  q.A = Vector3d(1, 1, -1).asDiagonal();
+  q.c = -0.25;
+  const Vector3d d = Vector3d(1, 0, 1).normalized();
+  const Vector3d o(-3, 0.2, -2);
+  const RayQuadratic e = ray_quadratic(q, {o, d});
+  EXPECT_EQ(e.alpha, 0.0);
+  const Roots r = solve_ray_quadratic(e);
+  ASSERT_EQ(r.count, 1);
+  EXPECT_NEAR(q.eval(o + r.t[0] * d), 0.0, 1e-12);
+  // Nearly linear: α = 1e-20 relative; the finite root must come out of the q-form exactly
+  // (the textbook (−β ± √D)/α loses every digit here).
+  for (const double alpha : {1e-8, 1e-12, 1e-16, 1e-20, 1e-300}) {
+    const RayQuadratic near{alpha, -1.0, 0.5};
+    const Roots rr = solve_ray_quadratic(near);
+    ASSERT_GE(rr.count, 1);
+    const long double la = alpha;
+    const double expected = static_cast<double>(0.5L / (1.0L + std::sqrt(1.0L - 0.5L * la)));
+    EXPECT_NEAR(rr.t[0], expected, 1e-15) << alpha;
+  }
+}
+
+TEST(Ray, TangentAndMissingRays) {
+  const Quadric unit = Quadric::sphere(Vector3d::Zero(), 1.0);
+  // Exactly tangent: a double root at t = 5, never NaN.
+  const Roots r = solve_ray_quadratic(ray_quadratic(unit, {Vector3d(-5, 1, 0), Vector3d::UnitX()}));
+  ASSERT_GE(r.count, 1);
+  EXPECT_NEAR(r.t[0], 5.0, 1e-7);
+  // A tangent root is neither front- nor back-facing; with culling it is dropped.
+  Hit hit;
+  EXPECT_FALSE(intersect_quadric(unit, {Vector3d(-5, 1, 0), Vector3d::UnitX()}, 0, kInf, true, kAnywhere, hit));
+  // Missing.
+  EXPECT_EQ(solve_ray_quadratic(ray_quadratic(unit, {Vector3d(-5, 1.001, 0), Vector3d::UnitX()})).count, 0);
+  // Degenerate quadric (all zero): no roots, no NaN.
+  EXPECT_EQ(solve_ray_quadratic({0, 0, 0}).count, 0);
+  EXPECT_EQ(solve_ray_quadratic({0, 0, 1}).count, 0);
+}
+
+TEST(Ray, Eq15VisitsNearRootFirstAndFallsBackToFarRoot) {
+  // Unit sphere clipped to z < 0.5 seen from +z: the near root is clipped, the far one is inside.
+  const Quadric unit = Quadric::sphere(Vector3d::Zero(), 1.0);
+  const Ray ray{Vector3d(0, 0, 5), Vector3d(0, 0, -1)};
+  Hit hit;
+  ASSERT_TRUE(intersect_quadric(unit, ray, 0, kInf, false, [](const Vector3d& p) { return p.z() < 0.5; }, hit));
+  EXPECT_NEAR(hit.t, 6.0, 1e-12);
+  EXPECT_FALSE(hit.front_facing);
+  // With per-fragment culling only the front-facing root counts, so the clipped sphere vanishes.
+  EXPECT_FALSE(intersect_quadric(unit, ray, 0, kInf, true, [](const Vector3d& p) { return p.z() < 0.5; }, hit));
+  ASSERT_TRUE(intersect_quadric(unit, ray, 0, kInf, true, kAnywhere, hit));
+  EXPECT_NEAR(hit.t, 4.0, 1e-12);
+}
+
+TEST(Ray, FarCameraKeepsRelativePrecisionWhenRebased) {
+  // A unit sphere seen from 10⁴ to 10⁸ sizes away: with the ray rebased to its closest approach
+  // the relative error of t stays at double level (without it, γ = ‖e‖² − 1 loses every digit).
+  for (const double dist : {1e4, 1e6, 1e8}) {
+    const Vector3d o(0.3, 0.2, dist);
+    const Ray ray{o, (Vector3d(0.1, -0.2, 0) - o).normalized()};
+    Ray local;
+    const double t0 = rebase_ray(ray, Vector3d::Zero(), local);
+    Hit hit;
+    ASSERT_TRUE(intersect_quadric(Quadric::sphere(Vector3d::Zero(), 1.0), local, -t0, kInf, true, kAnywhere, hit));
+    hit.t += t0;
+    // Truth in long double, from the closest approach (b² − c would itself cancel at 10⁸).
+    const Eigen::Matrix<long double, 3, 1> ol = o.cast<long double>(), dl = ray.dir.cast<long double>();
+    const long double tc = -ol.dot(dl) / dl.squaredNorm();
+    const long double t = tc - std::sqrt((1.0L - (ol + tc * dl).squaredNorm()) / dl.squaredNorm());
+    EXPECT_LE(std::abs(hit.t - t) / t, 1e-12) << dist;
+  }
+}

@@ -1,1 +1,188 @@
+// The CPU reference ray caster against analytic truth.
 #include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/bounds.h"
+#include "core/reference.h"
+#include "core/synth.h"
+
+using namespace quadrix;
+using Eigen::Vector3d;
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Pixels whose 3×3 neighbourhood is uniformly covered or uniformly empty in `mask`
+// (outside the 1-pixel silhouette band).
+bool interior(const std::vector<std::uint8_t>& mask, int w, int h, int x, int y) {
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int xx = std::clamp(x + dx, 0, w - 1), yy = std::clamp(y + dy, 0, h - 1);
+      if (mask[yy * w + xx] != mask[y * w + x]) return false;
+    }
+  return true;
+}
+}  // namespace
+
+TEST(Reference, SphereGlyphMatchesAnalyticImage) {
+  const Model m = synth_model("sphere");
+  const ReferenceScene scene(m);
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 10, .elevation_deg = 35, .width = 160, .height = 120});
+  const ReferenceImage img = render_reference(scene, cam);
+  std::vector<std::uint8_t> truth(img.coverage.size());
+  int covered = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const Ray r = cam.pixel_ray(x + 0.5, y + 0.5);
+      const double b = r.dir.dot(r.origin), c = r.origin.squaredNorm() - 1.0;
+      const std::size_t i = y * img.width + x;
+      truth[i] = b * b - c > 0;
+      if (!img.coverage[i]) continue;
+      ++covered;
+      const double t = -b - std::sqrt(b * b - c);
+      EXPECT_NEAR(img.distance[i], t, 1e-5 * t);  // stored as float
+      const Vector3d p = r.at(t);
+      EXPECT_LT((img.normal[i].cast<double>() - p).norm(), 1e-6);
+    }
+  int agree = 0, counted = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (interior(truth, img.width, img.height, x, y)) {
+        ++counted;
+        agree += truth[y * img.width + x] == img.coverage[y * img.width + x];
+      }
+  EXPECT_EQ(agree, counted);
+  EXPECT_GT(covered, 3000);
+}
+
+TEST(Reference, SlimSphereBlendIsTheSphere) {
+  // Every patch holds the exact unit sphere, so the per-ray blend must reproduce it exactly.
+  const Model m = synth_model("slim-sphere", {.count = 300});
+  const ReferenceScene scene(m);
+  const Camera cam = frame_box(bounds(m), {.width = 96, .height = 96});
+  const ReferenceImage img = render_reference(scene, cam);
+  int covered = 0, holes = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const Ray r = cam.pixel_ray(x + 0.5, y + 0.5);
+      const double b = r.dir.dot(r.origin), c = r.origin.squaredNorm() - 1.0;
+      const std::size_t i = y * img.width + x;
+      // Inside the sphere's silhouette by more than a pixel's worth: must be covered.
+      const bool deep = b * b - c > 0.05;
+      if (deep && !img.coverage[i]) ++holes;
+      if (!img.coverage[i]) continue;
+      ++covered;
+      const Vector3d p = r.at(img.distance[i]);
+      EXPECT_NEAR(p.norm(), 1.0, 1e-6);
+      EXPECT_LT((img.normal[i].cast<double>() - p.normalized()).norm(), 1e-5);
+    }
+  EXPECT_EQ(holes, 0);
+  EXPECT_GT(covered, 1000);
+}
+
+TEST(Reference, HyperboloidTetsLieOnTheQuadricAndMatchAnalyticHits) {
+  for (const char* kind : {"hyperboloid1", "hyperboloid2"}) {
+    const Model m = synth_model(kind, {.resolution = 8});
+    ASSERT_GT(m.tets.size(), 50u);
+    const Quadric q = synth_quadric(kind);
+    const ReferenceScene scene(m);
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 25, .elevation_deg = 15, .width = 120, .height = 120});
+    TraceOptions opt;
+    opt.cull_backfaces = false;
+    int agree = 0, total = 0;
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const Ray r = cam.pixel_ray(x + 0.5, y + 0.5);
+        const auto hit = scene.trace(r, 0, kInf, opt);
+        // Analytic: nearest root inside the cube [−1.5, 1.5]³.
+        const auto in_cube = [](const Vector3d& p) { return (p.array().abs() <= 1.5 - 1e-12).all(); };
+        Hit h;
+        const bool truth = intersect_quadric(q, r, 0, kInf, false, in_cube, h);
+        ++total;
+        if (hit) EXPECT_LT(q.taubin_distance(hit->point), 1e-9);
+        if (truth == hit.has_value() && (!truth || std::abs(hit->t - h.t) < 1e-9 * h.t)) ++agree;
+      }
+    EXPECT_GE(agree, total * 995 / 1000) << kind;
+  }
+}
+
+TEST(Reference, FarCameraNarrowFieldOfView) {
+  // The unit sphere from 10⁴ sizes away through a narrow field of view: hits stay exact.
+  const Model m = synth_model("sphere");
+  const ReferenceScene scene(m);
+  Camera cam;
+  cam.eye = Vector3d(1e4, 3e3, 2e4);
+  cam.target = Vector3d::Zero();
+  cam.fov_y_deg = 0.007;
+  cam.width = cam.height = 64;
+  const ReferenceImage img = render_reference(scene, cam);
+  int covered = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const std::size_t i = y * 64 + x;
+      if (!img.coverage[i]) continue;
+      ++covered;
+      const Ray r = cam.pixel_ray(x + 0.5, y + 0.5);
+      const auto hit = scene.trace(r, 0, kInf, {});
+      ASSERT_TRUE(hit);
+      EXPECT_NEAR(hit->point.norm(), 1.0, 1e-9);
+    }
+  EXPECT_GT(covered, 1000);
+}
+
+TEST(Reference, BvhAgreesWithBruteForce) {
+  const Model m = synth_model("glyphs", {.count = 3000, .seed = 4});
+  const ReferenceScene scene(m);
+  Model single;
+  std::mt19937_64 rng(8);
+  std::uniform_real_distribution<double> u(0, 1);
+  const Box3 box = bounds(m);
+  for (int i = 0; i < 300; ++i) {
+    const Vector3d o = box.centre() + box.diagonal() * Vector3d(u(rng) - 0.5, u(rng) - 0.5, 1.2);
+    const Vector3d target = box.min + (box.max - box.min).cwiseProduct(Vector3d(u(rng), u(rng), u(rng)));
+    const Ray r{o, (target - o).normalized()};
+    const auto hit = scene.trace(r, 0, kInf, {});
+    double best = kInf;
+    int best_index = -1;
+    for (std::size_t g = 0; g < m.glyphs.size(); ++g) {
+      single.glyphs = {m.glyphs[g]};
+      const auto h = ReferenceScene(single).trace(r, 0, kInf, {});
+      if (h && h->t < best) best = h->t, best_index = static_cast<int>(g);
+    }
+    ASSERT_EQ(hit.has_value(), best_index >= 0) << i;
+    if (hit) {
+      EXPECT_EQ(hit->index, best_index);
+      EXPECT_DOUBLE_EQ(hit->t, best);
+    }
+  }
+}
+
+TEST(Reference, CylinderCapsAndEllipsoidOnSurface) {
+  for (const char* kind : {"cylinder", "ellipsoid"}) {
+    const Model m = synth_model(kind);
+    const Glyph& g = m.glyphs[0];
+    const ReferenceScene scene(m);
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 40, .elevation_deg = 50, .width = 80, .height = 80});
+    const ReferenceImage img = render_reference(scene, cam);
+    int covered = 0;
+    for (int y = 0; y < 80; ++y)
+      for (int x = 0; x < 80; ++x) {
+        const std::size_t i = y * 80 + x;
+        if (!img.coverage[i]) continue;
+        ++covered;
+        const Vector3d p = cam.pixel_ray(x + 0.5, y + 0.5).at(img.distance[i]);
+        if (g.kind == GlyphKind::ellipsoid) {
+          EXPECT_NEAR((g.axes.inverse() * p).norm(), 1.0, 1e-5);
+        } else {
+          const Vector3d a = g.axes.col(0).normalized();
+          const double h = g.axes.col(0).norm(), along = p.dot(a), radial = (p - along * a).norm();
+          // On the side (radial = r, |along| ≤ h) or on a cap (|along| = h, radial ≤ r).
+          const bool side = std::abs(radial - g.radius) < 1e-5 && std::abs(along) <= h + 1e-5;
+          const bool cap = std::abs(std::abs(along) - h) < 1e-5 && radial <= g.radius + 1e-5;
+          EXPECT_TRUE(side || cap) << radial << " " << along;
+        }
+      }
+    EXPECT_GT(covered, 500) << kind;
+  }
+}

@@ -1,0 +1,40 @@
+# Quadrix: `make demo` and `make test` do all the set-up on a fresh Debian 12 machine.
+BUILD      ?= build
+SAN_BUILD  ?= build-sanitize
+JOBS       ?= 2
+CMAKE_ARGS ?=
+DEMO_OUT   ?= out/demo
+QUADRIX    := $(BUILD)/tools/quadrix
+
+.PHONY: all deps configure build test test-sanitize demo bench clean
+
+all: build
+
+deps:
+	@tools/setup.sh
+
+$(BUILD)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS)
+
+configure: deps $(BUILD)/CMakeCache.txt
+
+build: configure
+	cmake --build $(BUILD) -j$(JOBS)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 1500
+
+test-sanitize: deps
+	cmake -S . -B $(SAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQUADRIX_SANITIZE=ON -DQUADRIX_BENCHMARKS=OFF $(CMAKE_ARGS)
+	cmake --build $(SAN_BUILD) -j$(JOBS)
+	cd $(SAN_BUILD) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -j$(JOBS) --timeout 3000 -LE "slow|gl"
+
+demo: build
+	@tools/demo.sh $(QUADRIX) $(DEMO_OUT)
+
+bench: build
+	@tools/bench.sh $(QUADRIX) out/bench
+
+clean:
+	rm -rf $(BUILD) $(SAN_BUILD) out

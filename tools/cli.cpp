@@ -1,0 +1,68 @@
+#include "tools/cli.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+
+#include <fmt/format.h>
+
+namespace quadrix::cli {
+
+double Report::elapsed() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Progress::Impl {
+  std::string label;
+  bool enabled;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  std::mutex mutex;
+  int last_percent = -1;
+  bool drawn = false;
+};
+
+Progress::Progress(std::string label, bool enabled) : impl_(std::make_unique<Impl>()) {
+  impl_->label = std::move(label);
+  impl_->enabled = enabled;
+}
+
+Progress::~Progress() {
+  if (impl_->drawn) std::fprintf(stderr, "\r\033[K");
+}
+
+void Progress::update(double fraction) {
+  if (!impl_->enabled) return;
+  std::lock_guard lock(impl_->mutex);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - impl_->start).count();
+  if (secs < 1.0) return;  // short work stays silent
+  const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
+  if (percent == impl_->last_percent) return;
+  impl_->last_percent = percent;
+  constexpr int width = 30;
+  const int filled = percent * width / 100;
+  std::fprintf(stderr, "\r%s [%s%s] %3d%% %.1fs", impl_->label.c_str(), std::string(filled, '#').c_str(),
+               std::string(width - filled, '.').c_str(), percent, secs);
+  std::fflush(stderr);
+  impl_->drawn = true;
+}
+
+void add_common_options(CLI::App& app, CommonOptions& o) {
+  app.add_flag("-q,--quiet", o.quiet, "No progress bar, no informational messages");
+  app.add_flag("-v,--verbose", o.verbose, "More messages on stderr (repeat for debug)");
+  app.add_option("--report", o.report, "Write the measured figures as JSON to this file");
+}
+
+std::pair<int, int> parse_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
+      w > 16384 || h > 16384)
+    throw CLI::ValidationError("--size", fmt::format("'{}' is not WxH with 1 ≤ W, H ≤ 16384", text));
+  return {w, h};
+}
+
+bool progress_allowed(const CommonOptions& o) { return !o.quiet && ::isatty(STDERR_FILENO); }
+
+}  // namespace quadrix::cli

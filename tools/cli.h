@@ -1,0 +1,77 @@
+#pragma once
+/// Shared pieces of the `quadrix` subcommands: exit codes, common options, the JSON report
+/// and the progress bar. One file per subcommand (tools/cmd_*.cpp) registers itself through
+/// a `void add_NAME(CLI::App& root, Commands& commands)` function listed in main.cpp.
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+namespace quadrix::cli {
+
+/// Documented in the README; distinct per failure kind.
+enum ExitCode : int {
+  kOk = 0,
+  kInternal = 1,     ///< a bug: unexpected exception
+  kUsage = 2,        ///< bad command line
+  kBadInput = 3,     ///< an input file is malformed, or input data is unusable (InvalidInput)
+  kComputation = 4,  ///< a solver or computation failed (SolverError)
+  kIo = 5,           ///< a file could not be read or written (IoError)
+  kGl = 6,           ///< no usable OpenGL context or GL failure (GlError)
+};
+
+/// Options every subcommand has.
+struct CommonOptions {
+  bool quiet = false;
+  int verbose = 0;
+  std::string report;  ///< --report FILE.json
+};
+
+/// Figures a command measured; written to --report FILE.json (temporary file + rename).
+struct Report {
+  nlohmann::json json = nlohmann::json::object();
+  /// Seconds since the command started.
+  double elapsed() const;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+};
+
+/// A text progress bar on stderr, shown only when stderr is a terminal, not --quiet, and the work
+/// has run for more than about a second. Thread-safe update().
+class Progress {
+public:
+  Progress(std::string label, bool enabled);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  void update(double fraction);
+  std::function<void(double)> callback() {
+    return [this](double f) { update(f); };
+  }
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// A registered subcommand: its CLI11 app and the action run after parsing.
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int(const CommonOptions&, Report&)> run;
+};
+using Commands = std::vector<Command>;
+
+/// Adds --quiet, --verbose and --report to a subcommand.
+void add_common_options(CLI::App& app, CommonOptions& options);
+
+/// Parses "WxH" (e.g. 1024x768). \throws CLI::ValidationError.
+std::pair<int, int> parse_size(const std::string& text);
+
+/// True when progress output is allowed (stderr is a terminal and not quiet).
+bool progress_allowed(const CommonOptions& options);
+
+}  // namespace quadrix::cli
