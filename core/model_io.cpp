@@ -47,7 +47,8 @@ std::string single_line(std::string v) {
 // ---------------------------------------------------------------- writer
 
 void check_finite(bool ok, std::string_view what, std::size_t i, const std::filesystem::path& path) {
-  if (!ok) throw InvalidInput(fmt::format("{}: cannot write {} {}: it holds non-finite values", path.string(), what, i));
+  if (!ok)
+    throw InvalidInput(fmt::format("{}: cannot write {} {}: it holds non-finite values", path.string(), what, i));
 }
 
 void append_doubles(std::string& out, std::initializer_list<double> vs) {
@@ -80,8 +81,8 @@ public:
   std::size_t size() const { return t_.rows; }
   double get(std::size_t row, std::size_t col) const { return t_(row, col); }
   [[noreturn]] void fail(std::size_t row, std::size_t col, std::string_view what) const {
-    throw FormatError(file_.message(t_.element, static_cast<std::int64_t>(row), t_.properties[col],
-                                    t_.byte_offset(row, col), what));
+    throw FormatError(
+        file_.message(t_.element, static_cast<std::int64_t>(row), t_.properties[col], t_.byte_offset(row, col), what));
   }
   [[noreturn]] void fail_row(std::size_t row, std::string_view what) const {
     throw FormatError(file_.message(t_.element, static_cast<std::int64_t>(row), {}, t_.byte_offset(row, 0), what));
@@ -104,7 +105,8 @@ public:
     Rgb c;
     for (std::size_t i = 0; i < 3; ++i) {
       const double v = finite(row, col + i);
-      if (v < 0 || v > 255 || v != std::floor(v)) fail(row, col + i, fmt::format("colour value {} is not in 0..255", v));
+      if (v < 0 || v > 255 || v != std::floor(v))
+        fail(row, col + i, fmt::format("colour value {} is not in 0..255", v));
       c[i] = static_cast<std::uint8_t>(v);
     }
     return c;
@@ -123,13 +125,15 @@ bool optional_group(const ply::File& f, const ply::Element& e, std::span<const c
   if (found == group.size()) return true;
   for (const char* n : group)
     if (e.find(n) < 0)
-      throw FormatError(f.message(e.name, -1, n, ply::kNoByte, "property missing from an optional group (all or none must be present)"));
+      throw FormatError(f.message(e.name, -1, n, ply::kNoByte,
+                                  "property missing from an optional group (all or none must be present)"));
   return true;
 }
 
 std::vector<std::string> required(const ply::File& f, const ply::Element& e, std::vector<std::string> props) {
   for (const auto& p : props)
-    if (e.find(p) < 0) throw FormatError(f.message(e.name, -1, p, ply::kNoByte, "required property is missing from the header"));
+    if (e.find(p) < 0)
+      throw FormatError(f.message(e.name, -1, p, ply::kNoByte, "required property is missing from the header"));
   return props;
 }
 
@@ -147,17 +151,19 @@ Model read_qxm(const ply::File& f) {
       int version = 0;
       const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), version);
       if (ec != std::errc() || end != value.data() + value.size())
-        throw FormatError(f.message({}, -1, {}, ply::kNoByte, fmt::format("bad 'comment quadrix-format {}' line", value)));
+        throw FormatError(
+            f.message({}, -1, {}, ply::kNoByte, fmt::format("bad 'comment quadrix-format {}' line", value)));
       if (version < 1 || version > kQxmFormatVersion)
-        throw FormatError(f.message({}, -1, {}, ply::kNoByte,
-                                    fmt::format("unsupported quadrix-format {} (this build reads 1..{})", version,
-                                                kQxmFormatVersion)));
+        throw FormatError(f.message(
+            {}, -1, {}, ply::kNoByte,
+            fmt::format("unsupported quadrix-format {} (this build reads 1..{})", version, kQxmFormatVersion)));
       has_version = true;
       continue;
     }
     model.metadata[key] = std::move(value);
   }
-  if (!has_version) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "not a .qxm file (no 'comment quadrix-format' line)"));
+  if (!has_version)
+    throw FormatError(f.message({}, -1, {}, ply::kNoByte, "not a .qxm file (no 'comment quadrix-format' line)"));
 
   // Which elements and optional groups are present.
   const ply::Element* es = h.find("slim");
@@ -171,7 +177,9 @@ Model read_qxm(const ply::File& f) {
   if (es) {
     slim_clip = optional_group(f, *es, kClipNames);
     slim_colour = optional_group(f, *es, kColourNames);
-    auto props = required(f, *es, names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames}));
+    auto props = required(
+        f, *es,
+        names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames}));
     if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
     if (slim_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
     is = static_cast<int>(requests.size());
@@ -186,7 +194,9 @@ Model read_qxm(const ply::File& f) {
   }
   if (eg) {
     glyph_colour = optional_group(f, *eg, kColourNames);
-    auto props = required(f, *eg, names({std::span<const char* const>(std::array<const char*, 5>{"kind", "x", "y", "z", "radius"}), kAxisNames}));
+    auto props = required(
+        f, *eg,
+        names({std::span<const char* const>(std::array<const char*, 5>{"kind", "x", "y", "z", "radius"}), kAxisNames}));
     if (glyph_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
     ig = static_cast<int>(requests.size());
     requests.push_back({"glyph", std::move(props)});
@@ -308,14 +318,16 @@ Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
     const std::size_t at = 12 + i * stride;
     auto value = [&](std::size_t j, std::string_view what) {
       const double v = load_le<float>(b, at + 4 * j);
-      if (!std::isfinite(v)) fail(static_cast<std::int64_t>(i), at + 4 * j, fmt::format("{} value {} is not finite", what, v));
+      if (!std::isfinite(v))
+        fail(static_cast<std::int64_t>(i), at + 4 * j, fmt::format("{} value {} is not finite", what, v));
       return v;
     };
     Ball& ball = balls[i];
     for (std::size_t j = 0; j < 3; ++j) ball.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
     for (std::size_t j = 0; j < 10; ++j) ball.k[j] = value(3 + j, "coefficient");
     ball.radius = value(13, "radius");
-    if (!(ball.radius > 0)) fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", ball.radius));
+    if (!(ball.radius > 0))
+      fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", ball.radius));
     const std::int32_t parent = load_le<std::int32_t>(b, at + 56);
     if (parent < -1 || parent > nballs)
       fail(static_cast<std::int64_t>(i), at + 56, fmt::format("parent id {} is not in [-1, {}]", parent, nballs));
@@ -363,10 +375,14 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     check_finite(g.centre.allFinite() && std::isfinite(g.radius) && g.axes.allFinite(), "glyph", i, path);
   }
 
-  const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.clip.has_value(); });
-  const bool slim_colour = std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.colour.has_value(); });
-  const bool tet_colour = std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
-  const bool glyph_colour = std::any_of(model.glyphs.begin(), model.glyphs.end(), [](const Glyph& g) { return g.colour.has_value(); });
+  const bool slim_clip =
+      std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.clip.has_value(); });
+  const bool slim_colour =
+      std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.colour.has_value(); });
+  const bool tet_colour =
+      std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
+  const bool glyph_colour =
+      std::any_of(model.glyphs.begin(), model.glyphs.end(), [](const Glyph& g) { return g.colour.has_value(); });
 
   ply::Header h;
   h.encoding = ply::Encoding::binary_little_endian;
@@ -381,7 +397,8 @@ void write_model(const Model& model, const std::filesystem::path& path) {
                                      box.max.y(), box.max.z()));
   const bool all = model.empty();  // an empty model still declares the whole profile
   if (all || !model.slims.empty()) {
-    auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames});
+    auto props =
+        names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames});
     if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
     h.elements.push_back(element("slim", model.slims.size(), props, slim_colour));
   }
@@ -415,7 +432,8 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     for (int k = 0; k < 3; ++k) append_doubles(out, {g.axes(0, k), g.axes(1, k), g.axes(2, k)});
     if (glyph_colour) append_colour(out, g.colour);
   }
-  write_file_atomically(path, [&](std::ostream& os) { os.write(out.data(), static_cast<std::streamsize>(out.size())); });
+  write_file_atomically(path,
+                        [&](std::ostream& os) { os.write(out.data(), static_cast<std::streamsize>(out.size())); });
 }
 
 }  // namespace quadrix

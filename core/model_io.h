@@ -13,6 +13,16 @@
 ///                  a0x a0y a0z a1x a1y a1z a2x a2y a2z [red green blue]
 ///   header comments: `comment quadrix-format 1`, then `comment KEY VALUE` per metadata entry
 ///   (producer, units, bbox, max_error, …).
+///
+/// Writer conventions: only non-empty elements are written, except that an entirely empty model
+/// declares all three with count 0. Optional columns appear when any primitive of that kind has
+/// them; a slim patch without a clip plane then gets an all-zero plane (a zero normal reads back
+/// as "no clip"), and a primitive without a colour is written black (0 0 0) and reads back black.
+/// Metadata keys containing whitespace are skipped, values are made single-line; `bbox` is always
+/// recomputed from the model (`bbox x0 y0 z0 x1 y1 z1`, omitted for an empty model).
+/// Reader: every comment `KEY VALUE` except `quadrix-format` becomes a metadata entry (so `bbox`
+/// is in the metadata read back). Columns may be of any PLY numeric type; unknown extra
+/// properties and elements are ignored (but still validated).
 #include <filesystem>
 
 #include "core/model.h"
@@ -31,6 +41,9 @@ Model read_model(const std::filesystem::path& path);
 /// Kanai's .slim2t: int32 {±degree, #balls, #user values}, then per ball float32 centre(3),
 /// coefficients(10, order xx yy zz xy yz zx x y z 1, local to the centre, unscaled),
 /// support R, parent id (1-based, −1 root), user values. Only leaf balls are kept.
+/// All little-endian; we read the parent id as int32 and user values as float32 (ignored);
+/// |degree| ∈ {1, 2} (the sign is a flag), 0 ≤ #user values < 1024, parent ids in [−1, #balls]
+/// (0 and −1 mean no parent); R must be finite and > 0.
 /// \throws FormatError, IoError as read_model.
 Model read_slim2t(const std::filesystem::path& path);
 

@@ -22,9 +22,9 @@ struct TypeName {
   Type type;
 };
 constexpr TypeName kTypeNames[] = {
-    {"char", Type::int8},     {"int8", Type::int8},     {"uchar", Type::uint8},    {"uint8", Type::uint8},
-    {"short", Type::int16},   {"int16", Type::int16},   {"ushort", Type::uint16},  {"uint16", Type::uint16},
-    {"int", Type::int32},     {"int32", Type::int32},   {"uint", Type::uint32},    {"uint32", Type::uint32},
+    {"char", Type::int8},     {"int8", Type::int8},       {"uchar", Type::uint8},    {"uint8", Type::uint8},
+    {"short", Type::int16},   {"int16", Type::int16},     {"ushort", Type::uint16},  {"uint16", Type::uint16},
+    {"int", Type::int32},     {"int32", Type::int32},     {"uint", Type::uint32},    {"uint32", Type::uint32},
     {"float", Type::float32}, {"float32", Type::float32}, {"double", Type::float64}, {"float64", Type::float64},
 };
 
@@ -41,24 +41,38 @@ bool is_integer_type(Type t) { return t != Type::float32 && t != Type::float64; 
 
 double type_min(Type t) {
   switch (t) {
-    case Type::int8: return -128.0;
-    case Type::uint8: return 0.0;
-    case Type::int16: return -32768.0;
-    case Type::uint16: return 0.0;
-    case Type::int32: return -2147483648.0;
-    case Type::uint32: return 0.0;
-    default: return -std::numeric_limits<double>::infinity();
+    case Type::int8:
+      return -128.0;
+    case Type::uint8:
+      return 0.0;
+    case Type::int16:
+      return -32768.0;
+    case Type::uint16:
+      return 0.0;
+    case Type::int32:
+      return -2147483648.0;
+    case Type::uint32:
+      return 0.0;
+    default:
+      return -std::numeric_limits<double>::infinity();
   }
 }
 double type_max(Type t) {
   switch (t) {
-    case Type::int8: return 127.0;
-    case Type::uint8: return 255.0;
-    case Type::int16: return 32767.0;
-    case Type::uint16: return 65535.0;
-    case Type::int32: return 2147483647.0;
-    case Type::uint32: return 4294967295.0;
-    default: return std::numeric_limits<double>::infinity();
+    case Type::int8:
+      return 127.0;
+    case Type::uint8:
+      return 255.0;
+    case Type::int16:
+      return 32767.0;
+    case Type::uint16:
+      return 65535.0;
+    case Type::int32:
+      return 2147483647.0;
+    case Type::uint32:
+      return 4294967295.0;
+    default:
+      return std::numeric_limits<double>::infinity();
   }
 }
 
@@ -103,14 +117,22 @@ T load(const char* p, bool swap) {
 
 double load_value(const char* p, Type t, bool swap) {
   switch (t) {
-    case Type::int8: return load<std::int8_t>(p, swap);
-    case Type::uint8: return load<std::uint8_t>(p, swap);
-    case Type::int16: return load<std::int16_t>(p, swap);
-    case Type::uint16: return load<std::uint16_t>(p, swap);
-    case Type::int32: return load<std::int32_t>(p, swap);
-    case Type::uint32: return load<std::uint32_t>(p, swap);
-    case Type::float32: return load<float>(p, swap);
-    case Type::float64: return load<double>(p, swap);
+    case Type::int8:
+      return load<std::int8_t>(p, swap);
+    case Type::uint8:
+      return load<std::uint8_t>(p, swap);
+    case Type::int16:
+      return load<std::int16_t>(p, swap);
+    case Type::uint16:
+      return load<std::uint16_t>(p, swap);
+    case Type::int32:
+      return load<std::int32_t>(p, swap);
+    case Type::uint32:
+      return load<std::uint32_t>(p, swap);
+    case Type::float32:
+      return load<float>(p, swap);
+    case Type::float64:
+      return load<double>(p, swap);
   }
   return 0.0;
 }
@@ -122,27 +144,39 @@ bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' |
 std::size_t type_size(Type t) {
   switch (t) {
     case Type::int8:
-    case Type::uint8: return 1;
+    case Type::uint8:
+      return 1;
     case Type::int16:
-    case Type::uint16: return 2;
+    case Type::uint16:
+      return 2;
     case Type::int32:
     case Type::uint32:
-    case Type::float32: return 4;
-    case Type::float64: return 8;
+    case Type::float32:
+      return 4;
+    case Type::float64:
+      return 8;
   }
   return 0;
 }
 
 std::string_view type_name(Type t) {
   switch (t) {
-    case Type::int8: return "char";
-    case Type::uint8: return "uchar";
-    case Type::int16: return "short";
-    case Type::uint16: return "ushort";
-    case Type::int32: return "int";
-    case Type::uint32: return "uint";
-    case Type::float32: return "float";
-    case Type::float64: return "double";
+    case Type::int8:
+      return "char";
+    case Type::uint8:
+      return "uchar";
+    case Type::int16:
+      return "short";
+    case Type::uint16:
+      return "ushort";
+    case Type::int32:
+      return "int";
+    case Type::uint32:
+      return "uint";
+    case Type::float32:
+      return "float";
+    case Type::float64:
+      return "double";
   }
   return "?";
 }
@@ -164,8 +198,8 @@ std::uint64_t Table::byte_offset(std::size_t row, std::size_t col) const {
   return row_offsets[row] + static_cast<std::uint64_t>(std::max<std::int64_t>(c, 0));
 }
 
-std::string File::message(std::string_view element, std::int64_t row, std::string_view property,
-                          std::uint64_t byte, std::string_view what) const {
+std::string File::message(std::string_view element, std::int64_t row, std::string_view property, std::uint64_t byte,
+                          std::string_view what) const {
   std::string where;
   auto add = [&](const std::string& part) { where += (where.empty() ? "" : " ") + part; };
   if (!element.empty()) add(fmt::format("element '{}'", element));
@@ -223,10 +257,14 @@ File File::from_bytes(std::string bytes, const std::filesystem::path& path) {
     } else if (kw == "format") {
       if (has_format) bad("second 'format' line");
       if (words.size() != 3) bad(fmt::format("bad format line '{}'", line));
-      if (words[1] == "ascii") h.encoding = Encoding::ascii;
-      else if (words[1] == "binary_little_endian") h.encoding = Encoding::binary_little_endian;
-      else if (words[1] == "binary_big_endian") h.encoding = Encoding::binary_big_endian;
-      else bad(fmt::format("unknown format '{}'", words[1]));
+      if (words[1] == "ascii")
+        h.encoding = Encoding::ascii;
+      else if (words[1] == "binary_little_endian")
+        h.encoding = Encoding::binary_little_endian;
+      else if (words[1] == "binary_big_endian")
+        h.encoding = Encoding::binary_big_endian;
+      else
+        bad(fmt::format("unknown format '{}'", words[1]));
       if (words[2] != "1.0" && words[2] != "1") bad(fmt::format("unsupported PLY format version '{}'", words[2]));
       has_format = true;
     } else if (kw == "element") {
@@ -284,8 +322,8 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
   std::vector<Table> tables(requests.size());
   for (std::size_t r = 0; r < requests.size(); ++r) {
     const Request& req = requests[r];
-    const auto it = std::find_if(h.elements.begin(), h.elements.end(),
-                                 [&](const Element& e) { return e.name == req.element; });
+    const auto it =
+        std::find_if(h.elements.begin(), h.elements.end(), [&](const Element& e) { return e.name == req.element; });
     if (it == h.elements.end())
       throw FormatError(message({}, -1, {}, kNoByte, fmt::format("no element '{}' in the header", req.element)));
     const std::size_t ei = static_cast<std::size_t>(it - h.elements.begin());
@@ -294,7 +332,8 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
     for (std::size_t c = 0; c < req.properties.size(); ++c) {
       const int pi = it->find(req.properties[c]);
       if (pi < 0)
-        throw FormatError(message(it->name, -1, req.properties[c], kNoByte, "required property is missing from the header"));
+        throw FormatError(
+            message(it->name, -1, req.properties[c], kNoByte, "required property is missing from the header"));
       if (it->properties[pi].is_list)
         throw FormatError(message(it->name, -1, req.properties[c], kNoByte, "is a list where a scalar is required"));
       column[ei][pi] = static_cast<int>(c);
@@ -315,12 +354,15 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
     std::size_t min_row = 0;
     bool fixed = true;
     for (const auto& p : e.properties) {
-      if (ascii) min_row += 2;
-      else min_row += p.is_list ? type_size(p.count_type) : type_size(p.type);
+      if (ascii)
+        min_row += 2;
+      else
+        min_row += p.is_list ? type_size(p.count_type) : type_size(p.type);
       fixed = fixed && !p.is_list;
     }
     if (e.count > 0 && min_row == 0)
-      throw FormatError(message(e.name, -1, {}, pos, fmt::format("{} rows declared but the element has no properties", e.count)));
+      throw FormatError(
+          message(e.name, -1, {}, pos, fmt::format("{} rows declared but the element has no properties", e.count)));
     const std::size_t budget = ascii ? remaining + 1 : remaining;  // the last ASCII value may lack a newline
     if (e.count > 0 && e.count > budget / min_row) {
       throw FormatError(message(
@@ -354,17 +396,20 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
           if (!p.is_list) {
             const std::size_t n = type_size(p.type);
             if (n > s.size() - pos)
-              throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos, "truncated: unexpected end of file"));
+              throw FormatError(
+                  message(e.name, static_cast<std::int64_t>(row), p.name, pos, "truncated: unexpected end of file"));
             if (out && col[pi] >= 0) out[col[pi]] = load_value(s.data() + pos, p.type, swap);
             pos += n;
             continue;
           }
           const std::size_t cn = type_size(p.count_type);
           if (cn > s.size() - pos)
-            throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos, "truncated: unexpected end of file"));
+            throw FormatError(
+                message(e.name, static_cast<std::int64_t>(row), p.name, pos, "truncated: unexpected end of file"));
           const double count = load_value(s.data() + pos, p.count_type, swap);
           if (count < 0)
-            throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos, fmt::format("list count {} is negative", count)));
+            throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos,
+                                      fmt::format("list count {} is negative", count)));
           const std::size_t vn = type_size(p.type);
           const std::size_t left = s.size() - pos - cn;
           if (count > static_cast<double>(left / vn))
@@ -398,8 +443,8 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         double v = 0.0;
         const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), v);
         if (ec != std::errc() || end != num.data() + num.size() || num.empty())
-          throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, start,
-                                    fmt::format("'{}' is not a number", tok)));
+          throw FormatError(
+              message(e.name, static_cast<std::int64_t>(row), p.name, start, fmt::format("'{}' is not a number", tok)));
         if (is_integer_type(t) && (v != std::floor(v) || v < type_min(t) || v > type_max(t)))
           throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, start,
                                     fmt::format("'{}' is not a valid {} value", tok, type_name(t))));
@@ -415,7 +460,8 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         const std::size_t count_at = pos;
         const double count = next_value(p, p.count_type, "a list count");
         if (count < 0)
-          throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, count_at, fmt::format("list count {} is negative", count)));
+          throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, count_at,
+                                    fmt::format("list count {} is negative", count)));
         if (count > static_cast<double>((s.size() - pos) / 2 + 1))
           throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, count_at,
                                     fmt::format("truncated: list count {} exceeds the rest of the file", count)));
@@ -425,9 +471,10 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
       if (pos < s.size() && s[pos] != '\n') {
         std::size_t end = pos;
         while (end < s.size() && !is_blank(s[end]) && s[end] != '\n') ++end;
-        throw FormatError(message(e.name, static_cast<std::int64_t>(row), {}, pos,
-                                  fmt::format("extra value '{}' at the end of the row ({} properties declared)",
-                                              s.substr(pos, std::min<std::size_t>(end - pos, 40)), e.properties.size())));
+        throw FormatError(
+            message(e.name, static_cast<std::int64_t>(row), {}, pos,
+                    fmt::format("extra value '{}' at the end of the row ({} properties declared)",
+                                s.substr(pos, std::min<std::size_t>(end - pos, 40)), e.properties.size())));
       }
       if (pos < s.size()) ++pos;
     }
@@ -438,9 +485,15 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
 std::string header_text(const Header& header) {
   std::string out = "ply\nformat ";
   switch (header.encoding) {
-    case Encoding::ascii: out += "ascii"; break;
-    case Encoding::binary_little_endian: out += "binary_little_endian"; break;
-    case Encoding::binary_big_endian: out += "binary_big_endian"; break;
+    case Encoding::ascii:
+      out += "ascii";
+      break;
+    case Encoding::binary_little_endian:
+      out += "binary_little_endian";
+      break;
+    case Encoding::binary_big_endian:
+      out += "binary_big_endian";
+      break;
   }
   out += " 1.0\n";
   for (const auto& c : header.comments) out += "comment " + c + "\n";
@@ -465,14 +518,30 @@ void append_le(std::string& out, Type t, double v) {
     out.append(buf, sizeof(x));
   };
   switch (t) {
-    case Type::int8: put(static_cast<std::int8_t>(std::lround(v))); break;
-    case Type::uint8: put(static_cast<std::uint8_t>(std::lround(v))); break;
-    case Type::int16: put(static_cast<std::int16_t>(std::lround(v))); break;
-    case Type::uint16: put(static_cast<std::uint16_t>(std::lround(v))); break;
-    case Type::int32: put(static_cast<std::int32_t>(std::llround(v))); break;
-    case Type::uint32: put(static_cast<std::uint32_t>(std::llround(v))); break;
-    case Type::float32: put(static_cast<float>(v)); break;
-    case Type::float64: put(v); break;
+    case Type::int8:
+      put(static_cast<std::int8_t>(std::lround(v)));
+      break;
+    case Type::uint8:
+      put(static_cast<std::uint8_t>(std::lround(v)));
+      break;
+    case Type::int16:
+      put(static_cast<std::int16_t>(std::lround(v)));
+      break;
+    case Type::uint16:
+      put(static_cast<std::uint16_t>(std::lround(v)));
+      break;
+    case Type::int32:
+      put(static_cast<std::int32_t>(std::llround(v)));
+      break;
+    case Type::uint32:
+      put(static_cast<std::uint32_t>(std::llround(v)));
+      break;
+    case Type::float32:
+      put(static_cast<float>(v));
+      break;
+    case Type::float64:
+      put(v);
+      break;
   }
 }
 

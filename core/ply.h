@@ -26,9 +26,9 @@ std::string_view type_name(Type t);
 
 struct Property {
   std::string name;
-  Type type = Type::float64;     ///< value type (of the entries, for a list)
+  Type type = Type::float64;  ///< value type (of the entries, for a list)
   bool is_list = false;
-  Type count_type = Type::uint8; ///< lists only
+  Type count_type = Type::uint8;  ///< lists only
 };
 
 struct Element {
@@ -44,7 +44,7 @@ struct Header {
   std::vector<std::string> comments;  ///< text after `comment `, in file order
   std::vector<std::string> obj_info;  ///< text after `obj_info `
   std::vector<Element> elements;
-  std::size_t body_offset = 0;        ///< first byte after the `end_header` line
+  std::size_t body_offset = 0;  ///< first byte after the `end_header` line
   /// The element called name, or nullptr.
   const Element* find(std::string_view name) const;
 };
@@ -55,8 +55,8 @@ struct Table {
   std::vector<std::string> properties;
   std::size_t rows = 0;
   std::vector<double> values;
-  std::vector<std::uint64_t> row_offsets;   ///< byte offset in the file where each row starts
-  std::vector<std::int64_t> column_offsets; ///< byte offset of a column within a binary row, or −1
+  std::vector<std::uint64_t> row_offsets;    ///< byte offset in the file where each row starts
+  std::vector<std::int64_t> column_offsets;  ///< byte offset of a column within a binary row, or −1
   double operator()(std::size_t row, std::size_t col) const { return values[row * properties.size() + col]; }
   /// Byte offset of one value (its row's start where the column offset is not fixed).
   std::uint64_t byte_offset(std::size_t row, std::size_t col) const;
@@ -93,8 +93,8 @@ public:
 
   /// `FILE: element 'E' row R property 'P' at byte B: what` (empty E or P, row < 0 and
   /// byte == kNoByte are left out).
-  std::string message(std::string_view element, std::int64_t row, std::string_view property,
-                      std::uint64_t byte, std::string_view what) const;
+  std::string message(std::string_view element, std::int64_t row, std::string_view property, std::uint64_t byte,
+                      std::string_view what) const;
 
 private:
   std::filesystem::path path_;

@@ -135,8 +135,8 @@ PointCloud read_xyz(const std::filesystem::path& path, bool allow_count_line) {
     if (n == 6) cloud.normals.push_back(unit_normal(r, v.data() + 3));
   }
   if (declared >= 0 && static_cast<std::size_t>(declared) != cloud.points.size())
-    throw FormatError(fmt::format("{}: the count line declares {} points but the file holds {}", path.string(), declared,
-                                  cloud.points.size()));
+    throw FormatError(fmt::format("{}: the count line declares {} points but the file holds {}", path.string(),
+                                  declared, cloud.points.size()));
   finish(cloud, path);
   return cloud;
 }
@@ -183,8 +183,8 @@ PointCloud read_off(const std::filesystem::path& path) {
   std::size_t face_lines = 0;
   while (face_lines < static_cast<std::size_t>(std::min(nf, 1e18)) && r.next_data(line)) ++face_lines;
   if (static_cast<double>(face_lines) < nf)
-    throw FormatError(fmt::format("{}: {} faces declared but only {} face lines follow the vertices", path.string(), nf,
-                                  face_lines));
+    throw FormatError(
+        fmt::format("{}: {} faces declared but only {} face lines follow the vertices", path.string(), nf, face_lines));
   finish(cloud, path);
   return cloud;
 }
@@ -202,8 +202,10 @@ PointCloud read_obj(const std::filesystem::path& path) {
     if (!is_v && !is_vn) continue;
     const std::size_t n = r.numbers(line.substr(is_v ? 1 : 2), v);
     if (n < 3) r.fail(fmt::format("{} values after '{}', at least 3 expected", n, is_v ? "v" : "vn"));
-    if (is_v) cloud.points.push_back(finite_point(r, v.data(), "vertex"));
-    else normals.push_back(unit_normal(r, v.data()));
+    if (is_v)
+      cloud.points.push_back(finite_point(r, v.data(), "vertex"));
+    else
+      normals.push_back(unit_normal(r, v.data()));
   }
   if (!normals.empty() && normals.size() == cloud.points.size()) cloud.normals = std::move(normals);
   finish(cloud, path);
@@ -217,7 +219,8 @@ PointCloud read_ply_points(const std::filesystem::path& path) {
   std::vector<std::string> props = {"x", "y", "z"};
   const int normal_count = (e->find("nx") >= 0) + (e->find("ny") >= 0) + (e->find("nz") >= 0);
   if (normal_count != 0 && normal_count != 3)
-    throw FormatError(f.message("vertex", -1, {}, ply::kNoByte, "has some but not all of the normal properties nx ny nz"));
+    throw FormatError(
+        f.message("vertex", -1, {}, ply::kNoByte, "has some but not all of the normal properties nx ny nz"));
   if (normal_count == 3) props.insert(props.end(), {"nx", "ny", "nz"});
   const std::vector<ply::Request> req = {{"vertex", props}};
   const ply::Table t = f.read(req).front();
@@ -233,7 +236,8 @@ PointCloud read_ply_points(const std::filesystem::path& path) {
     if (normal_count == 3) {
       const Eigen::Vector3d n(t(i, 3), t(i, 4), t(i, 5));
       const double len = n.norm();
-      if (!(len > 0)) throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3), "zero normal"));
+      if (!(len > 0))
+        throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3), "zero normal"));
       cloud.normals[i] = n / len;
     }
   }
@@ -266,7 +270,8 @@ PointCloud read_points(const std::filesystem::path& path) {
 
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path) {
   if (cloud.has_normals() && cloud.normals.size() != cloud.points.size())
-    throw InvalidInput(fmt::format("{}: {} normals for {} points", path.string(), cloud.normals.size(), cloud.points.size()));
+    throw InvalidInput(
+        fmt::format("{}: {} normals for {} points", path.string(), cloud.normals.size(), cloud.points.size()));
   fmt::memory_buffer buf;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     const auto& p = cloud.points[i];
@@ -278,7 +283,8 @@ void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path
       fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g}\n", p.x(), p.y(), p.z());
     }
   }
-  write_file_atomically(path, [&](std::ostream& os) { os.write(buf.data(), static_cast<std::streamsize>(buf.size())); });
+  write_file_atomically(path,
+                        [&](std::ostream& os) { os.write(buf.data(), static_cast<std::streamsize>(buf.size())); });
 }
 
 }  // namespace quadrix

@@ -1,4 +1,6 @@
-// quadrix render MODEL --out img.png: the CPU reference ray caster (GL backends: render/).
+// quadrix render MODEL --out img.png: ray-cast a model with the OpenGL renderer (contexts osmesa,
+// egl, glfw) or the double-precision CPU reference.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -6,72 +8,152 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "core/log.h"
+#include "core/mesh_io.h"
 #include "core/model_io.h"
 #include "core/reference.h"
 #include "core/shade.h"
+#include "render/context.h"
+#include "render/renderer.h"
 #include "tools/cli.h"
 
 namespace quadrix::cli {
+namespace {
+
+struct RenderArgs {
+  std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
+  std::string shading = "phong", mesh;
+  double azimuth = 30, elevation = 20, fov = 40;
+  bool no_cull = false;
+  int frames = 1;
+  double slim_offset = 0.5;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+bool gl_can_draw(const Model& m) { return m.slims.empty() && m.glyphs.empty(); }
+
+FloatImage depth_of(const render::GBuffer& g) { return {g.width, g.height, 1, g.depth}; }
+FloatImage normals_of(const render::GBuffer& g) {
+  FloatImage f{g.width, g.height, 3, {}};
+  for (const auto& n : g.normal) f.data.insert(f.data.end(), {n.x(), n.y(), n.z()});
+  return f;
+}
+
+int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
+  const auto [w, h] = parse_size(a.size);
+  const Model model = read_model(a.model);
+  std::optional<PolygonMesh> mesh;
+  if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
+  if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
+  Box3 box = bounds(model);
+  if (mesh)
+    for (const auto& v : mesh->vertices) box.extend(v);
+  const Camera camera = frame_box(
+      box, {.azimuth_deg = a.azimuth, .elevation_deg = a.elevation, .fov_y_deg = a.fov, .width = w, .height = h});
+  nlohmann::json& j = report.json["render"];
+  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}};
+
+  std::string backend = a.backend;
+  if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";
+  if (backend == "gl" && !gl_can_draw(model))
+    throw InvalidInput(fmt::format("{}: holds SLIM patches or glyphs, which only --backend cpu draws so far", a.model));
+  j["backend"] = backend;
+
+  if (backend == "cpu") {
+    if (mesh) throw InvalidInput("--mesh needs the GL backend");
+    const double t0 = report.elapsed();
+    const ReferenceScene scene(model);
+    Progress progress("render", progress_allowed(common));
+    ReferenceRenderOptions ro;
+    ro.trace.cull_backfaces = !a.no_cull;
+    ro.trace.slim.offset = a.slim_offset;
+    ro.progress = progress.callback();
+    const double t1 = report.elapsed();
+    const ReferenceImage img = render_reference(scene, camera, ro);
+    const double t2 = report.elapsed();
+    write_png(shade_phong(img, camera), a.out);
+    if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
+    if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
+    j["covered_pixels"] = std::count(img.coverage.begin(), img.coverage.end(), 1);
+    j["bvh_nodes"] = scene.bvh_node_count();
+    j["seconds_bvh"] = t1 - t0;
+    j["seconds_trace"] = t2 - t1;
+    log::info("cpu: {}x{} in {:.3f} s", w, h, t2 - t1);
+    return kOk;
+  }
+
+  auto context = render::create_context(a.context, {.width = w, .height = h});
+  render::Renderer renderer(*context);
+  renderer.set_model(model);
+  if (mesh) renderer.set_mesh(*mesh);
+  render::RenderOptions ro;
+  ro.cull = !a.no_cull;
+  ro.shading = a.shading == "envmap" ? render::Shading::envmap
+               : a.shading == "npr"  ? render::Shading::npr
+                                     : render::Shading::phong;
+  // One frame with statistics (counted separately: the counters cost time), then N timed frames.
+  ro.statistics = true;
+  const render::FrameStats stats = renderer.draw(camera, ro);
+  ro.statistics = false;
+  std::vector<double> geometry, shading, total;
+  for (int f = 0; f < a.frames; ++f) {
+    const auto s = renderer.draw(camera, ro);
+    geometry.push_back(s.ms_geometry);
+    shading.push_back(s.ms_shading);
+    total.push_back(s.ms_total);
+  }
+  write_png(renderer.read_colour(), a.out);
+  if (!a.depth_out.empty() || !a.normal_out.empty()) {
+    const render::GBuffer g = renderer.read_gbuffer();
+    if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
+    if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
+  }
+  const bool has_fs = stats.fragments != static_cast<std::uint64_t>(-1);
+  j["context"] = context->description();
+  j["frames"] = a.frames;
+  j["culling"] = ro.cull;
+  j["shading"] = a.shading;
+  j["primitives_drawn"] = stats.primitives - stats.culled;
+  j["primitives_culled"] = stats.culled;
+  j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
+  j["fragments_hit"] = stats.fragments_hit;
+  j["ms_geometry_median"] = median(geometry);
+  j["ms_shading_median"] = median(shading);
+  j["ms_frame_median"] = median(total);
+  log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), w, h, median(total),
+            a.frames, stats.primitives - stats.culled, stats.culled);
+  return kOk;
+}
+
+}  // namespace
 
 void add_render(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("render", "Ray-cast a model into a PNG (and depth/normal PFM)");
-  struct Args {
-    std::string model, out, depth_out, normal_out, backend = "cpu", size = "512x512";
-    double azimuth = 30, elevation = 20, fov = 40;
-    bool no_cull = false;
-    double slim_offset = 0.5;
-  };
-  auto a = std::make_shared<Args>();
+  auto a = std::make_shared<RenderArgs>();
   app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t)")->required();
   app->add_option("-o,--out", a->out, "Output PNG")->required();
-  app->add_option("--backend", a->backend, "Renderer: cpu (the double-precision reference)")
-      ->check(CLI::IsMember({"cpu"}));
+  app->add_option("--backend", a->backend, "auto (gl where it draws every kind, else cpu), gl, or cpu (the reference)")
+      ->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
+      ->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
   app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about +y");
   app->add_option("--elevation", a->elevation, "Camera elevation in degrees")->check(CLI::Range(-89.9, 89.9));
   app->add_option("--fov", a->fov, "Vertical field of view in degrees")->check(CLI::Range(0.001, 179.0));
+  app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
+      ->check(CLI::IsMember({"phong", "envmap", "npr"}));
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
+  app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(CLI::Range(1, 10000));
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
-  app->add_flag("--no-cull", a->no_cull, "Keep back-facing roots (two-sided surfaces)");
-  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius")
+  app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
+  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (cpu)")
       ->check(CLI::Range(0.0, 10.0));
-  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
-                        const auto [w, h] = parse_size(a->size);
-                        const Model model = read_model(a->model);
-                        if (model.empty()) throw InvalidInput(fmt::format("{}: the model holds no primitives", a->model));
-                        const double t_load = report.elapsed();
-                        const Camera camera = frame_box(bounds(model), {.azimuth_deg = a->azimuth,
-                                                                        .elevation_deg = a->elevation,
-                                                                        .fov_y_deg = a->fov,
-                                                                        .width = w,
-                                                                        .height = h});
-                        const ReferenceScene scene(model);
-                        const double t_bvh = report.elapsed();
-                        Progress progress("render", progress_allowed(common));
-                        ReferenceRenderOptions ro;
-                        ro.trace.cull_backfaces = !a->no_cull;
-                        ro.trace.slim.offset = a->slim_offset;
-                        ro.progress = progress.callback();
-                        const ReferenceImage img = render_reference(scene, camera, ro);
-                        const double t_render = report.elapsed();
-                        write_png(shade_phong(img, camera), a->out);
-                        if (!a->depth_out.empty()) write_pfm(depth_image(img), a->depth_out);
-                        if (!a->normal_out.empty()) write_pfm(normal_image(img), a->normal_out);
-                        std::size_t covered = 0;
-                        for (auto c : img.coverage) covered += c;
-                        report.json["render"] = {{"backend", a->backend},
-                                                 {"model", a->model},
-                                                 {"primitives", model.size()},
-                                                 {"width", w},
-                                                 {"height", h},
-                                                 {"covered_pixels", covered},
-                                                 {"bvh_nodes", scene.bvh_node_count()},
-                                                 {"seconds_load", t_load},
-                                                 {"seconds_bvh", t_bvh - t_load},
-                                                 {"seconds_trace", t_render - t_bvh}};
-                        log::info("rendered {}x{} in {:.3f} s ({} px covered)", w, h, t_render - t_bvh, covered);
-                        return kOk;
-                      }});
+  commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_render(*a, c, r); }});
 }
 
 }  // namespace quadrix::cli

@@ -53,7 +53,7 @@ private:
 // ------------------------------------------------------------------ a tiny PLY writer
 
 struct PlyProp {
-  std::string type;        ///< char uchar short ushort int uint float double (or anything, verbatim)
+  std::string type;  ///< char uchar short ushort int uint float double (or anything, verbatim)
   std::string name;
   std::string list_count;  ///< non-empty: a list property with this count type; the row holds count, entries
 };
@@ -105,14 +105,22 @@ inline void append_binary(std::string& out, const std::string& t, double v, bool
   unsigned char b[8];
   std::size_t n = ply_type_size(t);
   auto put = [&](auto x) { std::memcpy(b, &x, sizeof(x)); };
-  if (t == "char" || t == "int8") put(static_cast<std::int8_t>(std::llround(v)));
-  else if (t == "uchar" || t == "uint8") put(static_cast<std::uint8_t>(std::llround(v)));
-  else if (t == "short" || t == "int16") put(static_cast<std::int16_t>(std::llround(v)));
-  else if (t == "ushort" || t == "uint16") put(static_cast<std::uint16_t>(std::llround(v)));
-  else if (t == "int" || t == "int32") put(static_cast<std::int32_t>(std::llround(v)));
-  else if (t == "uint" || t == "uint32") put(static_cast<std::uint32_t>(std::llround(v)));
-  else if (t == "double" || t == "float64") put(v);
-  else put(static_cast<float>(v));
+  if (t == "char" || t == "int8")
+    put(static_cast<std::int8_t>(std::llround(v)));
+  else if (t == "uchar" || t == "uint8")
+    put(static_cast<std::uint8_t>(std::llround(v)));
+  else if (t == "short" || t == "int16")
+    put(static_cast<std::int16_t>(std::llround(v)));
+  else if (t == "ushort" || t == "uint16")
+    put(static_cast<std::uint16_t>(std::llround(v)));
+  else if (t == "int" || t == "int32")
+    put(static_cast<std::int32_t>(std::llround(v)));
+  else if (t == "uint" || t == "uint32")
+    put(static_cast<std::uint32_t>(std::llround(v)));
+  else if (t == "double" || t == "float64")
+    put(v);
+  else
+    put(static_cast<float>(v));
   if (big_endian)
     for (std::size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
   out.append(reinterpret_cast<const char*>(b), n);
@@ -133,7 +141,8 @@ inline std::string encode_ply(const PlyDoc& doc, const std::string& encoding) {
   out += doc.format_override.empty() ? "format " + encoding + " 1.0\n" : doc.format_override + "\n";
   for (const auto& c : doc.comments) out += "comment " + c + "\n";
   for (const auto& e : doc.elements) {
-    out += "element " + e.name + " " + (e.count_override.empty() ? std::to_string(e.rows.size()) : e.count_override) + "\n";
+    out += "element " + e.name + " " + (e.count_override.empty() ? std::to_string(e.rows.size()) : e.count_override) +
+           "\n";
     for (const auto& p : e.props)
       out += p.list_count.empty() ? "property " + p.type + " " + p.name + "\n"
                                   : "property list " + p.list_count + " " + p.type + " " + p.name + "\n";
@@ -150,8 +159,8 @@ inline std::string encode_ply(const PlyDoc& doc, const std::string& encoding) {
         if (ascii) {
           if (!line.empty()) line += ' ';
           line += ascii_value(t, v);
-        }
-        else append_binary(out, t, v, be);
+        } else
+          append_binary(out, t, v, be);
         return v;
       };
       for (const auto& p : e.props) {

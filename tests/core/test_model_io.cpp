@@ -55,7 +55,8 @@ void expect_same_primitives(const Model& a, const Model& b) {
   for (std::size_t i = 0; i < a.glyphs.size(); ++i) {
     const Glyph &x = a.glyphs[i], &y = b.glyphs[i];
     EXPECT_EQ(x.kind, y.kind) << "glyph " << i;
-    EXPECT_TRUE(same_bits(x.centre, y.centre) && same_bits(x.radius, y.radius) && same_bits(x.axes, y.axes)) << "glyph " << i;
+    EXPECT_TRUE(same_bits(x.centre, y.centre) && same_bits(x.radius, y.radius) && same_bits(x.axes, y.axes))
+        << "glyph " << i;
     EXPECT_EQ(x.colour, y.colour) << "glyph " << i;
   }
 }
@@ -282,7 +283,8 @@ TEST(Slim2t, KeepsLeavesAndConvertsCoefficients) {
         const Eigen::Vector3d x(u(rng), u(rng), u(rng));
         EXPECT_NEAR(world.eval(x), original.eval(x - c), 1e-9 * (1 + std::abs(original.eval(x - c))));
         // The local quadric is in u = (x − c)/R.
-        EXPECT_NEAR(s.local.eval((x - c) / s.radius), original.eval(x - c), 1e-9 * (1 + std::abs(original.eval(x - c))));
+        EXPECT_NEAR(s.local.eval((x - c) / s.radius), original.eval(x - c),
+                    1e-9 * (1 + std::abs(original.eval(x - c))));
       }
     }
   }
@@ -311,8 +313,8 @@ TEST(Slim2t, MalformedFilesThrowFormatErrors) {
   expect_error("short.slim2t", std::string(7, '\0'), "truncated");
   expect_error("degree.slim2t", slim2t_bytes(3, balls, 0), "degree 3");
   expect_error("count.slim2t", slim2t_bytes(2, balls, 0, 1000000000), "truncated");
-  expect_error("negative.slim2t", slim2t_bytes(2, balls, 0, 0).substr(0, 4) + std::string("\xff\xff\xff\xff", 4) +
-                                      std::string(4, '\0'),
+  expect_error("negative.slim2t",
+               slim2t_bytes(2, balls, 0, 0).substr(0, 4) + std::string("\xff\xff\xff\xff", 4) + std::string(4, '\0'),
                "negative");
   expect_error("user.slim2t", slim2t_bytes(2, {}, 5000), "user value count");
   expect_error("cut.slim2t", slim2t_bytes(2, balls, 1).substr(0, 12 + 16 * 4 * 3 + 10), "ball 3");

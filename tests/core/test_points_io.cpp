@@ -15,8 +15,8 @@ using test::write_bytes;
 
 const std::filesystem::path kDatasets = QUADRIX_DATASETS;
 
-#define REQUIRE_DATASET(rel)                                                             \
-  const std::filesystem::path path = kDatasets / (rel);                                  \
+#define REQUIRE_DATASET(rel)                            \
+  const std::filesystem::path path = kDatasets / (rel); \
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path.string()
 
 void expect_unit_normals(const PointCloud& c) {
@@ -133,7 +133,8 @@ TEST(PointsXyz, WriteReadRoundTripIsExact) {
 
 test::PlyDoc vertex_doc(bool normals) {
   test::PlyDoc d;
-  test::PlyElem v{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}, {"uchar", "flags", ""}}, {}, {}};
+  test::PlyElem v{
+      "vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}, {"uchar", "flags", ""}}, {}, {}};
   if (normals) v.props.insert(v.props.end(), {{"double", "nx", ""}, {"double", "ny", ""}, {"double", "nz", ""}});
   for (int i = 0; i < 5; ++i) {
     std::vector<double> r = {0.5 * i, -1.0 * i, 2.0, 7};

@@ -1,0 +1,36 @@
+#pragma once
+/// Measured error of a SLIM model against points: the distance of each point to the blended
+/// surface the renderer shows (per-ray blend of core/slim.h), along the point's normal.
+#include <cstddef>
+#include <vector>
+
+#include "core/model.h"
+#include "core/points_io.h"
+
+namespace quadrix {
+
+struct SlimErrorOptions {
+  /// Probe height h (world units): each point p is measured by the ray from p + h·n along −n,
+  /// error |t − h|; no hit counts as a miss (infinite error). 0: 4 × the model's
+  /// `max_error_abs` metadata, or 5e-3 × the points' bounding-box diagonal without it.
+  double probe_height = 0;
+  bool keep_per_point = false;  ///< fill SlimError::per_point
+};
+
+struct SlimError {
+  std::size_t points = 0;
+  std::size_t misses = 0;       ///< rays that found no surface
+  double max = 0;               ///< world units; +inf when misses > 0
+  double rms = 0;               ///< over the points that were hit
+  std::size_t worst = 0;        ///< index of the point with the largest error
+  double probe_height = 0;      ///< h actually used
+  std::vector<double> per_point;  ///< error per point (+inf for a miss), when asked for
+  std::size_t count_above(double e) const;  ///< needs per_point
+};
+
+/// Measures model against cloud (e.g. the fitted points, or held-out ones). Points without
+/// normals get estimated ones (fit/normals.h). TBB-parallel over points.
+/// \throws InvalidInput when the model has no SLIM patches or the cloud is empty.
+SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimErrorOptions& options = {});
+
+}  // namespace quadrix

@@ -1,0 +1,134 @@
+#include "fit/normals.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "fit/point_index.h"
+
+namespace quadrix {
+
+NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const NormalEstimationOptions& options) {
+  const std::size_t n = points.size();
+  if (n < 3) throw InvalidInput(fmt::format("estimate_normals: {} points; at least 3 are needed", n));
+  for (std::size_t i = 0; i < n; ++i)
+    if (!points[i].allFinite()) throw InvalidInput(fmt::format("estimate_normals: point {} is not finite", i));
+  const std::size_t k = std::clamp<std::size_t>(options.neighbours, 3, n);
+  const std::size_t km = std::clamp<std::size_t>(options.mst_neighbours, 2, n);
+  const PointIndex index(points);
+
+  NormalEstimation out;
+  out.normals.resize(n);
+  std::vector<std::uint32_t> graph(n * km);  // the km nearest neighbours of each point (self excluded)
+  std::vector<std::uint8_t> degree(n, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<Neighbour> nb;
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      index.nearest(points[i], std::max(k, km + 1), nb);
+      const std::size_t kk = std::min(k, nb.size());
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
+      mean /= double(kk);
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (std::size_t j = 0; j < kk; ++j) {
+        const Eigen::Vector3d d = points[nb[j].first] - mean;
+        C += d * d.transpose();
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+      out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
+      if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
+      std::uint8_t d = 0;
+      for (std::size_t j = 0; j < nb.size() && d < km; ++j)
+        if (nb[j].first != i) graph[i * km + d++] = nb[j].first;
+      degree[i] = d;
+    }
+  });
+
+  // Symmetric adjacency: the kNN relation is not symmetric; add reverse edges.
+  std::vector<std::uint32_t> offset(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < degree[i]; ++j) {
+      ++offset[i + 1];
+      ++offset[graph[i * km + j] + 1];
+    }
+  for (std::size_t i = 0; i < n; ++i) offset[i + 1] += offset[i];
+  std::vector<std::uint32_t> adj(offset[n]);
+  {
+    std::vector<std::uint32_t> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < degree[i]; ++j) {
+        const std::uint32_t t = graph[i * km + j];
+        adj[fill[i]++] = t;
+        adj[fill[t]++] = std::uint32_t(i);
+      }
+  }
+
+  // Components, each with its own seed.
+  std::vector<std::int32_t> comp(n, -1);
+  std::vector<std::vector<std::uint32_t>> members;
+  for (std::size_t s = 0; s < n; ++s) {
+    if (comp[s] >= 0) continue;
+    const auto id = std::int32_t(members.size());
+    members.emplace_back();
+    std::vector<std::uint32_t> stack{std::uint32_t(s)};
+    comp[s] = id;
+    while (!stack.empty()) {
+      const std::uint32_t v = stack.back();
+      stack.pop_back();
+      members[id].push_back(v);
+      for (std::uint32_t e = offset[v]; e < offset[v + 1]; ++e)
+        if (comp[adj[e]] < 0) {
+          comp[adj[e]] = id;
+          stack.push_back(adj[e]);
+        }
+    }
+  }
+  out.components = members.size();
+
+  // Prim's MST per component (weight 1 − |nᵢ·nⱼ|), propagating orientation from parent to child.
+  std::vector<std::uint8_t> done(n, 0);
+  using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
+  for (const auto& m : members) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (auto v : m) centroid += points[v];
+    centroid /= double(m.size());
+    std::uint32_t seed = m[0];
+    double far = -1;
+    for (auto v : m)
+      if (const double d = (points[v] - centroid).squaredNorm(); d > far) {
+        far = d;
+        seed = v;
+      }
+    if (out.normals[seed].dot(points[seed] - centroid) < 0) out.normals[seed] = -out.normals[seed];
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
+    auto push_edges = [&](std::uint32_t v) {
+      done[v] = 1;
+      for (std::uint32_t e = offset[v]; e < offset[v + 1]; ++e)
+        if (!done[adj[e]]) heap.push({1.0 - std::abs(out.normals[v].dot(out.normals[adj[e]])), {v, adj[e]}});
+    };
+    push_edges(seed);
+    while (!heap.empty()) {
+      const auto [w, edge] = heap.top();
+      heap.pop();
+      const auto [parent, child] = edge;
+      if (done[child]) continue;
+      if (out.normals[child].dot(out.normals[parent]) < 0) out.normals[child] = -out.normals[child];
+      push_edges(child);
+    }
+    // Global outward test: most normals should point away from the component's centroid.
+    std::ptrdiff_t votes = 0;
+    for (auto v : m) votes += out.normals[v].dot(points[v] - centroid) >= 0 ? 1 : -1;
+    if (votes < 0) {
+      for (auto v : m) out.normals[v] = -out.normals[v];
+      ++out.flipped_components;
+    }
+  }
+  return out;
+}
+
+}  // namespace quadrix

@@ -1,0 +1,478 @@
+#include "fit/slim_fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <queue>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "fit/blend_probe.h"
+#include "fit/local_fit.h"
+#include "fit/normals.h"
+#include "fit/point_index.h"
+
+namespace quadrix {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Weight of a point in the local least squares, r = ‖p − c‖/R: the SLIM blend weight's shape
+// (DESIGN §2) with a floor so rim points, which are checked too, still pull on the fit.
+double fit_weight(double r) {
+  const double w = r < 0.5 ? std::exp(-8.0 * r * r) : 16.0 * std::exp(-2.0) * std::pow(1.0 - std::min(r, 1.0), 4);
+  return w + 0.05;
+}
+
+struct Ball {
+  std::uint32_t centre = 0;  // point index
+  double R = 0;
+  Quadric g;                 // local: u = (x − c)/R
+  bool is_height = false;
+  bool is_bounded = true;    // error ≤ E was reached
+  double max_taubin = 0, sum_sq_taubin = 0;  // local units × R = world
+  std::size_t count = 0;     // points in the ball
+};
+
+struct Fitter {
+  const std::vector<Eigen::Vector3d>& P;
+  const std::vector<Eigen::Vector3d>& N;
+  const PointIndex& index;
+  const SlimFitOptions& opt;
+  double E;       // world
+  double probe;   // world
+
+  struct Scratch {
+    std::vector<Neighbour> nb;
+    std::vector<Eigen::Vector3d> u, n, fu, fn;
+    std::vector<double> fw;
+  };
+
+  // Fits and checks one ball (c, R); the fit with the smaller error when both kinds are tried.
+  std::optional<Ball> try_ball(std::uint32_t ci, double R, Scratch& s, bool accept_any = false) const {
+    const Eigen::Vector3d& c = P[ci];
+    index.radius(c, R, s.nb);
+    const std::size_t m = s.nb.size();
+    s.u.resize(m);
+    s.n.resize(m);
+    for (std::size_t j = 0; j < m; ++j) {
+      s.u[j] = (P[s.nb[j].first] - c) / R;
+      s.n[j] = N[s.nb[j].first];
+    }
+    // Fit on at most max_fit_points (evenly strided), check on all.
+    const std::size_t stride = std::max<std::size_t>(1, (m + opt.max_fit_points - 1) / opt.max_fit_points);
+    s.fu.clear();
+    s.fn.clear();
+    s.fw.clear();
+    for (std::size_t j = 0; j < m; j += stride) {
+      s.fu.push_back(s.u[j]);
+      s.fn.push_back(s.n[j]);
+      s.fw.push_back(fit_weight(s.u[j].norm()));
+    }
+    const LocalSample sample{s.fu, s.fn, s.fw};
+    if (m > opt.max_check_points) {  // strided subset for the check (in place: u, n are scratch)
+      const std::size_t cs = (m + opt.max_check_points - 1) / opt.max_check_points;
+      std::size_t w = 0;
+      for (std::size_t j = 0; j < m; j += cs, ++w) {
+        s.u[w] = s.u[j];
+        s.n[w] = s.n[j];
+      }
+      s.u.resize(w);
+      s.n.resize(w);
+    }
+    const double bound = E / R, h = probe / R;
+    std::optional<Ball> best;
+    double best_err = std::numeric_limits<double>::infinity();
+    auto consider = [&](const std::optional<Quadric>& g, bool is_height) {
+      if (!g) return false;
+      const LocalError e = local_error(*g, s.u, s.n, h, accept_any ? std::numeric_limits<double>::infinity() : bound);
+      const double err = std::max(e.max_taubin, e.max_probe);
+      if (!(e.within || accept_any) || (best && !(err < best_err))) return e.within;
+      best_err = err;
+      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, m};
+      return e.within && err <= bound;
+    };
+    if (m >= opt.min_points && consider(fit_general_quadric(sample, opt.normal_weight), false)) return best;
+    consider(fit_height_quadric(sample, opt.normal_weight), true);
+    if (best && !best->is_bounded && !accept_any) return std::nullopt;
+    return best;
+  }
+
+  // The largest R whose fit stays within E: growth from the min_points-th neighbour distance,
+  // then bisection in log R.
+  Ball grow(std::uint32_t ci, Scratch& s, double limit = std::numeric_limits<double>::infinity()) const {
+    index.nearest(P[ci], opt.min_points, s.nb);
+    double R = std::sqrt(s.nb.back().second) * 1.05;
+    if (!(R > 0)) R = E;
+    R = std::min(R, limit);
+    std::optional<Ball> ok = try_ball(ci, R, s);
+    if (!ok) {
+      // Smaller balls (height fit, down to a handful of points), else the best fit at R.
+      for (int k = 0; k < 3 && !ok; ++k) {
+        R *= 0.7;
+        ok = try_ball(ci, R, s);
+      }
+      if (!ok) {
+        R /= 0.7 * 0.7 * 0.7;
+        auto any = try_ball(ci, R, s, true);
+        // Last resort: the tangent plane at the centre.
+        Ball b = any ? *any : Ball{ci, R, Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1};
+        b.is_bounded = false;
+        return b;
+      }
+      return *ok;
+    }
+    double lo = R, hi = 0;
+    const double cap = std::min(0.5 * diagonal, limit);
+    while (lo < cap) {
+      const double next = std::min(cap, lo * opt.radius_growth);
+      auto b = try_ball(ci, next, s);
+      if (!b) {
+        hi = next;
+        break;
+      }
+      ok = b;
+      lo = next;
+    }
+    if (hi > 0)
+      for (int k = 0; k < opt.bisection_steps; ++k) {
+        const double mid = std::sqrt(lo * hi);
+        if (auto b = try_ball(ci, mid, s)) {
+          ok = b;
+          lo = mid;
+        } else {
+          hi = mid;
+        }
+      }
+    return *ok;
+  }
+  double diagonal = 0;
+};
+
+void validate(const PointCloud& cloud, const SlimFitOptions& o) {
+  const std::size_t n = cloud.points.size();
+  if (n < 10) throw InvalidInput(fmt::format("fit_slim: {} points; at least 10 are needed", n));
+  if (cloud.has_normals() && cloud.normals.size() != n)
+    throw InvalidInput(fmt::format("fit_slim: {} normals for {} points", cloud.normals.size(), n));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!cloud.points[i].allFinite())
+      throw InvalidInput(fmt::format("fit_slim: point {} is not finite ({}, {}, {})", i, cloud.points[i].x(),
+                                     cloud.points[i].y(), cloud.points[i].z()));
+    if (cloud.has_normals() && !(cloud.normals[i].allFinite() && cloud.normals[i].norm() > 1e-12))
+      throw InvalidInput(fmt::format("fit_slim: normal {} is zero or not finite ({}, {}, {})", i,
+                                     cloud.normals[i].x(), cloud.normals[i].y(), cloud.normals[i].z()));
+  }
+  if (!(o.max_error > 0) || !std::isfinite(o.max_error))
+    throw InvalidInput(fmt::format("fit_slim: max_error must be positive and finite, got {}", o.max_error));
+  if (!(o.normal_weight > 0)) throw InvalidInput(fmt::format("fit_slim: normal_weight must be > 0, got {}", o.normal_weight));
+  if (!(o.radius_growth > 1)) throw InvalidInput(fmt::format("fit_slim: radius_growth must be > 1, got {}", o.radius_growth));
+  if (o.min_points < 3) throw InvalidInput(fmt::format("fit_slim: min_points must be ≥ 3, got {}", o.min_points));
+  if (o.max_fit_points < 10) throw InvalidInput(fmt::format("fit_slim: max_fit_points must be ≥ 10, got {}", o.max_fit_points));
+  // Degenerate point sets: coincident, or all on one plane (no surface to enclose).
+  Box3 box;
+  for (const auto& p : cloud.points) box.extend(p);
+  const double diag = box.diagonal();
+  if (!(diag > 0)) throw InvalidInput(fmt::format("fit_slim: all {} points coincide", n));
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : cloud.points) mean += p;
+  mean /= double(n);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (const auto& p : cloud.points) C += (p - mean) * (p - mean).transpose();
+  const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(0);
+  double off = 0;
+  for (const auto& p : cloud.points) off = std::max(off, std::abs(axis.dot(p - mean)));
+  if (off <= 1e-9 * diag)
+    throw InvalidInput(fmt::format("fit_slim: the {} points are coplanar (largest distance from their plane {:.3g}, "
+                                   "diagonal {:.6g}); a SLIM surface needs a 3-D point set",
+                                   n, off, diag));
+}
+
+}  // namespace
+
+SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
+  const auto t_start = Clock::now();
+  validate(cloud, opt);
+  SlimFitResult result;
+  SlimFitStats& st = result.stats;
+  const auto& P = cloud.points;
+  const std::size_t n = P.size();
+  st.points = n;
+  Box3 box;
+  for (const auto& p : P) box.extend(p);
+  st.diagonal = box.diagonal();
+  const double E = opt.max_error_is_absolute ? opt.max_error : opt.max_error * st.diagonal;
+  st.max_error_abs = E;
+
+  // Normals: given (normalised) or estimated.
+  auto t0 = Clock::now();
+  std::vector<Eigen::Vector3d> N;
+  if (cloud.has_normals()) {
+    N.resize(n);
+    for (std::size_t i = 0; i < n; ++i) N[i] = cloud.normals[i].normalized();
+  } else {
+    N = estimate_normals(P, {.neighbours = opt.normal_neighbours}).normals;
+    st.normals_estimated = true;
+    log::info("fit_slim: the cloud has no normals; estimated them (PCA over {} neighbours, MST orientation)",
+              opt.normal_neighbours);
+  }
+  st.time_normals = seconds_since(t0);
+
+  t0 = Clock::now();
+  const PointIndex index(P);
+  Fitter fitter{P, N, index, opt, E, opt.probe_factor * E};
+  fitter.diagonal = st.diagonal;
+  std::mt19937_64 rng(opt.seed);
+
+  std::vector<Ball> balls;                  // evaluated candidates
+  std::vector<std::vector<std::uint32_t>> covers;  // points within ½R of each candidate
+  std::vector<std::uint8_t> is_candidate(n, 0);
+  auto evaluate = [&](const std::vector<std::uint32_t>& centres, const std::vector<double>* caps) {
+    const std::size_t first = balls.size();
+    balls.resize(first + centres.size());
+    covers.resize(first + centres.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.size(), 4), [&](const tbb::blocked_range<std::size_t>& r) {
+      Fitter::Scratch s;
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        // Repair rounds: no larger than the cap of this centre.
+        Ball b = fitter.grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity());
+        index.radius(P[centres[k]], 0.5 * b.R, s.nb);
+        auto& cov = covers[first + k];
+        cov.resize(s.nb.size());
+        for (std::size_t j = 0; j < s.nb.size(); ++j) cov[j] = s.nb[j].first;
+        balls[first + k] = std::move(b);
+      }
+    });
+  };
+
+  // Initial candidates: a random fraction of the points.
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::shuffle(order.begin(), order.end(), rng);
+  const std::size_t m0 =
+      std::min({n, opt.max_candidates, std::max(opt.min_candidates, std::size_t(opt.candidate_fraction * double(n)))});
+  std::vector<std::uint32_t> centres(order.begin(), order.begin() + m0);
+  for (auto c : centres) is_candidate[c] = 1;
+  evaluate(centres, nullptr);
+  st.time_candidates = seconds_since(t0);
+
+  // Greedy covering (lazy: a candidate's gain only decreases), adding uncovered points as new
+  // candidates until every point is covered.
+  t0 = Clock::now();
+  std::vector<std::uint8_t> covered(n, 0);
+  std::vector<std::uint8_t> chosen_flag;
+  std::vector<std::uint32_t> chosen;
+  std::size_t uncovered = n;
+  using Item = std::pair<std::size_t, std::uint32_t>;  // gain, candidate
+  std::priority_queue<Item> heap;
+  auto gain = [&](std::uint32_t b) {
+    std::size_t g = 0;
+    for (auto p : covers[b]) g += !covered[p];
+    return g;
+  };
+  auto run_greedy = [&](std::size_t from) {
+    chosen_flag.resize(balls.size(), 0);
+    for (std::size_t b = from; b < balls.size(); ++b) heap.push({gain(std::uint32_t(b)), std::uint32_t(b)});
+    while (uncovered > 0 && !heap.empty()) {
+      auto [g, b] = heap.top();
+      heap.pop();
+      if (g == 0) break;
+      const std::size_t now = gain(b);
+      if (now < g) {
+        if (now > 0) heap.push({now, b});
+        continue;
+      }
+      chosen.push_back(b);
+      chosen_flag[b] = 1;
+      for (auto p : covers[b])
+        if (!covered[p]) {
+          covered[p] = 1;
+          --uncovered;
+        }
+    }
+  };
+  auto add_uncovered_candidates = [&](std::size_t limit, const std::vector<double>* cap_of_point) {
+    std::vector<std::uint32_t> fresh;
+    std::vector<double> caps;
+    for (auto p : order)
+      if (!covered[p]) {
+        fresh.push_back(p);
+        if (cap_of_point) caps.push_back((*cap_of_point)[p]);
+        if (fresh.size() >= limit) break;
+      }
+    for (auto c : fresh) is_candidate[c] = 1;
+    const std::size_t from = balls.size();
+    evaluate(fresh, cap_of_point ? &caps : nullptr);
+    return from;
+  };
+  run_greedy(0);
+  while (uncovered > 0) {
+    const std::size_t limit = std::max<std::size_t>(64, uncovered / 16);
+    run_greedy(add_uncovered_candidates(limit, nullptr));
+  }
+
+  // Drop balls whose ½R points are all covered by other chosen balls (smallest first).
+  std::vector<std::uint16_t> multiplicity(n, 0);
+  auto prune = [&]() {
+    std::fill(multiplicity.begin(), multiplicity.end(), 0);
+    for (auto b : chosen)
+      for (auto p : covers[b]) multiplicity[p] = std::uint16_t(std::min<int>(multiplicity[p] + 1, 60000));
+    std::sort(chosen.begin(), chosen.end(), [&](auto a, auto b) { return covers[a].size() < covers[b].size(); });
+    std::vector<std::uint32_t> kept;
+    for (auto b : chosen) {
+      const bool redundant = std::all_of(covers[b].begin(), covers[b].end(), [&](auto p) { return multiplicity[p] >= 2; });
+      if (redundant) {
+        for (auto p : covers[b]) --multiplicity[p];
+        chosen_flag[b] = 0;
+      } else {
+        kept.push_back(b);
+      }
+    }
+    chosen.swap(kept);
+  };
+  st.patches_before_pruning = chosen.size();
+  prune();
+  st.time_cover = seconds_since(t0);
+
+  auto build_model = [&]() {
+    result.model.slims.clear();
+    for (auto b : chosen) {
+      SlimPatch s;
+      s.centre = P[balls[b].centre];
+      s.radius = balls[b].R;
+      s.local = balls[b].g;
+      result.model.slims.push_back(std::move(s));
+    }
+  };
+  build_model();
+
+  // Verify against the blended surface; shrink the patches at fault and cover again.
+  t0 = Clock::now();
+  std::vector<double> err(n, 0.0);
+  const double h = opt.probe_factor * E;
+  std::vector<double> cap(n, std::numeric_limits<double>::infinity());  // radius cap per centre point
+  for (int round = 0;; ++round) {
+    const BlendProbe probe(result.model);
+    std::vector<std::uint8_t> at_fault(result.model.slims.size(), 0);
+    std::vector<std::uint32_t> failing;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<int> culprits;
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        culprits.clear();
+        err[i] = probe.probe(P[i], N[i], h, E, &culprits);
+        for (int c : culprits) at_fault[c] = 1;  // benign race: every writer stores 1
+      }
+    });
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(err[i] <= E)) failing.push_back(std::uint32_t(i));
+    st.blend_failures = failing.size();
+    if (failing.empty() || round >= opt.repair_rounds) break;
+    ++st.repair_rounds;
+    log::debug("fit_slim: repair round {}: {} points beyond E", round + 1, failing.size());
+    // Remove the culprit patches; their centres may come back no larger than 0.7 R.
+    std::vector<std::uint32_t> keep;
+    for (std::size_t k = 0; k < chosen.size(); ++k) {
+      const auto b = chosen[k];
+      if (!at_fault[k] || balls[b].R <= 0) {
+        keep.push_back(b);
+        continue;
+      }
+      chosen_flag[b] = 0;
+      cap[balls[b].centre] = std::min(cap[balls[b].centre], 0.7 * balls[b].R);
+    }
+    chosen.swap(keep);
+    std::fill(covered.begin(), covered.end(), 0);
+    uncovered = n;
+    for (auto b : chosen)
+      for (auto p : covers[b])
+        if (!covered[p]) {
+          covered[p] = 1;
+          --uncovered;
+        }
+    // Other points near failures that are centres of culprits get capped candidates first.
+    std::vector<std::uint32_t> again;
+    std::vector<double> caps;
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::isfinite(cap[i]) && !covered[i]) {
+        again.push_back(std::uint32_t(i));
+        caps.push_back(cap[i]);
+      }
+    const std::size_t from = balls.size();
+    evaluate(again, &caps);
+    for (std::size_t b = from; b < balls.size(); ++b) cap[balls[b].centre] = std::min(cap[balls[b].centre], balls[b].R);
+    // Re-covering must not regrow balls beyond their caps: candidates at capped points are
+    // evaluated with the cap.
+    chosen_flag.resize(balls.size(), 0);
+    for (std::size_t b = 0; b < from; ++b)
+      if (!chosen_flag[b] && balls[b].R > cap[balls[b].centre]) covers[b].clear();  // retire
+    while (!heap.empty()) heap.pop();
+    run_greedy(0);
+    while (uncovered > 0) {
+      const std::size_t limit = std::max<std::size_t>(64, uncovered / 16);
+      run_greedy(add_uncovered_candidates(limit, &cap));
+    }
+    prune();
+    build_model();
+  }
+  st.time_verify = seconds_since(t0);
+
+  // Statistics and metadata.
+  double sum_sq_blend = 0;
+  std::size_t finite = 0;
+  st.max_blend = 0;
+  for (double e : err) {
+    st.max_blend = std::max(st.max_blend, e);
+    if (std::isfinite(e)) {
+      sum_sq_blend += e * e;
+      ++finite;
+    }
+  }
+  st.rms_blend = finite ? std::sqrt(sum_sq_blend / double(finite)) : 0;
+  double sum_sq_taubin = 0;
+  std::size_t in_balls = 0;
+  for (auto b : chosen) {
+    st.max_taubin = std::max(st.max_taubin, balls[b].max_taubin);
+    sum_sq_taubin += balls[b].sum_sq_taubin;
+    in_balls += balls[b].count;
+    st.height_patches += balls[b].is_height;
+    st.unbounded_patches += !balls[b].is_bounded;
+  }
+  st.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
+  st.candidates = balls.size();
+  st.patches = chosen.size();
+  st.time_total = seconds_since(t_start);
+
+  auto& md = result.model.metadata;
+  auto num = [](double v) { return fmt::format("{:.6g}", v); };
+  md["producer"] = "quadrix fit";
+  md["max_error"] = num(E / st.diagonal);
+  md["max_error_abs"] = num(E);
+  md["diagonal"] = num(st.diagonal);
+  md["normals"] = st.normals_estimated ? "estimated" : "given";
+  md["points"] = std::to_string(n);
+  md["patches"] = std::to_string(st.patches);
+  md["candidates"] = std::to_string(st.candidates);
+  md["height_patches"] = std::to_string(st.height_patches);
+  md["measured_max_error"] = num(st.max_blend);
+  md["measured_rms_error"] = num(st.rms_blend);
+  md["measured_failures"] = std::to_string(st.blend_failures);
+  md["taubin_max_error"] = num(st.max_taubin);
+  md["taubin_rms_error"] = num(st.rms_taubin);
+  md["time_normals_s"] = num(st.time_normals);
+  md["time_candidates_s"] = num(st.time_candidates);
+  md["time_cover_s"] = num(st.time_cover);
+  md["time_verify_s"] = num(st.time_verify);
+  md["time_total_s"] = num(st.time_total);
+  log::info("fit_slim: {} points, {} patches ({} candidates), E = {:.3g}, blended max {:.3g} rms {:.3g}, {:.2f} s", n,
+            st.patches, st.candidates, E, st.max_blend, st.rms_blend, st.time_total);
+  return result;
+}
+
+}  // namespace quadrix

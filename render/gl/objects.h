@@ -1,0 +1,93 @@
+#pragma once
+/// Thin move-only RAII wrappers over OpenGL objects (Magnum-style): one owner per GL name.
+#include <glad/gl.h>
+
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+
+#include <Eigen/Core>
+
+namespace quadrix::render::gl {
+
+/// Owns one GL name; Delete is called with it on destruction.
+template <void (*Delete)(GLuint)>
+class Handle {
+public:
+  Handle() = default;
+  explicit Handle(GLuint id) : id_(id) {}
+  ~Handle() { reset(); }
+  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      reset();
+      id_ = std::exchange(o.id_, 0);
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  GLuint id() const { return id_; }
+  explicit operator bool() const { return id_ != 0; }
+  void reset() {
+    if (id_) Delete(id_);
+    id_ = 0;
+  }
+
+private:
+  GLuint id_ = 0;
+};
+
+namespace detail {
+inline void delete_buffer(GLuint id) { glDeleteBuffers(1, &id); }
+inline void delete_vertex_array(GLuint id) { glDeleteVertexArrays(1, &id); }
+inline void delete_texture(GLuint id) { glDeleteTextures(1, &id); }
+inline void delete_framebuffer(GLuint id) { glDeleteFramebuffers(1, &id); }
+inline void delete_query(GLuint id) { glDeleteQueries(1, &id); }
+inline void delete_program(GLuint id) { glDeleteProgram(id); }
+}  // namespace detail
+
+using Buffer = Handle<detail::delete_buffer>;
+using VertexArray = Handle<detail::delete_vertex_array>;
+using Texture = Handle<detail::delete_texture>;
+using Framebuffer = Handle<detail::delete_framebuffer>;
+using Query = Handle<detail::delete_query>;
+
+Buffer make_buffer(GLsizeiptr bytes, const void* data, GLbitfield flags = 0);
+VertexArray make_vertex_array();
+Texture make_texture_2d(GLenum internal_format, int width, int height);
+Query make_query(GLenum target);
+
+/// A linked program with cached uniform locations and typed setters.
+class Program {
+public:
+  Program() = default;
+  /// Compiles and links; the prelude is prepended to every stage.
+  /// \throws GlError with the compiler log and the stage's file name.
+  Program(std::string_view name, std::string_view vertex, std::string_view fragment);
+  GLuint id() const { return handle_.id(); }
+  void use() const { glUseProgram(handle_.id()); }
+  GLint location(const char* uniform) const;
+  void set(const char* u, int v) const { glProgramUniform1i(id(), location(u), v); }
+  void set(const char* u, unsigned v) const { glProgramUniform1ui(id(), location(u), v); }
+  void set(const char* u, float v) const { glProgramUniform1f(id(), location(u), v); }
+  void set(const char* u, const Eigen::Vector2f& v) const { glProgramUniform2fv(id(), location(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector3f& v) const { glProgramUniform3fv(id(), location(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector4f& v) const { glProgramUniform4fv(id(), location(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Matrix3f& m) const {
+    glProgramUniformMatrix3fv(id(), location(u), 1, GL_FALSE, m.data());
+  }
+  void set(const char* u, const Eigen::Matrix4f& m) const {
+    glProgramUniformMatrix4fv(id(), location(u), 1, GL_FALSE, m.data());
+  }
+
+private:
+  Handle<detail::delete_program> handle_;
+  mutable std::unordered_map<std::string, GLint> locations_;
+};
+
+/// Throws GlError naming `where` if glGetError reports an error.
+void check_error(const char* where);
+
+}  // namespace quadrix::render::gl

@@ -1,0 +1,81 @@
+#pragma once
+/// The OpenGL renderer: ray-casts every primitive per pixel into a G-buffer and shades it in a
+/// deferred pass ([Stoll06] §5, DESIGN §6). A frame runs only the passes its scene needs.
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/mesh_io.h"
+#include "core/model.h"
+
+namespace quadrix::render {
+
+class GlContext;
+
+enum class Shading { phong, envmap, npr };
+
+struct RenderOptions {
+  bool cull = true;            ///< per-quadric (eq. 19) and per-fragment (eq. 14) backface culling
+  Shading shading = Shading::phong;
+  bool statistics = false;     ///< count culled/drawn primitives, fragments (costs a little)
+  Rgb background{255, 255, 255};
+  /// Clip-plane tolerance in local units (tetrahedron size ≈ 1): neighbours overlap by this much
+  /// so no pixel falls between them.
+  float clip_eps = 2e-5f;
+};
+
+/// Measured figures of one frame.
+struct FrameStats {
+  std::uint64_t primitives = 0;        ///< tetrahedron patches submitted
+  std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
+  std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
+  std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
+  double ms_geometry = 0;              ///< G-buffer passes (GPU time)
+  double ms_shading = 0;               ///< deferred pass
+  double ms_total = 0;                 ///< CPU wall time of the frame incl. glFinish
+};
+
+/// Per-pixel results read back from the GPU (row 0 at the top, like the CPU reference).
+struct GBuffer {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> coverage;
+  std::vector<float> depth;            ///< eye-space depth, +inf background
+  std::vector<Eigen::Vector3f> normal; ///< world normal facing the viewer
+  std::vector<std::int32_t> primitive; ///< kind·2²⁸ + index, −1 background
+};
+
+class Renderer {
+public:
+  /// Compiles the programs in the current context. \throws GlError.
+  explicit Renderer(GlContext& context);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Uploads a model's primitives (float, relative to each primitive's local origin).
+  /// \throws GlError (e.g. out of GPU memory), InvalidInput for kinds not supported yet.
+  void set_model(const Model& model);
+  /// Ordinary triangles drawn into the same G-buffer (polygons fanned).
+  void set_mesh(const PolygonMesh& mesh, Rgb colour = {180, 180, 190});
+
+  /// Renders one frame at the camera's size. Allocates targets on size change.
+  FrameStats draw(const Camera& camera, const RenderOptions& options);
+
+  Image8 read_colour() const;
+  GBuffer read_gbuffer() const;
+  /// Blits the shaded image into the default framebuffer (window contexts).
+  void present(int window_width, int window_height) const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// True if GL_ARB_pipeline_statistics_query is available (fragment invocation counts).
+bool has_pipeline_statistics();
+
+}  // namespace quadrix::render

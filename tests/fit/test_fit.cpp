@@ -1,0 +1,282 @@
+// Tests of the SLIM fitter (fit/slim_fit.h), its normal estimation and its error measure, on
+// analytic surfaces sampled with fixed seeds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include "core/error.h"
+#include "fit/blend_probe.h"
+#include "fit/evaluate.h"
+#include "fit/normals.h"
+#include "fit/slim_fit.h"
+
+namespace quadrix {
+namespace {
+
+Eigen::Vector3d random_direction(std::mt19937_64& rng) {
+  std::normal_distribution<double> g;
+  Eigen::Vector3d d;
+  do d = {g(rng), g(rng), g(rng)};
+  while (d.norm() < 1e-9);
+  return d.normalized();
+}
+
+PointCloud sphere(std::size_t n, double r, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = random_direction(rng);
+    c.points.push_back(r * d);
+    c.normals.push_back(d);
+  }
+  return c;
+}
+
+// Ellipsoid with semi-axes a: points a∘d (d uniform on the sphere), normals ∝ (x/a²).
+PointCloud ellipsoid(std::size_t n, const Eigen::Vector3d& a, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = a.cwiseProduct(random_direction(rng));
+    c.points.push_back(p);
+    c.normals.push_back(p.cwiseQuotient(a.cwiseProduct(a)).normalized());
+  }
+  return c;
+}
+
+// Torus around z with radii R (tube centre) and r (tube), area-uniform by rejection.
+PointCloud torus(std::size_t n, double R, double r, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0, 2 * std::numbers::pi), V(0, 1);
+  PointCloud c;
+  while (c.points.size() < n) {
+    const double u = U(rng), v = U(rng);
+    if (V(rng) > (R + r * std::cos(v)) / (R + r)) continue;
+    const Eigen::Vector3d nrm(std::cos(v) * std::cos(u), std::cos(v) * std::sin(u), std::sin(v));
+    c.points.push_back(Eigen::Vector3d(R * std::cos(u), R * std::sin(u), 0) + r * nrm);
+    c.normals.push_back(nrm);
+  }
+  return c;
+}
+
+// Cube [−a, a]³ rounded by r (Minkowski sum with a ball): p = q + r·m, q the nearest cube point.
+PointCloud rounded_cube(std::size_t n, double a, double r, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(-(a + r), a + r);
+  PointCloud c;
+  while (c.points.size() < n) {
+    // Uniform in area: a random point of a random face of the outer box, pushed onto the surface.
+    Eigen::Vector3d x(U(rng), U(rng), U(rng));
+    const int axis = int(rng() % 3);
+    x[axis] = (rng() % 2 ? 1 : -1) * (a + r);
+    const Eigen::Vector3d q = x.cwiseMax(-a).cwiseMin(a);
+    const Eigen::Vector3d m = (x - q).normalized();
+    c.points.push_back(q + r * m);
+    c.normals.push_back(m);
+  }
+  return c;
+}
+
+double diagonal(const PointCloud& c) {
+  Box3 b;
+  for (const auto& p : c.points) b.extend(p);
+  return b.diagonal();
+}
+
+// Fits, then measures every sample against the blended surface; returns the result.
+SlimFitResult fit_and_check(const PointCloud& c, double rel, double tolerance_factor = 1.0) {
+  const SlimFitResult r = fit_slim(c, {.max_error = rel});
+  const double E = rel * diagonal(c);
+  EXPECT_NEAR(r.stats.max_error_abs, E, 1e-12 * E);
+  const SlimError e = evaluate_slim(r.model, c, {.keep_per_point = true});
+  EXPECT_EQ(e.misses, 0u);
+  EXPECT_LE(e.max, tolerance_factor * E) << e.count_above(E) << " of " << e.points << " points beyond E";
+  EXPECT_LE(e.rms, E);
+  EXPECT_EQ(r.stats.blend_failures, 0u);
+  EXPECT_EQ(r.model.slims.size(), r.stats.patches);
+  EXPECT_EQ(r.model.metadata.at("patches"), std::to_string(r.stats.patches));
+  for (const auto& s : r.model.slims) {
+    EXPECT_GT(s.radius, 0);
+    EXPECT_TRUE(s.local.is_finite());
+  }
+  return r;
+}
+
+TEST(FitSlim, SphereIsAHandfulOfPatches) {
+  const PointCloud c = sphere(4000, 1.0, 1);
+  const auto r = fit_and_check(c, 1e-3);
+  EXPECT_LE(r.stats.patches, 20u);
+  EXPECT_FALSE(r.stats.normals_estimated);
+  EXPECT_EQ(r.model.metadata.at("normals"), "given");
+}
+
+TEST(FitSlim, EllipsoidIsAHandfulOfPatches) {
+  const auto r = fit_and_check(ellipsoid(5000, {1.0, 0.6, 0.35}, 2), 1e-3);
+  EXPECT_LE(r.stats.patches, 30u);
+}
+
+TEST(FitSlim, TorusWithinE) {
+  const auto r = fit_and_check(torus(8000, 1.0, 0.35, 3), 1e-3);
+  EXPECT_GT(r.stats.patches, 4u);  // a torus is quartic: one quadric cannot do
+}
+
+TEST(FitSlim, RoundedCubeWithinE) { fit_and_check(rounded_cube(12000, 0.8, 0.2, 4), 1e-3); }
+
+TEST(FitSlim, AbsoluteErrorAndFewerPatchesForLargerError) {
+  const PointCloud c = torus(6000, 1.0, 0.35, 5);
+  const auto fine = fit_slim(c, {.max_error = 1e-4, .max_error_is_absolute = true});
+  const auto coarse = fit_slim(c, {.max_error = 1e-2, .max_error_is_absolute = true});
+  EXPECT_DOUBLE_EQ(fine.stats.max_error_abs, 1e-4);
+  EXPECT_LE(evaluate_slim(fine.model, c).max, 1e-4);
+  EXPECT_LE(evaluate_slim(coarse.model, c).max, 1e-2);
+  EXPECT_LT(coarse.stats.patches, fine.stats.patches);
+}
+
+TEST(FitSlim, NoisyInputWithinErrorPlusNoise) {
+  PointCloud c = sphere(5000, 1.0, 6);
+  const double E = 2e-3 * diagonal(c), noise = 0.5 * E;
+  std::mt19937_64 rng(60);
+  std::uniform_real_distribution<double> U(-noise, noise);
+  for (std::size_t i = 0; i < c.points.size(); ++i) c.points[i] += U(rng) * c.normals[i];
+  const auto r = fit_slim(c, {.max_error = E, .max_error_is_absolute = true});
+  // The noise-free sphere is within E + noise of the fit, and so is every noisy sample.
+  EXPECT_LE(evaluate_slim(r.model, c).max, E + noise);
+  const PointCloud clean = sphere(3000, 1.0, 61);
+  EXPECT_LE(evaluate_slim(r.model, clean, {.probe_height = 4 * E}).max, E + noise);
+}
+
+TEST(FitSlim, HeldOutPointsOfTheSameSurface) {
+  const auto r = fit_slim(torus(8000, 1.0, 0.35, 7), {.max_error = 1e-3});
+  const PointCloud held_out = torus(4000, 1.0, 0.35, 70);
+  const SlimError e = evaluate_slim(r.model, held_out);
+  EXPECT_EQ(e.misses, 0u);
+  EXPECT_LE(e.max, 2.0 * r.stats.max_error_abs);
+  EXPECT_LE(e.rms, 0.5 * r.stats.max_error_abs);
+}
+
+TEST(FitSlim, EstimatesNormalsWhenAbsent) {
+  PointCloud c = torus(6000, 1.0, 0.35, 8);
+  const PointCloud truth = c;
+  c.normals.clear();
+  const auto r = fit_slim(c, {.max_error = 1e-3});
+  EXPECT_TRUE(r.stats.normals_estimated);
+  EXPECT_EQ(r.model.metadata.at("normals"), "estimated");
+  // Measured along the true normals the error grows by at most the tilt of the estimates.
+  EXPECT_LE(evaluate_slim(r.model, truth).max, 1.5 * r.stats.max_error_abs);
+}
+
+TEST(EstimateNormals, OutwardOnSphereAndTorus) {
+  for (const PointCloud& c : {sphere(3000, 2.0, 9), torus(5000, 1.0, 0.35, 10)}) {
+    const NormalEstimation est = estimate_normals(c.points);
+    ASSERT_EQ(est.normals.size(), c.points.size());
+    std::size_t good = 0;
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      EXPECT_NEAR(est.normals[i].norm(), 1.0, 1e-9);
+      good += est.normals[i].dot(c.normals[i]) > 0.98;
+    }
+    EXPECT_EQ(good, c.points.size());
+  }
+}
+
+TEST(FitSlimErrors, TooFewPoints) {
+  PointCloud c = sphere(9, 1.0, 11);
+  try {
+    fit_slim(c);
+    FAIL() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("9 points"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FitSlimErrors, CoplanarPoints) {
+  PointCloud c;
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int i = 0; i < 200; ++i) {
+    c.points.emplace_back(U(rng), U(rng), 0.5);
+    c.normals.emplace_back(0, 0, 1);
+  }
+  EXPECT_THROW(
+      {
+        try {
+          fit_slim(c);
+        } catch (const InvalidInput& e) {
+          EXPECT_NE(std::string(e.what()).find("coplanar"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InvalidInput);
+}
+
+TEST(FitSlimErrors, DuplicatesOnly) {
+  PointCloud c;
+  c.points.assign(50, Eigen::Vector3d(1, 2, 3));
+  try {
+    fit_slim(c);
+    FAIL() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("coincide"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FitSlimErrors, NaNPointAndNormal) {
+  PointCloud c = sphere(100, 1.0, 13);
+  c.points[42].y() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    fit_slim(c);
+    FAIL() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("point 42"), std::string::npos) << e.what();
+  }
+  c = sphere(100, 1.0, 13);
+  c.normals[7] = Eigen::Vector3d::Zero();
+  EXPECT_THROW(fit_slim(c), InvalidInput);
+  c.normals.pop_back();
+  EXPECT_THROW(fit_slim(c), InvalidInput);  // count mismatch
+}
+
+TEST(FitSlimErrors, BadOptions) {
+  const PointCloud c = sphere(100, 1.0, 14);
+  EXPECT_THROW(fit_slim(c, {.max_error = 0}), InvalidInput);
+  EXPECT_THROW(fit_slim(c, {.max_error = -1e-3}), InvalidInput);
+  EXPECT_THROW(fit_slim(c, {.max_error = std::numeric_limits<double>::quiet_NaN()}), InvalidInput);
+}
+
+TEST(EvaluateSlim, EmptyInputs) {
+  EXPECT_THROW(evaluate_slim(Model{}, sphere(20, 1.0, 15)), InvalidInput);
+  Model m;
+  m.slims.push_back(SlimPatch{});
+  EXPECT_THROW(evaluate_slim(m, PointCloud{}), InvalidInput);
+}
+
+TEST(EvaluateSlim, ExactSphereModelHasZeroError) {
+  // One patch holding the unit sphere in local coordinates of a ball of radius 3 at the origin.
+  Model m;
+  SlimPatch s;
+  s.radius = 3.0;
+  s.local = Quadric::sphere(Eigen::Vector3d::Zero(), 1.0).to_local(Eigen::Vector3d::Zero(), 3.0);
+  m.slims.push_back(s);
+  const SlimError e = evaluate_slim(m, sphere(500, 1.0, 16), {.probe_height = 0.01});
+  EXPECT_EQ(e.misses, 0u);
+  EXPECT_LT(e.max, 1e-12);
+  // A sphere of radius 1.001 measures 1e-3 everywhere.
+  const SlimError f = evaluate_slim(m, sphere(500, 1.001, 17), {.probe_height = 0.01});
+  EXPECT_NEAR(f.max, 1e-3, 1e-9);
+  EXPECT_NEAR(f.rms, 1e-3, 1e-9);
+}
+
+TEST(EvaluateSlim, FitterProbeAgreesWithReferenceScene) {
+  // The fitter verifies with its own kd-tree probe; the measure uses core/reference.h.
+  const PointCloud c = rounded_cube(6000, 0.8, 0.2, 18);
+  const auto r = fit_slim(c, {.max_error = 3e-3});
+  const SlimError e = evaluate_slim(r.model, c, {.keep_per_point = true});
+  const BlendProbe probe(r.model);
+  for (std::size_t i = 0; i < c.points.size(); ++i)
+    ASSERT_NEAR(probe.probe(c.points[i], c.normals[i], e.probe_height), e.per_point[i], 1e-9) << "point " << i;
+}
+
+}  // namespace
+}  // namespace quadrix
