@@ -13,6 +13,8 @@ namespace quadrix::cli {
 void add_info(CLI::App& root, Commands& commands);
 void add_render(CLI::App& root, Commands& commands);
 void add_synth(CLI::App& root, Commands& commands);
+void add_fit(CLI::App& root, Commands& commands);
+void add_view(CLI::App& root, Commands& commands);
 }  // namespace quadrix::cli
 
 int main(int argc, char** argv) {
@@ -25,6 +27,8 @@ int main(int argc, char** argv) {
   add_info(app, commands);
   add_render(app, commands);
   add_synth(app, commands);
+  add_fit(app, commands);
+  add_view(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
 

@@ -1,0 +1,93 @@
+// quadrix fit POINTS -o model.qxm: SLIM surfaces from point clouds (issue 4, DESIGN §2).
+#include <random>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/model_io.h"
+#include "core/points_io.h"
+#include "fit/evaluate.h"
+#include "fit/slim_fit.h"
+#include "tools/cli.h"
+
+namespace quadrix::cli {
+
+void add_fit(CLI::App& root, Commands& commands) {
+  auto* app = root.add_subcommand("fit", "Fit a SLIM surface (sparse low-degree implicits) to a point cloud");
+  struct Args {
+    std::string points, out;
+    double max_error = 1e-3;
+    double max_error_abs = 0;
+    double holdout = 0;
+    SlimFitOptions options;
+  };
+  auto a = std::make_shared<Args>();
+  app->add_option("POINTS", a->points, "Point cloud: PLY, XYZ (3 or 6 columns), OFF/OBJ vertices")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm")->required();
+  app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
+      ->check(CLI::Range(1e-7, 0.5));
+  app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--normal-weight", a->options.normal_weight, "μ: weight of the normal term")
+      ->check(CLI::Range(1e-6, 10.0));
+  app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")
+      ->check(CLI::Range(0.0, 0.9));
+  app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)");
+  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+                        PointCloud cloud = read_points(a->points);
+                        PointCloud held;
+                        if (a->holdout > 0) {
+                          // Fit on a random subset; measure the held-out rest afterwards.
+                          std::mt19937_64 rng(a->options.seed);
+                          std::bernoulli_distribution out(a->holdout);
+                          PointCloud kept;
+                          for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+                            PointCloud& dst = out(rng) ? held : kept;
+                            dst.points.push_back(cloud.points[i]);
+                            if (cloud.has_normals()) dst.normals.push_back(cloud.normals[i]);
+                          }
+                          cloud = std::move(kept);
+                        }
+                        SlimFitOptions o = a->options;
+                        o.max_error = a->max_error_abs > 0 ? a->max_error_abs : a->max_error;
+                        o.max_error_is_absolute = a->max_error_abs > 0;
+                        SlimFitResult r = fit_slim(cloud, o);
+                        r.model.metadata["producer"] = fmt::format("quadrix fit {}", a->points);
+                        const auto& s = r.stats;
+                        nlohmann::json j = {{"points", s.points},
+                                            {"patches", s.patches},
+                                            {"normals", s.normals_estimated ? "estimated" : "given"},
+                                            {"max_error_abs", s.max_error_abs},
+                                            {"max_error_rel", s.max_error_abs / s.diagonal},
+                                            {"diagonal", s.diagonal},
+                                            {"measured_max_abs", s.max_blend},
+                                            {"measured_rms_abs", s.rms_blend},
+                                            {"measured_max_rel", s.max_blend / s.diagonal},
+                                            {"measured_rms_rel", s.rms_blend / s.diagonal},
+                                            {"points_beyond_bound", s.blend_failures},
+                                            {"height_patches", s.height_patches},
+                                            {"seconds", {{"normals", s.time_normals},
+                                                         {"candidates", s.time_candidates},
+                                                         {"cover", s.time_cover},
+                                                         {"verify", s.time_verify},
+                                                         {"total", s.time_total}}}};
+                        if (s.normals_estimated)
+                          log::warn("{}: no normals in the file; estimated them (PCA + MST orientation)", a->points);
+                        if (!held.points.empty()) {
+                          const SlimError e = evaluate_slim(r.model, held);
+                          j["holdout"] = {{"points", e.points}, {"misses", e.misses}, {"max_abs", e.max},
+                                          {"rms_abs", e.rms}, {"max_rel", e.max / s.diagonal}};
+                        }
+                        write_model(r.model, a->out);
+                        report.json["fit"] = j;
+                        if (s.blend_failures > 0)
+                          log::warn("{} of {} points remain farther than E = {:.3g} from the blended surface (max {:.3g})",
+                                    s.blend_failures, s.points, s.max_error_abs, s.max_blend);
+                        log::info("{} patches for {} points in {:.2f} s; max error {:.3g} (E = {:.3g})", s.patches,
+                                  s.points, s.time_total, s.max_blend, s.max_error_abs);
+                        return kOk;
+                      }});
+}
+
+}  // namespace quadrix::cli

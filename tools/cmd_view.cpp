@@ -1,0 +1,145 @@
+// quadrix view MODEL: an interactive GLFW window. Left drag orbits, right drag pans, the wheel
+// zooms; C toggles culling, S cycles the shading, R resets the view, Esc quits. The title shows
+// the frame time. --frames N renders N frames and exits (scripts and tests), --screenshot saves
+// the last frame.
+#include <cmath>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/image.h"
+#include "core/log.h"
+#include "core/mesh_io.h"
+#include "core/model_io.h"
+#include "render/context.h"
+#include "render/renderer.h"
+#include "tools/cli.h"
+
+namespace quadrix::cli {
+namespace {
+
+struct ViewState {
+  FramingOptions framing;
+  Box3 box;
+  Eigen::Vector3d pan = Eigen::Vector3d::Zero();
+  double zoom = 1.0;
+  render::RenderOptions options;
+  double last_x = 0, last_y = 0;
+  bool rotating = false, panning = false;
+
+  Camera camera(int w, int h) const {
+    FramingOptions f = framing;
+    f.width = std::max(w, 1);
+    f.height = std::max(h, 1);
+    Camera c = frame_box(box, f);
+    const Eigen::Vector3d dir = c.eye - c.target;
+    c.target += pan;
+    c.eye = c.target + zoom * dir;
+    c.near_plane = std::max(c.near_plane * zoom, 1e-6 * dir.norm());
+    c.far_plane *= std::max(1.0, zoom);
+    return c;
+  }
+};
+
+}  // namespace
+
+void add_view(CLI::App& root, Commands& commands) {
+  auto* app = root.add_subcommand("view", "Open an interactive window (GLFW) on a model");
+  struct Args {
+    std::string model, mesh, size = "960x720", screenshot, shading = "phong";
+    double azimuth = 30, elevation = 20, fov = 40;
+    int frames = 0;
+    bool no_cull = false;
+  };
+  auto a = std::make_shared<Args>();
+  app->add_option("MODEL", a->model, "Model file (.qxm)")->required();
+  app->add_option("--mesh", a->mesh, "Also draw this mesh");
+  app->add_option("--size", a->size, "Window size WxH");
+  app->add_option("--azimuth", a->azimuth, "Initial azimuth (degrees)");
+  app->add_option("--elevation", a->elevation, "Initial elevation (degrees)")->check(CLI::Range(-89.9, 89.9));
+  app->add_option("--fov", a->fov, "Vertical field of view (degrees)")->check(CLI::Range(0.001, 179.0));
+  app->add_option("--shading", a->shading, "phong, envmap or npr")->check(CLI::IsMember({"phong", "envmap", "npr"}));
+  app->add_flag("--no-cull", a->no_cull, "Start with culling off");
+  app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")->check(CLI::NonNegativeNumber);
+  app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG");
+  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+                        const auto [w, h] = parse_size(a->size);
+                        const Model model = read_model(a->model);
+                        std::optional<PolygonMesh> mesh;
+                        if (!a->mesh.empty()) mesh = read_mesh(a->mesh);
+                        ViewState st;
+                        st.box = bounds(model);
+                        if (mesh)
+                          for (const auto& v : mesh->vertices) st.box.extend(v);
+                        st.framing = {.azimuth_deg = a->azimuth, .elevation_deg = a->elevation, .fov_y_deg = a->fov};
+                        st.options.cull = !a->no_cull;
+                        st.options.shading = a->shading == "envmap" ? render::Shading::envmap
+                                             : a->shading == "npr"  ? render::Shading::npr
+                                                                    : render::Shading::phong;
+                        auto context = render::create_context(
+                            "glfw", {.width = w, .height = h, .visible = true, .title = "quadrix " + a->model});
+                        render::Renderer renderer(*context);
+                        renderer.set_model(model);
+                        if (mesh) renderer.set_mesh(*mesh);
+                        auto* win = static_cast<GLFWwindow*>(context->native_window());
+                        glfwSetWindowUserPointer(win, &st);
+                        glfwSetMouseButtonCallback(win, [](GLFWwindow* wnd, int button, int action, int) {
+                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
+                          glfwGetCursorPos(wnd, &s.last_x, &s.last_y);
+                          if (button == GLFW_MOUSE_BUTTON_LEFT) s.rotating = action == GLFW_PRESS;
+                          if (button == GLFW_MOUSE_BUTTON_RIGHT) s.panning = action == GLFW_PRESS;
+                        });
+                        glfwSetCursorPosCallback(win, [](GLFWwindow* wnd, double x, double y) {
+                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
+                          const double dx = x - s.last_x, dy = y - s.last_y;
+                          s.last_x = x, s.last_y = y;
+                          if (s.rotating) {
+                            s.framing.azimuth_deg -= 0.4 * dx;
+                            s.framing.elevation_deg = std::clamp(s.framing.elevation_deg + 0.4 * dy, -89.0, 89.0);
+                          } else if (s.panning) {
+                            int ww, wh;
+                            glfwGetFramebufferSize(wnd, &ww, &wh);
+                            const Camera c = s.camera(ww, wh);
+                            const Eigen::Vector3d f = c.forward(), r = f.cross(c.up).normalized(), u = r.cross(f);
+                            const double k = 2.0 * (c.eye - c.target).norm() *
+                                             std::tan(c.fov_y_deg * 3.14159265358979 / 360.0) / std::max(wh, 1);
+                            s.pan += k * (-dx * r + dy * u);
+                          }
+                        });
+                        glfwSetScrollCallback(win, [](GLFWwindow* wnd, double, double dy) {
+                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
+                          s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 1e-4, 1e4);
+                        });
+                        glfwSetKeyCallback(win, [](GLFWwindow* wnd, int key, int, int action, int) {
+                          if (action != GLFW_PRESS) return;
+                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
+                          if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(wnd, GLFW_TRUE);
+                          if (key == GLFW_KEY_C) s.options.cull = !s.options.cull;
+                          if (key == GLFW_KEY_S)
+                            s.options.shading = static_cast<render::Shading>((static_cast<int>(s.options.shading) + 1) % 3);
+                          if (key == GLFW_KEY_R) s.pan.setZero(), s.zoom = 1.0;
+                        });
+                        int frame = 0;
+                        double ms = 0;
+                        while (!context->should_close() && (a->frames == 0 || frame < a->frames)) {
+                          int fw, fh;
+                          glfwGetFramebufferSize(win, &fw, &fh);
+                          const auto stats = renderer.draw(st.camera(fw, fh), st.options);
+                          ms = stats.ms_total;
+                          renderer.present(fw, fh);
+                          context->swap_buffers();
+                          glfwSetWindowTitle(win, fmt::format("quadrix {} — {:.1f} ms/frame, culling {}", a->model, ms,
+                                                              st.options.cull ? "on" : "off")
+                                                      .c_str());
+                          glfwPollEvents();
+                          ++frame;
+                        }
+                        if (!a->screenshot.empty()) write_png(renderer.read_colour(), a->screenshot);
+                        report.json["view"] = {{"frames", frame}, {"ms_last_frame", ms}, {"context", context->description()}};
+                        return kOk;
+                      }});
+}
+
+}  // namespace quadrix::cli
