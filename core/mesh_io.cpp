@@ -202,7 +202,9 @@ PolygonMesh parse_off(std::string_view text, const fs::path& path) {
     if (n < 3) lines.fail("face {} has {} vertices (at least 3 needed)", f, n);
     face.clear();
     for (long long k = 0; k < n; ++k) {
-      const std::string_view tok = next_token(line);
+      std::string_view tok = next_token(line);
+      // OFF is whitespace-separated: a face record may continue on the next line.
+      while (tok.empty() && lines.next(line)) tok = next_token(line);
       long long idx = 0;
       if (tok.empty()) lines.fail("face {}: expected {} vertex indices, found {}", f, n, k);
       if (!parse_long(tok, idx)) lines.fail("face {}: index '{}' is not an integer", f, tok);

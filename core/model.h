@@ -38,10 +38,23 @@ struct SlimPatch {
 };
 
 /// A quadric clipped by a tetrahedron ([Stoll06] §5): converted quads, skin and volume cells.
+/// The quadric is written relative to the tetrahedron's centroid (y = x − centroid()): world
+/// coordinates far from the origin would cost the coefficients their digits (DESIGN §5).
 struct TetPatch {
   std::array<Eigen::Vector3d, 4> corners;  ///< world units
-  Quadric quadric;                         ///< world coordinates
+  Quadric quadric;                         ///< f(y), y = x − centroid()
   std::optional<Rgb> colour;
+
+  Eigen::Vector3d centroid() const { return 0.25 * ((corners[0] + corners[1]) + (corners[2] + corners[3])); }
+  /// The quadric in world coordinates (loses precision far from the origin; for tests and tools).
+  Quadric world() const { return quadric.translated_to_origin(-centroid()); }
+  /// A patch from a quadric given in world coordinates.
+  static TetPatch from_world(const std::array<Eigen::Vector3d, 4>& corners, const Quadric& world_quadric,
+                             std::optional<Rgb> colour = std::nullopt) {
+    TetPatch t{corners, {}, colour};
+    t.quadric = world_quadric.translated_to_origin(t.centroid());
+    return t;
+  }
 };
 
 enum class GlyphKind : std::uint8_t { sphere = 0, ellipsoid = 1, cylinder = 2 };

@@ -8,7 +8,7 @@
 ///                  [clip_nx clip_ny clip_nz clip_d] [red green blue]
 ///                  (coefficients of g(u), u = (x − centre)/radius; clip plane in u)
 ///   element tet:   x0 y0 z0 x1 y1 z1 x2 y2 z2 x3 y3 z3 k_xx … k_1 [red green blue]
-///                  (coefficients in world coordinates)
+///                  (coefficients relative to the centroid of the four corners: y = x − centroid)
 ///   element glyph: kind(uchar: 0 sphere, 1 ellipsoid, 2 cylinder) x y z radius
 ///                  a0x a0y a0z a1x a1y a1z a2x a2y a2z [red green blue]
 ///   header comments: `comment quadrix-format 1`, then `comment KEY VALUE` per metadata entry

@@ -129,8 +129,7 @@ ReferenceScene::ReferenceScene(const Model& model) : impl_(std::make_unique<Impl
   impl_->tets.reserve(model.tets.size());
   for (std::uint32_t i = 0; i < model.tets.size(); ++i) {
     const auto& t = model.tets[i];
-    const Eigen::Vector3d c = 0.25 * (t.corners[0] + t.corners[1] + t.corners[2] + t.corners[3]);
-    impl_->tets.push_back({Tetrahedron(t.corners), c, t.quadric.translated_to_origin(c)});
+    impl_->tets.push_back({Tetrahedron(t.corners), t.centroid(), t.quadric});
     impl_->refs.push_back({PrimitiveKind::tet, i});
     boxes.push_back(bounds(t));
   }

@@ -35,7 +35,7 @@ Model tet_model(const Quadric& q, int n, const Eigen::Vector3d& lo, const Eigen:
                 fmin = std::min(fmin, f);
                 fmax = std::max(fmax, f);
               }
-          if (fmin <= 0.0 && fmax >= 0.0) m.tets.push_back({t, q, colour});
+          if (fmin <= 0.0 && fmax >= 0.0) m.tets.push_back(TetPatch::from_world(t, q, colour));
         }
       }
   return m;

@@ -44,12 +44,13 @@ float bits_float(std::uint32_t u) {
 }
 
 GpuTet pack(const TetPatch& t, std::int32_t id) {
+  const Eigen::Vector3d c = t.centroid();
   std::array<Eigen::Vector3d, 4> p = t.corners;
   if ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) < 0) std::swap(p[1], p[2]);
-  const Eigen::Vector3d c = 0.25 * (p[0] + p[1] + p[2] + p[3]);
   double s = 0;
   for (const auto& q : p) s = std::max(s, (q - c).norm());
-  const Quadric local = t.quadric.to_local(c, s).normalized();
+  // Relative to the centroid already; scaled by s so local coordinates are O(1).
+  const Quadric local = t.quadric.to_local(Eigen::Vector3d::Zero(), s).normalized();
   GpuTet g{};
   const Split cs = split(c);
   for (int i = 0; i < 3; ++i) {

@@ -15,6 +15,7 @@ void add_render(CLI::App& root, Commands& commands);
 void add_synth(CLI::App& root, Commands& commands);
 void add_fit(CLI::App& root, Commands& commands);
 void add_view(CLI::App& root, Commands& commands);
+void add_convert(CLI::App& root, Commands& commands);
 }  // namespace quadrix::cli
 
 int main(int argc, char** argv) {
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   add_synth(app, commands);
   add_fit(app, commands);
   add_view(app, commands);
+  add_convert(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
 

@@ -15,25 +15,30 @@ vec3 view_dir_at(vec2 frag) {
   return normalize(vec3(ndc.x / u_proj[0][0], ndc.y / u_proj[1][1], -1.0));
 }
 
+// Outlines [Sigg06]: silhouettes (coverage changes), depth discontinuities (Sobel on eye depth,
+// relative to the centre depth) and creases (Sobel on normals).
 float edge_strength(ivec2 p) {
-  // Sobel on eye depth (relative) and on normals.
-  float gx = 0.0, gy = 0.0;
-  vec3 nx = vec3(0.0), ny = vec3(0.0);
   const int kx[9] = int[9](-1, 0, 1, -2, 0, 2, -1, 0, 1);
   const int ky[9] = int[9](-1, -2, -1, 0, 0, 0, 1, 2, 1);
   float centre = texelFetch(g_normal_depth, p, 0).w;
+  float gx = 0.0, gy = 0.0;
+  vec3 nx = vec3(0.0), ny = vec3(0.0);
+  int covered = 0;
   for (int i = 0; i < 9; ++i) {
     ivec2 q = clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), ivec2(u_viewport) - 1);
     vec4 s = texelFetch(g_normal_depth, q, 0);
-    float d = s.w > 0.0 ? s.w : 1e30;
+    covered += s.w > 0.0 ? 1 : 0;
+    float d = s.w > 0.0 ? s.w : centre;
     gx += float(kx[i]) * d;
     gy += float(ky[i]) * d;
     nx += float(kx[i]) * s.xyz;
     ny += float(ky[i]) * s.xyz;
   }
-  float depth_edge = length(vec2(gx, gy)) / max(centre, 1e-6);
+  if (covered != 0 && covered != 9) return 1.0;  // silhouette
+  if (covered == 0) return 0.0;
+  float depth_edge = length(vec2(gx, gy)) / centre;
   float normal_edge = length(nx) + length(ny);
-  return max(step(0.08, depth_edge), step(1.2, normal_edge));
+  return max(step(0.05, depth_edge), step(1.2, normal_edge));
 }
 
 void main() {
