@@ -1,6 +1,7 @@
 // quadrix render MODEL --out img.png: ray-cast a model with the OpenGL renderer (contexts osmesa,
 // egl, glfw) or the double-precision CPU reference.
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -45,9 +46,16 @@ FloatImage normals_of(const render::GBuffer& g) {
 
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   const auto [w, h] = parse_size(a.size);
-  const Model model = read_model(a.model);
+  // A mesh file as MODEL draws just that mesh as flat triangles (the baseline of the benchmarks).
+  const std::string ext = std::filesystem::path(a.model).extension().string();
+  const bool model_is_mesh = ext == ".obj" || ext == ".off";
+  const Model model = model_is_mesh ? Model{} : read_model(a.model);
   std::optional<PolygonMesh> mesh;
   if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
+  if (model_is_mesh) {
+    if (mesh) throw InvalidInput("give either a mesh as MODEL or --mesh, not both");
+    mesh = read_mesh(a.model);
+  }
   if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
   Box3 box = bounds(model);
   if (mesh)
@@ -59,6 +67,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 
   std::string backend = a.backend;
   if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";
+  if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
   if (backend == "gl" && !gl_can_draw(model))
     throw InvalidInput(fmt::format("{}: holds SLIM patches or glyphs, which only --backend cpu draws so far", a.model));
   j["backend"] = backend;
@@ -134,7 +143,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 void add_render(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("render", "Ray-cast a model into a PNG (and depth/normal PFM)");
   auto a = std::make_shared<RenderArgs>();
-  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t)")->required();
+  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.obj/.off) drawn as flat triangles")->required();
   app->add_option("-o,--out", a->out, "Output PNG")->required();
   app->add_option("--backend", a->backend, "auto (gl where it draws every kind, else cpu), gl, or cpu (the reference)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
