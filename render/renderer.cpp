@@ -94,7 +94,8 @@ bool has_pipeline_statistics() {
 
 struct Renderer::Impl {
   GlContext* context;
-  gl::Program tet_program, mesh_program, shade_program;
+  gl::Program tet_program, mesh_program;
+  gl::Program shade_programs[3];  // one per Shading mode
   gl::VertexArray empty_vao;
   gl::Buffer tets, stats;
   std::size_t tet_count = 0;
@@ -102,7 +103,7 @@ struct Renderer::Impl {
   int width = 0, height = 0;
   gl::Texture normal_depth, albedo, ids, depth, colour;
   gl::Framebuffer gbuffer, final_fbo;
-  gl::Query q_time_geometry, q_time_shading, q_samples, q_invocations;
+  gl::Query q_samples, q_invocations;
   bool pipeline_stats = false;
 
   void resize(int w, int h) {
@@ -137,11 +138,11 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
   impl_->context = &context;
   impl_->tet_program = gl::Program("tet", shader_source("tet.vert"), shader_source("tet.frag"));
   impl_->mesh_program = gl::Program("mesh", shader_source("mesh.vert"), shader_source("mesh.frag"));
-  impl_->shade_program = gl::Program("shade", shader_source("fullscreen.vert"), shader_source("shade.frag"));
+  for (int mode = 0; mode < 3; ++mode)
+    impl_->shade_programs[mode] = gl::Program("shade", shader_source("fullscreen.vert"), shader_source("shade.frag"),
+                                              fmt::format("#define SHADING_MODE {}\n", mode));
   impl_->empty_vao = gl::make_vertex_array();
   impl_->stats = gl::make_buffer(2 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
-  impl_->q_time_geometry = gl::make_query(GL_TIME_ELAPSED);
-  impl_->q_time_shading = gl::make_query(GL_TIME_ELAPSED);
   impl_->q_samples = gl::make_query(GL_SAMPLES_PASSED);
   impl_->pipeline_stats = has_pipeline_statistics();
   if (impl_->pipeline_stats) impl_->q_invocations = gl::make_query(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
@@ -217,12 +218,21 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   glClearNamedFramebufferfv(I.gbuffer.id(), GL_COLOR, 1, zero);
   glClearNamedFramebufferiv(I.gbuffer.id(), GL_COLOR, 2, minus_one);
   glClearNamedFramebufferfv(I.gbuffer.id(), GL_DEPTH, 0, &one);
+  using clock = std::chrono::steady_clock;
+  auto mark = clock::now();
+  const auto lap = [&](double& ms) {
+    if (!o.time_passes) return;
+    glFinish();
+    const auto now = clock::now();
+    ms = std::chrono::duration<double, std::milli>(now - mark).count();
+    mark = now;
+  };
+  lap(st.ms_clear);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);
 
-  glBeginQuery(GL_TIME_ELAPSED, I.q_time_geometry.id());
   if (o.statistics) {
     glBeginQuery(GL_SAMPLES_PASSED, I.q_samples.id());
     if (I.pipeline_stats) glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, I.q_invocations.id());
@@ -267,33 +277,25 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     glEndQuery(GL_SAMPLES_PASSED);
     if (I.pipeline_stats) glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
   }
-  glEndQuery(GL_TIME_ELAPSED);
+  lap(st.ms_geometry);
 
   // Deferred shading into the output target.
-  glBeginQuery(GL_TIME_ELAPSED, I.q_time_shading.id());
   glBindFramebuffer(GL_FRAMEBUFFER, I.final_fbo.id());
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
-  const auto& s = I.shade_program;
+  const auto& s = I.shade_programs[static_cast<int>(o.shading)];
   s.use();
   s.set("u_view_rot", R);
   s.set("u_proj", P);
   s.set("u_viewport", Eigen::Vector2f(float(I.width), float(I.height)));
-  s.set("u_mode", static_cast<int>(o.shading));
   s.set("u_background", Eigen::Vector3f(o.background[0] / 255.f, o.background[1] / 255.f, o.background[2] / 255.f));
   glBindTextureUnit(0, I.normal_depth.id());
   glBindTextureUnit(1, I.albedo.id());
   glBindVertexArray(I.empty_vao.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
-  glEndQuery(GL_TIME_ELAPSED);
+  lap(st.ms_shading);
   glFinish();
   gl::check_error("draw");
-
-  GLuint64 ns = 0;
-  glGetQueryObjectui64v(I.q_time_geometry.id(), GL_QUERY_RESULT, &ns);
-  st.ms_geometry = ns * 1e-6;
-  glGetQueryObjectui64v(I.q_time_shading.id(), GL_QUERY_RESULT, &ns);
-  st.ms_shading = ns * 1e-6;
   if (o.statistics) {
     GLuint64 v = 0;
     glGetQueryObjectui64v(I.q_samples.id(), GL_QUERY_RESULT, &v);

@@ -26,6 +26,9 @@ struct RenderOptions {
   /// Clip-plane tolerance in local units (tetrahedron size ≈ 1): neighbours overlap by this much
   /// so no pixel falls between them.
   float clip_eps = 2e-5f;
+  /// glFinish after each pass and time the passes on the CPU (llvmpipe's GL_TIME_ELAPSED only
+  /// measures command submission). Costs the overlap between passes; for benchmarks.
+  bool time_passes = false;
 };
 
 /// Measured figures of one frame.
@@ -34,8 +37,9 @@ struct FrameStats {
   std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
-  double ms_geometry = 0;              ///< G-buffer passes (GPU time)
-  double ms_shading = 0;               ///< deferred pass
+  double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
+  double ms_geometry = 0;              ///< G-buffer passes (time_passes only)
+  double ms_shading = 0;               ///< deferred pass (time_passes only)
   double ms_total = 0;                 ///< CPU wall time of the frame incl. glFinish
 };
 

@@ -108,13 +108,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   ro.statistics = true;
   const render::FrameStats stats = renderer.draw(camera, ro);
   ro.statistics = false;
-  std::vector<double> geometry, shading, total;
-  for (int f = 0; f < a.frames; ++f) {
-    const auto s = renderer.draw(camera, ro);
-    geometry.push_back(s.ms_geometry);
-    shading.push_back(s.ms_shading);
-    total.push_back(s.ms_total);
-  }
+  std::vector<double> total;
+  for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
   write_png(renderer.read_colour(), a.out);
   if (!a.depth_out.empty() || !a.normal_out.empty()) {
     const render::GBuffer g = renderer.read_gbuffer();
@@ -130,8 +125,6 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j["primitives_culled"] = stats.culled;
   j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
   j["fragments_hit"] = stats.fragments_hit;
-  j["ms_geometry_median"] = median(geometry);
-  j["ms_shading_median"] = median(shading);
   j["ms_frame_median"] = median(total);
   log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), w, h, median(total),
             a.frames, stats.primitives - stats.culled, stats.culled);

@@ -16,6 +16,7 @@ void add_synth(CLI::App& root, Commands& commands);
 void add_fit(CLI::App& root, Commands& commands);
 void add_view(CLI::App& root, Commands& commands);
 void add_convert(CLI::App& root, Commands& commands);
+void add_bench(CLI::App& root, Commands& commands);
 }  // namespace quadrix::cli
 
 int main(int argc, char** argv) {
@@ -31,6 +32,7 @@ int main(int argc, char** argv) {
   add_fit(app, commands);
   add_view(app, commands);
   add_convert(app, commands);
+  add_bench(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
 

@@ -42,8 +42,9 @@ Query make_query(GLenum) {
 }
 
 namespace {
-GLuint compile(GLenum stage, std::string_view name, std::string_view source) {
-  const std::string full = std::string(shader_source("prelude.glsl")) + "\n#line 1\n" + std::string(source);
+GLuint compile(GLenum stage, std::string_view name, std::string_view source, std::string_view defines) {
+  const std::string full = std::string(shader_source("prelude.glsl")) + "\n" + std::string(defines) + "\n#line 1\n" +
+                           std::string(source);
   const GLuint s = glCreateShader(stage);
   const char* text = full.c_str();
   glShaderSource(s, 1, &text, nullptr);
@@ -63,11 +64,11 @@ GLuint compile(GLenum stage, std::string_view name, std::string_view source) {
 }
 }  // namespace
 
-Program::Program(std::string_view name, std::string_view vertex, std::string_view fragment) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, name, vertex);
+Program::Program(std::string_view name, std::string_view vertex, std::string_view fragment, std::string_view defines) {
+  const GLuint vs = compile(GL_VERTEX_SHADER, name, vertex, defines);
   GLuint fs = 0;
   try {
-    fs = compile(GL_FRAGMENT_SHADER, name, fragment);
+    fs = compile(GL_FRAGMENT_SHADER, name, fragment, defines);
   } catch (...) {
     glDeleteShader(vs);
     throw;

@@ -63,9 +63,9 @@ Query make_query(GLenum target);
 class Program {
 public:
   Program() = default;
-  /// Compiles and links; the prelude is prepended to every stage.
-  /// \throws GlError with the compiler log and the stage's file name.
-  Program(std::string_view name, std::string_view vertex, std::string_view fragment);
+  /// Compiles and links; the prelude, then `defines` (e.g. "#define MODE 1\n"), are prepended to
+  /// every stage. \throws GlError with the compiler log and the stage's file name.
+  Program(std::string_view name, std::string_view vertex, std::string_view fragment, std::string_view defines = {});
   GLuint id() const { return handle_.id(); }
   void use() const { glUseProgram(handle_.id()); }
   GLint location(const char* uniform) const;

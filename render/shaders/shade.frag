@@ -6,7 +6,8 @@ layout(binding = 1) uniform sampler2D g_albedo;
 uniform mat3 u_view_rot;
 uniform mat4 u_proj;
 uniform vec2 u_viewport;
-uniform int u_mode;          // 0 phong, 1 envmap, 2 npr
+// SHADING_MODE (0 phong, 1 envmap, 2 npr) is defined when the program is built: one program per
+// mode, so a frame runs only the code its mode needs.
 uniform vec3 u_background;
 out vec4 out_colour;
 
@@ -45,7 +46,7 @@ void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 nd = texelFetch(g_normal_depth, p, 0);
   if (nd.w <= 0.0) {
-    if (u_mode == 2 && edge_strength(p) > 0.0) { out_colour = vec4(0.0, 0.0, 0.0, 1.0); return; }
+    if (SHADING_MODE == 2 && edge_strength(p) > 0.0) { out_colour = vec4(0.0, 0.0, 0.0, 1.0); return; }
     out_colour = vec4(u_background, 1.0);
     return;
   }
@@ -55,7 +56,7 @@ void main() {
   vec3 lights[2] = vec3[2](vec3(0.0, 0.0, 1.0), normalize(vec3(-0.5, 0.8, 0.6)));
   float weights[2] = float[2](0.55, 0.45);
   vec3 colour;
-  if (u_mode == 1) {
+  if (SHADING_MODE == 1) {
     // Line map: stripes of the reflected direction; kinks show curvature discontinuities.
     vec3 r = reflect(-to_eye, n);
     float stripes = 0.5 + 0.5 * sin(18.0 * r.y + 6.0 * r.x);
@@ -68,7 +69,7 @@ void main() {
       diffuse += weights[i] * d;
       if (d > 0.0) spec += weights[i] * pow(max(dot(n, normalize(lights[i] + to_eye)), 0.0), 40.0);
     }
-    if (u_mode == 2) {
+    if (SHADING_MODE == 2) {
       diffuse = diffuse > 0.75 ? 0.95 : diffuse > 0.35 ? 0.6 : 0.3;
       spec = spec > 0.5 ? 0.4 : 0.0;
       colour = albedo * (0.15 + diffuse) + spec;

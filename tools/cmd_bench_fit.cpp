@@ -1,0 +1,303 @@
+// quadrix bench fit: SLIM fitting across error bounds on real scans, side by side with OpenMesh
+// quadric decimation and CGAL Poisson reconstruction of the same data (issue 4 item 6).
+// Writes bench_fit.csv, bench_fit.json and bench_fit.png (time and size against error).
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "bench/peers.h"
+#include "bench/plot.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/log.h"
+#include "core/mesh_io.h"
+#include "core/points_io.h"
+#include "fit/evaluate.h"
+#include "fit/normals.h"
+#include "fit/slim_fit.h"
+#include "tools/cli.h"
+
+#ifndef QUADRIX_DATASETS
+#define QUADRIX_DATASETS "../shared/datasets"
+#endif
+
+namespace quadrix::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One benchmark input: the points every method sees (with normals) and, where the data set
+// has one, the mesh the decimation starts from.
+struct Dataset {
+  std::string name;
+  fs::path file;
+  PointCloud cloud;
+  std::optional<PolygonMesh> mesh;
+  std::string normals;  // where the normals come from
+  double diagonal = 0;
+};
+
+// Area-weighted vertex normals of a mesh, turned outward by the sign of the enclosed volume;
+// vertices on no face get PCA normals (fit/normals.h).
+std::vector<Eigen::Vector3d> mesh_normals(const PolygonMesh& mesh, std::size_t& estimated) {
+  std::vector<Eigen::Vector3d> n(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  double volume = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      const auto &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
+      const Eigen::Vector3d area2 = (b - a).cross(c - a);
+      for (int v : {vs[0], vs[k], vs[k + 1]}) n[v] += area2;
+      volume += a.dot(b.cross(c));
+    }
+  }
+  const double sign = volume < 0 ? -1.0 : 1.0;
+  std::vector<std::size_t> missing;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    if (n[i].norm() > 0) n[i] = sign * n[i].normalized();
+    else missing.push_back(i);
+  }
+  estimated = missing.size();
+  if (!missing.empty()) {
+    const auto pca = estimate_normals(mesh.vertices).normals;
+    for (auto i : missing) n[i] = pca[i];
+  }
+  return n;
+}
+
+Dataset load_dataset(const std::string& name, const fs::path& dir) {
+  Dataset d;
+  d.name = name;
+  if (name == "bunny") d.file = dir / "meshes/bunny.ply";
+  else if (name == "armadillo") d.file = dir / "meshes/armadillo.obj";
+  else if (name == "kitten") d.file = dir / "points/kitten.xyz";
+  else {
+    d.file = fs::path(name).is_absolute() || fs::exists(name) ? fs::path(name) : dir / name;
+    d.name = d.file.stem().string();
+  }
+  const std::string ext = d.file.extension().string();
+  if (ext == ".off" || ext == ".obj" || ext == ".ply") {
+    try {
+      d.mesh = read_mesh(d.file);
+    } catch (const FormatError&) {
+      d.mesh.reset();  // a point cloud in a mesh format (no faces)
+    }
+  }
+  if (d.mesh) {
+    std::size_t estimated = 0;
+    d.cloud.points = d.mesh->vertices;
+    d.cloud.normals = mesh_normals(*d.mesh, estimated);
+    d.normals = estimated ? fmt::format("mesh faces ({} isolated vertices: PCA)", estimated) : "mesh faces";
+  } else {
+    d.cloud = read_points(d.file);
+    if (d.cloud.has_normals()) {
+      d.normals = "file";
+    } else {
+      d.cloud.normals = estimate_normals(d.cloud.points).normals;
+      d.normals = "estimated (PCA + MST)";
+    }
+  }
+  Box3 box;
+  for (const auto& p : d.cloud.points) box.extend(p);
+  d.diagonal = box.diagonal();
+  return d;
+}
+
+double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double l = -1;
+  in >> l;
+  return l;
+}
+
+// JSON has no infinity: misses make an error null.
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+double ratio(double a, double b) { return b > 0 ? a / b : std::numeric_limits<double>::quiet_NaN(); }
+
+struct Row {
+  std::string model, method;
+  double max_error = 0;  // bound asked for (relative); 0: none (Poisson)
+  std::size_t size = 0;
+  std::string unit;
+  double max_rel = 0, rms_rel = 0, seconds = 0;
+  std::size_t beyond = 0;  // points farther than the bound
+};
+
+constexpr Rgb kColours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}, {255, 127, 14}, {23, 190, 207}};
+
+Image8 draw_plot(const std::vector<std::string>& models, const std::vector<Row>& rows) {
+  PlotPanel time{"TIME (S) AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
+  PlotPanel size{"PATCHES / TRIANGLES AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    const Rgb colour = kColours[m % std::size(kColours)];
+    for (const auto& [method, style, label] :
+         {std::tuple{"slim", PlotStyle::solid, "SLIM"}, std::tuple{"decimation", PlotStyle::dashed, "OPENMESH"},
+          std::tuple{"poisson", PlotStyle::markers, "POISSON"}}) {
+      PlotSeries t{fmt::format("{} {}", models[m], label), {}, {}, colour, style};
+      PlotSeries s = t;
+      for (const auto& r : rows) {
+        if (r.model != models[m] || r.method != method) continue;
+        // SLIM and decimation at the bound they were asked for; Poisson at the error it reached.
+        const double x = r.max_error > 0 ? r.max_error : r.max_rel;
+        t.x.push_back(x), t.y.push_back(r.seconds);
+        s.x.push_back(x), s.y.push_back(double(r.size));
+      }
+      if (t.x.empty()) continue;
+      time.series.push_back(std::move(t));
+      size.series.push_back(std::move(s));
+    }
+  }
+  const PlotPanel panels[] = {time, size};
+  return plot_log_log(panels);
+}
+
+}  // namespace
+
+void add_bench_fit(CLI::App& bench, Commands& commands) {
+  auto* app = bench.add_subcommand(
+      "fit", "SLIM fitting across error bounds, against OpenMesh decimation and CGAL Poisson on the same data");
+  struct Args {
+    std::string datasets = QUADRIX_DATASETS;
+    std::vector<double> errors{1e-2, 3e-3, 1e-3, 3e-4, 1e-4};
+    std::vector<std::string> models{"bunny", "armadillo", "kitten"};
+    std::string out = ".";
+    bool peers = true;
+  };
+  auto a = std::make_shared<Args>();
+  app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
+  app->add_option("--errors", a->errors, "Error bounds relative to the bounding-box diagonal")
+      ->delimiter(',')
+      ->check(CLI::Range(1e-7, 0.5))
+      ->capture_default_str();
+  app->add_option("--models", a->models,
+                  "bunny (meshes/bunny.ply), armadillo (meshes/armadillo.obj), kitten (points/kitten.xyz), or files")
+      ->delimiter(',')
+      ->capture_default_str();
+  app->add_option("--out", a->out, "Folder for bench_fit.csv, bench_fit.json and bench_fit.png")->capture_default_str();
+  app->add_flag("--peers,!--no-peers", a->peers, "Run OpenMesh decimation and CGAL Poisson on the same data");
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
+    const fs::path out_dir(a->out);
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    if (ec) throw IoError(fmt::format("bench fit: cannot create {}: {}", out_dir.string(), ec.message()));
+    std::vector<Dataset> data;
+    for (const auto& m : a->models) data.push_back(load_dataset(m, a->datasets));
+
+    nlohmann::json j = {{"threads", std::thread::hardware_concurrency()},
+                        {"load_average_start", load_average()},
+                        {"errors", a->errors},
+                        {"peers", a->peers},
+                        {"models", nlohmann::json::object()}};
+    std::vector<Row> rows;
+    std::vector<std::string> names;
+    const std::size_t total = data.size() * (a->errors.size() + 1);
+    std::size_t done = 0;
+    Progress progress("bench fit", progress_allowed(common));
+    for (const auto& d : data) {
+      names.push_back(d.name);
+      const std::size_t n = d.cloud.points.size();
+      nlohmann::json jm = {{"file", d.file.string()},
+                           {"points", n},
+                           {"normals", d.normals},
+                           {"diagonal", d.diagonal},
+                           {"mesh_triangles", nullptr},
+                           {"runs", nlohmann::json::array()}};
+      std::optional<Row> poisson;
+      if (d.mesh) {
+        std::size_t t = 0;
+        for (std::size_t f = 0; f < d.mesh->face_count(); ++f) t += d.mesh->face(f).size() - 2;
+        jm["mesh_triangles"] = t;
+      }
+      if (a->peers) {
+        log::info("bench fit: {}: CGAL Poisson on {} points", d.name, n);
+        const peers::Poisson p = peers::reconstruct_poisson(d.cloud);
+        const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, p.mesh);
+        poisson = Row{d.name, "poisson", 0, p.mesh.face_count(), "triangles", e.max / d.diagonal,
+                      e.rms / d.diagonal, p.seconds, 0};
+        rows.push_back(*poisson);
+        jm["poisson"] = {{"triangles", p.mesh.face_count()}, {"vertices", p.mesh.vertices.size()},
+                         {"seconds", p.seconds},            {"spacing", p.spacing},
+                         {"max_rel", e.max / d.diagonal},   {"rms_rel", e.rms / d.diagonal},
+                         {"error_measure", "distance of every input point to the triangle mesh (CGAL AABB tree)"}};
+      }
+      progress.update(double(++done) / double(total));
+      for (double E : a->errors) {
+        log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
+        const SlimFitResult fit = fit_slim(d.cloud, {.max_error = E});
+        const SlimError se = evaluate_slim(fit.model, d.cloud, {.keep_per_point = true});
+        const double Eabs = E * d.diagonal;
+        const Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
+                       fit.stats.time_total, se.count_above(Eabs)};
+        rows.push_back(slim);
+        nlohmann::json run = {{"max_error", E},
+                              {"slim",
+                               {{"patches", slim.size},
+                                {"seconds", slim.seconds},
+                                {"max_rel", number(slim.max_rel)},
+                                {"rms_rel", slim.rms_rel},
+                                {"misses", se.misses},
+                                {"points_beyond_bound", slim.beyond},
+                                {"error_measure", "distance along each point's normal to the blended SLIM surface "
+                                                  "(fit/evaluate.h)"}}}};
+        if (a->peers && d.mesh) {
+          log::info("bench fit: {}: OpenMesh decimation to {:g}", d.name, E);
+          const peers::Decimation dec = peers::decimate_quadric(*d.mesh, Eabs);
+          const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, dec.mesh);
+          const Row r{d.name, "decimation", E, dec.mesh.face_count(), "triangles", e.max / d.diagonal,
+                      e.rms / d.diagonal, dec.seconds, 0};
+          rows.push_back(r);
+          run["decimation"] = {{"triangles", r.size},
+                               {"vertices", dec.mesh.vertices.size()},
+                               {"seconds", r.seconds},
+                               {"max_rel", r.max_rel},
+                               {"rms_rel", r.rms_rel},
+                               {"skipped_faces", dec.skipped_faces},
+                               {"error_measure", "distance of every original vertex to the decimated mesh"}};
+          run["ratios"]["patches_per_decimation_triangle"] = number(ratio(double(slim.size), double(r.size)));
+          run["ratios"]["patches_per_decimation_vertex"] =
+              number(ratio(double(slim.size), double(dec.mesh.vertices.size())));
+          run["ratios"]["time_vs_decimation"] = number(ratio(slim.seconds, r.seconds));
+        }
+        if (poisson) {
+          run["ratios"]["time_vs_poisson"] = number(ratio(slim.seconds, poisson->seconds));
+          run["ratios"]["patches_per_poisson_triangle"] = number(ratio(double(slim.size), double(poisson->size)));
+          run["ratios"]["max_error_vs_poisson"] = number(ratio(slim.max_rel, poisson->max_rel));
+          run["ratios"]["rms_error_vs_poisson"] = number(ratio(slim.rms_rel, poisson->rms_rel));
+        }
+        jm["runs"].push_back(run);
+        progress.update(double(++done) / double(total));
+      }
+      j["models"][d.name] = jm;
+    }
+    j["load_average_end"] = load_average();
+
+    write_file_atomically(out_dir / "bench_fit.csv", [&](std::ostream& os) {
+      os << "model,method,max_error,size,unit,measured_max_rel,measured_rms_rel,seconds,points_beyond_bound\n";
+      for (const auto& r : rows)
+        os << fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.4f},{}\n", r.model, r.method,
+                          r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "", r.size, r.unit, r.max_rel,
+                          r.rms_rel, r.seconds, r.beyond);
+    });
+    write_file_atomically(out_dir / "bench_fit.json", [&](std::ostream& os) { os << j.dump(2) << "\n"; });
+    write_png(draw_plot(names, rows), out_dir / "bench_fit.png");
+    report.json["bench_fit"] = j;
+    if (!common.quiet) {
+      std::cout << fmt::format("{:<10} {:<10} {:>8} {:>9} {:>10} {:>10} {:>8}\n", "model", "method", "E", "size",
+                               "max/diag", "rms/diag", "seconds");
+      for (const auto& r : rows)
+        std::cout << fmt::format("{:<10} {:<10} {:>8} {:>9} {:>10.3g} {:>10.3g} {:>8.2f}\n", r.model, r.method,
+                                 r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "-", r.size, r.max_rel,
+                                 r.rms_rel, r.seconds);
+      std::cout << fmt::format("wrote {}/bench_fit.{{csv,json,png}}\n", out_dir.string());
+    }
+    return kOk;
+  }});
+}
+
+}  // namespace quadrix::cli
