@@ -72,6 +72,39 @@ GpuTet pack(const TetPatch& t, std::int32_t id) {
   return g;
 }
 
+// std430 layout of `Ball` in slim.vert (6 vec4 = 96 bytes).
+struct GpuBall {
+  float centre_hi[4];
+  float centre_lo[4];
+  float q0[4], q1[4], q2[4];
+  float clip[4];
+};
+static_assert(sizeof(GpuBall) == 96);
+
+GpuBall pack(const SlimPatch& b, std::int32_t id) {
+  GpuBall g{};
+  const Split cs = split(b.centre);
+  for (int i = 0; i < 3; ++i) {
+    g.centre_hi[i] = cs.hi[i];
+    g.centre_lo[i] = cs.lo[i];
+  }
+  g.centre_hi[3] = static_cast<float>(b.radius);
+  const Rgb col = b.colour.value_or(Rgb{200, 200, 200});
+  g.centre_lo[3] = bits_float(col[0] | (col[1] << 8) | (col[2] << 16));
+  const Quadric q = b.local.normalized();
+  const auto& A = q.A;
+  g.q0[0] = float(A(0, 0)), g.q0[1] = float(A(1, 1)), g.q0[2] = float(A(2, 2)), g.q0[3] = float(A(0, 1));
+  g.q1[0] = float(A(1, 2)), g.q1[1] = float(A(0, 2)), g.q1[2] = float(q.b.x()), g.q1[3] = float(q.b.y());
+  g.q2[0] = float(q.b.z()), g.q2[1] = float(q.c), g.q2[2] = bits_float(static_cast<std::uint32_t>(id));
+  if (b.clip) {
+    const double n = b.clip->n.norm();
+    if (n > 0)
+      for (int i = 0; i < 3; ++i) g.clip[i] = float(b.clip->n[i] / n);
+    if (n > 0) g.clip[3] = float(b.clip->d / n);
+  }
+  return g;
+}
+
 struct Mesh {
   gl::VertexArray vao;
   gl::Buffer vbo;
@@ -96,6 +129,12 @@ struct Renderer::Impl {
   GlContext* context;
   gl::Program tet_program, mesh_program;
   gl::Program shade_programs[3];  // one per Shading mode
+  gl::Program slim_visibility, slim_accumulate, slim_resolve;
+  gl::Buffer balls;
+  std::size_t ball_count = 0;
+  gl::Texture acc_normal_weight, acc_depth_colour;
+  gl::Framebuffer acc_fbo;
+  bool acc_half = false;
   gl::VertexArray empty_vao;
   gl::Buffer tets, stats;
   std::size_t tet_count = 0;
@@ -131,6 +170,26 @@ struct Renderer::Impl {
     if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw GlError("output framebuffer incomplete");
     gl::check_error("allocating render targets");
+    acc_fbo.reset();  // re-made on demand with the new size
+  }
+
+  // Accumulation targets for SLIM pass 2; they share the G-buffer's depth texture.
+  void ensure_accumulation(bool half) {
+    if (acc_fbo && acc_half == half) return;
+    acc_half = half;
+    const GLenum format = half ? GL_RGBA16F : GL_RGBA32F;
+    acc_normal_weight = gl::make_texture_2d(format, width, height);
+    acc_depth_colour = gl::make_texture_2d(format, width, height);
+    GLuint fb = 0;
+    glCreateFramebuffers(1, &fb);
+    acc_fbo = gl::Framebuffer(fb);
+    glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT0, acc_normal_weight.id(), 0);
+    glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT1, acc_depth_colour.id(), 0);
+    glNamedFramebufferTexture(fb, GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(fb, 2, bufs);
+    if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GlError("SLIM accumulation framebuffer incomplete");
   }
 };
 
@@ -141,6 +200,11 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
   for (int mode = 0; mode < 3; ++mode)
     impl_->shade_programs[mode] = gl::Program("shade", shader_source("fullscreen.vert"), shader_source("shade.frag"),
                                               fmt::format("#define SHADING_MODE {}\n", mode));
+  impl_->slim_visibility = gl::Program("slim pass 1", shader_source("slim.vert"), shader_source("slim.frag"),
+                                       "#define SLIM_PASS 1\n");
+  impl_->slim_accumulate = gl::Program("slim pass 2", shader_source("slim.vert"), shader_source("slim.frag"),
+                                       "#define SLIM_PASS 2\n");
+  impl_->slim_resolve = gl::Program("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag"));
   impl_->empty_vao = gl::make_vertex_array();
   impl_->stats = gl::make_buffer(2 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
   impl_->q_samples = gl::make_query(GL_SAMPLES_PASSED);
@@ -152,8 +216,6 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
 Renderer::~Renderer() = default;
 
 void Renderer::set_model(const Model& model) {
-  if (!model.slims.empty())
-    throw InvalidInput("the GL renderer does not draw SLIM patches yet: use --backend cpu");
   if (!model.glyphs.empty())
     throw InvalidInput("the GL renderer does not draw glyphs yet: use --backend cpu");
   std::vector<GpuTet> data;
@@ -162,6 +224,12 @@ void Renderer::set_model(const Model& model) {
     data.push_back(pack(model.tets[i], static_cast<std::int32_t>((2 << 28) | i)));
   impl_->tets = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuTet)), data.data());
   impl_->tet_count = data.size();
+  std::vector<GpuBall> balls;
+  balls.reserve(model.slims.size());
+  for (std::size_t i = 0; i < model.slims.size(); ++i)
+    balls.push_back(pack(model.slims[i], static_cast<std::int32_t>((1 << 28) | i)));
+  impl_->balls = gl::make_buffer(static_cast<GLsizeiptr>(balls.size() * sizeof(GpuBall)), balls.data());
+  impl_->ball_count = balls.size();
 }
 
 void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) {
@@ -201,7 +269,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   I.resize(camera.width, camera.height);
   FrameStats st;
-  st.primitives = I.tet_count;
+  st.primitives = I.tet_count + I.ball_count;
 
   const Eigen::Matrix4f P = camera.projection().cast<float>();
   const Eigen::Matrix3f R = camera.view().topLeftCorner<3, 3>().cast<float>();
@@ -278,6 +346,60 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     if (I.pipeline_stats) glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
   }
   lap(st.ms_geometry);
+
+  if (I.ball_count > 0) {
+    // SLIM, three passes ([Stoll06] §5.1.1). Pass 1: pushed-back depth of each ball's first hit.
+    I.ensure_accumulation(o.slim_half_float);
+    glDisable(GL_CULL_FACE);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, I.balls.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, I.stats.id());
+    glBindVertexArray(I.empty_vao.id());
+    const auto setup = [&](const gl::Program& p, int count_stats) {
+      p.use();
+      p.set("u_proj", P);
+      p.set("u_view_rot", R);
+      p.set("u_target_hi", target.hi);
+      p.set("u_target_lo", target.lo);
+      p.set("u_target_distance", target_distance);
+      p.set("u_near", static_cast<float>(camera.near_plane));
+      p.set("u_offset", o.slim_offset);
+      p.set("u_count_stats", count_stats);
+    };
+    glBindFramebuffer(GL_FRAMEBUFFER, I.gbuffer.id());
+    glColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glColorMaski(2, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    setup(I.slim_visibility, o.statistics ? 1 : 0);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(I.ball_count));
+    glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glColorMaski(2, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    // Pass 2: every hit in front of pass 1's depth adds its weighted normal, depth and colour.
+    glBindFramebuffer(GL_FRAMEBUFFER, I.acc_fbo.id());
+    glClearNamedFramebufferfv(I.acc_fbo.id(), GL_COLOR, 0, zero);
+    glClearNamedFramebufferfv(I.acc_fbo.id(), GL_COLOR, 1, zero);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glBlendFunc(GL_ONE, GL_ONE);
+    setup(I.slim_accumulate, 0);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(I.ball_count));
+    glDisable(GL_BLEND);
+    // Pass 3: divide by Σw into the G-buffer; the deferred pass below shades it with the rest.
+    glBindFramebuffer(GL_FRAMEBUFFER, I.gbuffer.id());
+    glDepthFunc(GL_ALWAYS);
+    glDepthMask(GL_TRUE);
+    I.slim_resolve.use();
+    I.slim_resolve.set("u_proj", P);
+    glBindTextureUnit(0, I.acc_normal_weight.id());
+    glBindTextureUnit(1, I.acc_depth_colour.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthFunc(GL_LESS);
+    lap(st.ms_slim);
+  }
 
   // Deferred shading into the output target.
   glBindFramebuffer(GL_FRAMEBUFFER, I.final_fbo.id());

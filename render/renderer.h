@@ -29,16 +29,21 @@ struct RenderOptions {
   /// glFinish after each pass and time the passes on the CPU (llvmpipe's GL_TIME_ELAPSED only
   /// measures command submission). Costs the overlap between passes; for benchmarks.
   bool time_passes = false;
+  /// SLIM pass 1 pushes each first hit back by slim_offset·R along the ray (as the CPU reference).
+  float slim_offset = 0.5f;
+  /// SLIM accumulation targets: RGBA16F instead of RGBA32F (half the bandwidth; see the benchmark).
+  bool slim_half_float = false;
 };
 
 /// Measured figures of one frame.
 struct FrameStats {
-  std::uint64_t primitives = 0;        ///< tetrahedron patches submitted
+  std::uint64_t primitives = 0;        ///< tetrahedron patches and SLIM balls submitted
   std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
   double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
   double ms_geometry = 0;              ///< G-buffer passes (time_passes only)
+  double ms_slim = 0;                  ///< the three SLIM passes (time_passes only)
   double ms_shading = 0;               ///< deferred pass (time_passes only)
   double ms_total = 0;                 ///< CPU wall time of the frame incl. glFinish
 };

@@ -35,7 +35,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-bool gl_can_draw(const Model& m) { return m.slims.empty() && m.glyphs.empty(); }
+bool gl_can_draw(const Model& m) { return m.glyphs.empty(); }
 
 FloatImage depth_of(const render::GBuffer& g) { return {g.width, g.height, 1, g.depth}; }
 FloatImage normals_of(const render::GBuffer& g) {
@@ -69,7 +69,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";
   if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
   if (backend == "gl" && !gl_can_draw(model))
-    throw InvalidInput(fmt::format("{}: holds SLIM patches or glyphs, which only --backend cpu draws so far", a.model));
+    throw InvalidInput(fmt::format("{}: holds glyphs, which only --backend cpu draws so far", a.model));
   j["backend"] = backend;
 
   if (backend == "cpu") {
@@ -101,6 +101,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   if (mesh) renderer.set_mesh(*mesh);
   render::RenderOptions ro;
   ro.cull = !a.no_cull;
+  ro.slim_offset = static_cast<float>(a.slim_offset);
   ro.shading = a.shading == "envmap" ? render::Shading::envmap
                : a.shading == "npr"  ? render::Shading::npr
                                      : render::Shading::phong;
@@ -153,7 +154,7 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
   app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
-  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (cpu)")
+  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius")
       ->check(CLI::Range(0.0, 10.0));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_render(*a, c, r); }});
 }

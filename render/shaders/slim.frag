@@ -1,0 +1,62 @@
+// SLIM passes 1 and 2 ([Stoll06] §5.1.1, DESIGN §6). SLIM_PASS 1 (visibility): depth of the first
+// front-facing hit inside the ball (and its clip plane), pushed away from the eye by offset·R
+// along the ray. SLIM_PASS 2 (accumulation): the same hit, tested against pass 1's depth without
+// writing it, adds (w·n, w) and (w·depth, w·colour) into float targets; w is the SLIM weight.
+in vec3 v_dir;
+in vec3 v_offset;
+flat in vec3 v_centre_eye;
+flat in float v_radius;
+flat in vec3 v_A0;
+flat in vec3 v_A1;
+flat in vec3 v_A2;
+flat in vec4 v_bc;
+flat in vec4 v_clip;
+flat in uint v_colour;
+flat in int v_id;
+
+uniform mat4 u_proj;
+uniform mat3 u_view_rot;
+uniform float u_offset;  // pass 1 push-back, relative to R
+uniform float u_near;
+
+layout(depth_greater) out float gl_FragDepth;
+#if SLIM_PASS == 2
+layout(location = 0) out vec4 out_normal_weight;  // Σ w·n (world), Σ w
+layout(location = 1) out vec4 out_depth_colour;   // Σ w·depth, Σ w·rgb
+#endif
+
+float slim_weight(float r) {
+  if (r < 0.5) return exp(-8.0 * r * r);
+  float s = 1.0 - r;
+  return r <= 1.0 ? 16.0 * exp(-2.0) * s * s * s * s : 0.0;
+}
+
+void main() {
+  mat3 A = mat3(v_A0, v_A1, v_A2);
+  vec3 d = normalize(v_dir);
+  vec3 o = v_offset;
+  vec3 Ao_b = A * o + v_bc.xyz;
+  float a = dot(d, A * d);
+  float b = dot(d, Ao_b);
+  float c = dot(o, Ao_b) + dot(v_bc.xyz, o) + v_bc.w;
+  float t;
+  if (!front_root(a, b, c, t)) discard;
+  vec3 x = o + t * d;  // local units, eye axes
+  float r = length(x);
+  if (r > 1.0) discard;
+  if (dot(v_clip.xyz, v_clip.xyz) > 0.0 && dot(v_clip.xyz, x) + v_clip.w < 0.0) discard;
+  vec3 p = v_centre_eye + v_radius * x;  // eye space
+  if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
+#if SLIM_PASS == 1
+  float z_push = p.z * (1.0 + u_offset * v_radius / length(p));
+  gl_FragDepth = window_depth(z_push, u_proj);
+#else
+  gl_FragDepth = window_depth(p.z, u_proj);
+  float w = slim_weight(r);
+  if (w <= 0.0) discard;
+  vec3 n_eye = normalize(A * x + v_bc.xyz);
+  vec3 n = transpose(u_view_rot) * n_eye;
+  out_normal_weight = vec4(w * n, w);
+  out_depth_colour = vec4(w * -p.z, w * unpack_colour(v_colour));
+#endif
+}
