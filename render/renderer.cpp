@@ -206,7 +206,7 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
                                        "#define SLIM_PASS 2\n");
   impl_->slim_resolve = gl::Program("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag"));
   impl_->empty_vao = gl::make_vertex_array();
-  impl_->stats = gl::make_buffer(2 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
+  impl_->stats = gl::make_buffer(4 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
   impl_->q_samples = gl::make_query(GL_SAMPLES_PASSED);
   impl_->pipeline_stats = has_pipeline_statistics();
   if (impl_->pipeline_stats) impl_->q_invocations = gl::make_query(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
@@ -304,7 +304,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   if (o.statistics) {
     glBeginQuery(GL_SAMPLES_PASSED, I.q_samples.id());
     if (I.pipeline_stats) glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, I.q_invocations.id());
-    const GLuint z[2] = {0, 0};
+    const GLuint z[4] = {0, 0, 0, 0};
     glNamedBufferSubData(I.stats.id(), 0, sizeof(z), z);
   }
   if (I.tet_count > 0) {
@@ -341,10 +341,6 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     glBindVertexArray(I.mesh->vao.id());
     glDrawArrays(GL_TRIANGLES, 0, I.mesh->vertices);
   }
-  if (o.statistics) {
-    glEndQuery(GL_SAMPLES_PASSED);
-    if (I.pipeline_stats) glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
-  }
   lap(st.ms_geometry);
 
   if (I.ball_count > 0) {
@@ -364,6 +360,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
       p.set("u_near", static_cast<float>(camera.near_plane));
       p.set("u_offset", o.slim_offset);
       p.set("u_count_stats", count_stats);
+      p.set("u_cull", o.cull ? 1 : 0);
     };
     glBindFramebuffer(GL_FRAMEBUFFER, I.gbuffer.id());
     glColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
@@ -400,6 +397,10 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     glDepthFunc(GL_LESS);
     lap(st.ms_slim);
   }
+  if (o.statistics) {
+    glEndQuery(GL_SAMPLES_PASSED);
+    if (I.pipeline_stats) glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
+  }
 
   // Deferred shading into the output target.
   glBindFramebuffer(GL_FRAMEBUFFER, I.final_fbo.id());
@@ -428,9 +429,11 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     } else {
       st.fragments = static_cast<std::uint64_t>(-1);
     }
-    GLuint counts[2] = {0, 0};
+    GLuint counts[4] = {0, 0, 0, 0};
     glGetNamedBufferSubData(I.stats.id(), 0, sizeof(counts), counts);
     st.culled = counts[0];
+    st.slim_splat_fragments = counts[2];
+    st.slim_hit_fragments = counts[3];
   }
   st.ms_total = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return st;

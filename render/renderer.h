@@ -41,6 +41,12 @@ struct FrameStats {
   std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
+  std::uint64_t slim_splat_fragments = 0;  ///< SLIM pass 1 fragments: the splats' area [Toledo04] A_RTA
+  std::uint64_t slim_hit_fragments = 0;    ///< of those, rays that met their patch: A_obj
+  /// [Toledo04] Waste = (A_RTA − A_obj)/A_RTA of the SLIM splats (statistics only).
+  double slim_waste() const {
+    return slim_splat_fragments ? double(slim_splat_fragments - slim_hit_fragments) / slim_splat_fragments : 0.0;
+  }
   double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
   double ms_geometry = 0;              ///< G-buffer passes (time_passes only)
   double ms_slim = 0;                  ///< the three SLIM passes (time_passes only)

@@ -22,8 +22,9 @@ namespace {
 
 struct Row {
   std::string name;
-  double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_shading = 0;
+  double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
+  double slim_waste = 0;
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
@@ -37,6 +38,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.primitives = st.primitives;
   row.culled = st.culled;
   row.fragments = st.fragments;
+  row.slim_waste = st.slim_waste();
   row.covered = std::count(g.coverage.begin(), g.coverage.end(), 1);
   o.statistics = false;
   r.draw(cam, o);  // warm-up
@@ -47,16 +49,16 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.ms_min = ms.front();
   // Per-pass split, from separate frames with a glFinish after each pass.
   o.time_passes = true;
-  std::vector<double> c, geo, s;
+  std::vector<double> c, geo, sl, s;
   for (int f = 0; f < std::max(3, frames / 2); ++f) {
     const auto st = r.draw(cam, o);
-    c.push_back(st.ms_clear), geo.push_back(st.ms_geometry), s.push_back(st.ms_shading);
+    c.push_back(st.ms_clear), geo.push_back(st.ms_geometry), sl.push_back(st.ms_slim), s.push_back(st.ms_shading);
   }
   const auto med = [](std::vector<double>& v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
   };
-  row.ms_clear = med(c), row.ms_geometry = med(geo), row.ms_shading = med(s);
+  row.ms_clear = med(c), row.ms_geometry = med(geo), row.ms_slim = med(sl), row.ms_shading = med(s);
   return row;
 }
 
@@ -113,18 +115,20 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
-                                               {"ms_geometry", r.ms_geometry}, {"ms_shading", r.ms_shading},
+                                               {"ms_geometry", r.ms_geometry}, {"ms_slim", r.ms_slim},
+                                               {"ms_shading", r.ms_shading},
                                                {"primitives", r.primitives},
                                                {"culled", r.culled}, {"fragment_invocations", r.fragments},
                                                {"covered_pixels", r.covered},
-                                               {"invocations_per_covered_pixel", r.invocations_per_covered()}});
+                                               {"invocations_per_covered_pixel", r.invocations_per_covered()},
+                                               {"slim_splat_waste", r.slim_waste}});
                           csv += fmt::format("{},{:.3f},{:.3f},{},{},{},{},{:.3f}\n", r.name, r.ms_median, r.ms_min,
                                              r.primitives, r.culled, r.fragments, r.covered,
                                              r.invocations_per_covered());
-                          std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, geometry %.1f, shading %.1f)  "
-                                      "%7llu culled  %6.2f invocations/covered px\n",
-                                      r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_shading,
-                                      (unsigned long long)r.culled, r.invocations_per_covered());
+                          std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
+                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px\n",
+                                      r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
+                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
                         if (rows.size() > 2) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / rows[2].ms_median;

@@ -126,6 +126,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j["primitives_culled"] = stats.culled;
   j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
   j["fragments_hit"] = stats.fragments_hit;
+  if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
   j["ms_frame_median"] = median(total);
   log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), w, h, median(total),
             a.frames, stats.primitives - stats.culled, stats.culled);

@@ -18,6 +18,9 @@ uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform float u_offset;  // pass 1 push-back, relative to R
 uniform float u_near;
+uniform int u_count_stats;
+uniform int u_cull;
+layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 layout(depth_greater) out float gl_FragDepth;
 #if SLIM_PASS == 2
@@ -32,9 +35,13 @@ float slim_weight(float r) {
 }
 
 void main() {
-  mat3 A = mat3(v_A0, v_A1, v_A2);
+  if (u_count_stats != 0) atomicAdd(stats.splat_fragments, 1u);  // [Toledo04] A_RTA
   vec3 d = normalize(v_dir);
   vec3 o = v_offset;
+  // Outside the ball's projected disc: the ray misses the ball; no ray work ([Sigg06]).
+  float od = dot(o, d);
+  if (dot(o, o) - od * od > 1.0) discard;
+  mat3 A = mat3(v_A0, v_A1, v_A2);
   vec3 Ao_b = A * o + v_bc.xyz;
   float a = dot(d, A * d);
   float b = dot(d, Ao_b);
@@ -47,6 +54,7 @@ void main() {
   if (dot(v_clip.xyz, v_clip.xyz) > 0.0 && dot(v_clip.xyz, x) + v_clip.w < 0.0) discard;
   vec3 p = v_centre_eye + v_radius * x;  // eye space
   if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
+  if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
 #if SLIM_PASS == 1
   float z_push = p.z * (1.0 + u_offset * v_radius / length(p));
   gl_FragDepth = window_depth(z_push, u_proj);

@@ -17,7 +17,7 @@ struct Ball {
   vec4 clip;       // n (local, world axes), d; n = 0: no clip plane
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
-layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; } stats;
+layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
@@ -26,6 +26,7 @@ uniform vec3 u_target_lo;
 uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
+uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
 
 out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
@@ -54,7 +55,7 @@ void main() {
   // [Stoll06] eq. 18 about the centre: c′ − e′ᵀb′ = c + e′ᵀb with e′ the eye in local units; the
   // patch faces away everywhere in its ball when c − yᵀb < −‖b − A y‖, y = C/R.
   vec3 y = C / R;
-  bool culled = c - dot(y, be) < -length(be - Ae * y);
+  bool culled = u_cull != 0 && c - dot(y, be) < -length(be - Ae * y);
   if (u_count_stats != 0 && gl_VertexID == 0) {
     if (culled) atomicAdd(stats.culled, 1u); else atomicAdd(stats.drawn, 1u);
   }

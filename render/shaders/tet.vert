@@ -13,7 +13,7 @@ struct Tet {
   vec4 q2;          // b2 c — —
 };
 layout(std430, binding = 0) readonly buffer Tets { Tet tets[]; };
-layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; } stats;
+layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
