@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # make demo: the pipeline on real and analytic data. Fits the Stanford bunny (SLIM) and renders it
-# with the CPU reference, converts a quad mesh into tetrahedron-clipped quadrics and ray-casts it
+# with the CPU reference and with the GL three-pass SLIM renderer (OSMesa/EGL), converts a quad mesh into tetrahedron-clipped quadrics and ray-casts it
 # with OpenGL (OSMesa/EGL), and renders analytic glyph and hyperboloid models.
 set -euo pipefail
 q=${1:?quadrix binary}; out=${2:-out/demo}
@@ -21,7 +21,11 @@ fi
 
 if [ -n "$bunny" ] && [ -f "$bunny" ]; then
   run fit "$bunny" -o "$out/bunny.qxm" --max-error 1e-3 --report "$out/bunny_fit.json"
-  run render --backend cpu "$out/bunny.qxm" -o "$out/bunny.png" --size 640x640 --azimuth 0 --elevation 10
+  run render --backend cpu "$out/bunny.qxm" -o "$out/bunny_cpu.png" --size 640x640 --azimuth 0 --elevation 10
+  run render --backend gl "$out/bunny.qxm" -o "$out/bunny.png" --size 640x640 --azimuth 0 --elevation 10 \
+    --report "$out/bunny_render.json"
+  run render --backend gl "$out/bunny.qxm" -o "$out/bunny_envmap.png" --size 640x640 --azimuth 0 --elevation 10 \
+    --shading envmap
 else
   echo "demo: no bunny found (../shared/datasets or libcgal-demo); skipping the fit"
 fi
