@@ -8,7 +8,10 @@
 #include <filesystem>
 
 #include "convert/quads.h"
+#include <fstream>
+
 #include "core/mesh_io.h"
+#include "core/model_io.h"
 #include "core/points_io.h"
 #include "fit/slim_fit.h"
 #include "core/reference.h"
@@ -273,4 +276,31 @@ TEST_F(GlSlim, FittedBunnyMatchesTheCpuBlend) {
     EXPECT_LE(r.c.normal_median_deg, 0.5);
     EXPECT_EQ(r.cracks, 0);
   }
+}
+
+TEST_F(GlSlim, Slim2tModelsRenderThroughTheSamePath) {
+  // A Kanai-style .slim2t (float, coefficients local to each centre, unscaled) of the unit sphere.
+  const Model src = synth_model("slim-sphere", {.count = 300});
+  std::string bytes;
+  const auto put = [&](auto v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  put(std::int32_t{2}), put(static_cast<std::int32_t>(src.slims.size())), put(std::int32_t{0});
+  for (const auto& s : src.slims) {
+    const Eigen::Vector3f c = s.centre.cast<float>();
+    for (int i = 0; i < 3; ++i) put(c[i]);
+    const float k[10] = {1, 1, 1, 0, 0, 0, 2 * c.x(), 2 * c.y(), 2 * c.z(), c.squaredNorm() - 1};
+    for (float v : k) put(v);
+    put(static_cast<float>(s.radius));
+    put(std::int32_t{-1});
+  }
+  const auto path = std::filesystem::temp_directory_path() / "quadrix-test-sphere.slim2t";
+  std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  const Model m = read_model(path);
+  std::filesystem::remove(path);
+  ASSERT_EQ(m.slims.size(), src.slims.size());
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 40, .elevation_deg = 20, .width = 160, .height = 160});
+  const Result r = run_slim(m, cam);
+  EXPECT_GT(r.c.covered, 3000);
+  EXPECT_GE(r.c.coverage_agreement, 0.995);
+  EXPECT_LE(r.c.normal_median_deg, 0.5);
+  EXPECT_EQ(r.cracks, 0);
 }
