@@ -129,7 +129,7 @@ struct Renderer::Impl {
   GlContext* context;
   gl::Program tet_program, mesh_program;
   gl::Program shade_programs[3];  // one per Shading mode
-  gl::Program slim_visibility, slim_accumulate, slim_resolve;
+  gl::Program slim_visibility, slim_accumulate, slim_resolve, slim_outline;
   gl::Buffer balls;
   std::size_t ball_count = 0;
   gl::Texture acc_normal_weight, acc_depth_colour;
@@ -205,6 +205,8 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
   impl_->slim_accumulate = gl::Program("slim pass 2", shader_source("slim.vert"), shader_source("slim.frag"),
                                        "#define SLIM_PASS 2\n");
   impl_->slim_resolve = gl::Program("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag"));
+  impl_->slim_outline = gl::Program("slim outline", shader_source("slim.vert"), shader_source("slim_outline.frag"),
+                                    "#define SLIM_OUTLINE 1\n");
   impl_->empty_vao = gl::make_vertex_array();
   impl_->stats = gl::make_buffer(4 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT);
   impl_->q_samples = gl::make_query(GL_SAMPLES_PASSED);
@@ -416,6 +418,20 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   glBindTextureUnit(1, I.albedo.id());
   glBindVertexArray(I.empty_vao.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  if (o.slim_outlines && I.ball_count > 0) {
+    const auto& p = I.slim_outline;
+    p.use();
+    p.set("u_proj", P);
+    p.set("u_view_rot", R);
+    p.set("u_target_hi", target.hi);
+    p.set("u_target_lo", target.lo);
+    p.set("u_target_distance", target_distance);
+    p.set("u_near", static_cast<float>(camera.near_plane));
+    p.set("u_count_stats", 0);
+    p.set("u_cull", o.cull ? 1 : 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, I.balls.id());
+    glDrawArraysInstanced(GL_LINE_STRIP, 0, 5, static_cast<GLsizei>(I.ball_count));
+  }
   lap(st.ms_shading);
   glFinish();
   gl::check_error("draw");

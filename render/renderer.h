@@ -33,6 +33,8 @@ struct RenderOptions {
   float slim_offset = 0.5f;
   /// SLIM accumulation targets: RGBA16F instead of RGBA32F (half the bandwidth; see the benchmark).
   bool slim_half_float = false;
+  /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
+  bool slim_outlines = false;
 };
 
 /// Measured figures of one frame.

@@ -1,5 +1,6 @@
 // quadrix view MODEL: an interactive GLFW window. Left drag orbits, right drag pans, the wheel
-// zooms; C toggles culling, S cycles the shading, R resets the view, Esc quits. The title shows
+// zooms; C toggles culling, S cycles the shading, B the SLIM ball outlines (red: culled), R
+// resets the view, Esc quits. The title shows
 // the frame time. --frames N renders N frames and exits (scripts and tests), --screenshot saves
 // the last frame.
 #include <cmath>
@@ -52,6 +53,7 @@ void add_view(CLI::App& root, Commands& commands) {
     double azimuth = 30, elevation = 20, fov = 40;
     int frames = 0;
     bool no_cull = false;
+    bool outlines = false;
   };
   auto a = std::make_shared<Args>();
   app->add_option("MODEL", a->model, "Model file (.qxm)")->required();
@@ -62,6 +64,7 @@ void add_view(CLI::App& root, Commands& commands) {
   app->add_option("--fov", a->fov, "Vertical field of view (degrees)")->check(CLI::Range(0.001, 179.0));
   app->add_option("--shading", a->shading, "phong, envmap or npr")->check(CLI::IsMember({"phong", "envmap", "npr"}));
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
+  app->add_flag("--outlines", a->outlines, "Start with the SLIM ball outlines shown (key B)");
   app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")->check(CLI::NonNegativeNumber);
   app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
@@ -75,6 +78,7 @@ void add_view(CLI::App& root, Commands& commands) {
                           for (const auto& v : mesh->vertices) st.box.extend(v);
                         st.framing = {.azimuth_deg = a->azimuth, .elevation_deg = a->elevation, .fov_y_deg = a->fov};
                         st.options.cull = !a->no_cull;
+                        st.options.slim_outlines = a->outlines;
                         st.options.shading = a->shading == "envmap" ? render::Shading::envmap
                                              : a->shading == "npr"  ? render::Shading::npr
                                                                     : render::Shading::phong;
@@ -117,6 +121,7 @@ void add_view(CLI::App& root, Commands& commands) {
                           auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
                           if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(wnd, GLFW_TRUE);
                           if (key == GLFW_KEY_C) s.options.cull = !s.options.cull;
+                          if (key == GLFW_KEY_B) s.options.slim_outlines = !s.options.slim_outlines;
                           if (key == GLFW_KEY_S)
                             s.options.shading = static_cast<render::Shading>((static_cast<int>(s.options.shading) + 1) % 3);
                           if (key == GLFW_KEY_R) s.pan.setZero(), s.zoom = 1.0;

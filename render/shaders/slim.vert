@@ -39,6 +39,9 @@ flat out vec4 v_bc;  // b′ = R b, c
 flat out vec4 v_clip;
 flat out uint v_colour;
 flat out int v_id;
+#ifdef SLIM_OUTLINE
+flat out int v_culled;  // debug overlay ([Stoll06] Fig. 3): culled balls drawn in another colour
+#endif
 
 void main() {
   Ball ball = balls[gl_InstanceID];
@@ -59,10 +62,17 @@ void main() {
   if (u_count_stats != 0 && gl_VertexID == 0) {
     if (culled) atomicAdd(stats.culled, 1u); else atomicAdd(stats.drawn, 1u);
   }
+#ifdef SLIM_OUTLINE
+  v_culled = culled ? 1 : 0;
+  const int kLoop[5] = int[5](0, 1, 3, 2, 0);
+  int vid = kLoop[gl_VertexID];
+#else
   if (culled) {
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
     return;
   }
+  int vid = gl_VertexID;
+#endif
 
   // Tight bound ([Sigg06] eq. 5 for a sphere): the tangent lines from the eye in the xz and yz
   // planes give the slopes k = x/(−z) of the silhouette, ndc = P·k.
@@ -85,7 +95,7 @@ void main() {
     float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
     ndc_z = (u_proj[2][2] * zn + u_proj[3][2]) / -zn;
   }
-  vec2 corner = vec2((gl_VertexID & 1) != 0 ? hi.x : lo.x, (gl_VertexID & 2) != 0 ? hi.y : lo.y);
+  vec2 corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
   gl_Position = vec4(corner, ndc_z, 1.0);
   vec2 k = corner / vec2(u_proj[0][0], u_proj[1][1]);
   v_dir = vec3(k, -1.0);
