@@ -67,13 +67,15 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
 void add_bench_render(CLI::App& bench, Commands& commands) {
   auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, and quads vs flat triangles");
   struct Args {
-    std::string input, out = "out/bench", context = "auto", size = "1024x1024";
+    std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline;
     int frames = 10;
     double azimuth = 30, elevation = 20;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("INPUT", a->input, "A quad mesh (.obj/.off/.ply: converted here) or a .qxm model")->required();
+  app->add_option("INPUT", a->input, "A quad mesh (.obj/.off/.ply: converted here) or a .qxm/.slim2t model")->required();
   app->add_option("--out", a->out, "Folder for bench_render.json and bench_render.csv");
+  app->add_option("--baseline-mesh", a->baseline,
+                  "A triangle mesh drawn as the baseline row (e.g. a decimated mesh of the same error)");
   app->add_option("--context", a->context, "GL context")->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
   app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(CLI::Range(1, 1000));
@@ -103,13 +105,18 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames));
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames));
                         }
+                        std::size_t triangles = 0;
+                        if (!a->baseline.empty()) mesh = read_mesh(a->baseline);
                         if (mesh) {
                           render::Renderer r(*context);
                           r.set_mesh(*mesh);
-                          rows.push_back(measure("flat triangles", r, cam, false, a->frames));
+                          rows.push_back(measure(a->baseline.empty() ? "flat triangles" : "baseline mesh", r, cam,
+                                                 false, a->frames));
+                          for (std::size_t f = 0; f < mesh->face_count(); ++f) triangles += mesh->face(f).size() - 2;
                         }
                         nlohmann::json j = {{"input", a->input}, {"width", w}, {"height", h},
-                                            {"frames", a->frames}, {"context", context->description()}};
+                                            {"frames", a->frames}, {"context", context->description()},
+                                            {"primitives", model.size()}, {"baseline_triangles", triangles}};
                         std::string csv = "configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
                                           "covered_pixels,invocations_per_covered_pixel\n";
                         for (const auto& r : rows) {
@@ -132,6 +139,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
                         if (rows.size() > 2) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / rows[2].ms_median;
+                        std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
+                        if (rows.size() > 2) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / rows[2].ms_median);
+                        std::printf("\n");
                         std::filesystem::create_directories(a->out);
                         write_file_atomically(std::filesystem::path(a->out) / "bench_render.json",
                                               [&](std::ostream& o) { o << j.dump(2) << "\n"; });
