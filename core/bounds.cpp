@@ -6,8 +6,8 @@
 namespace quadrix {
 
 Tetrahedron::Tetrahedron(const std::array<Eigen::Vector3d, 4>& corners) : p_(corners) {
-  Eigen::Matrix4d M;
-  for (int i = 0; i < 4; ++i) M.col(i) << p_[i], 1.0;
+  Eigen::Matrix3d M;
+  M << p_[1] - p_[0], p_[2] - p_[0], p_[3] - p_[0];
   inv_ = M.inverse();
 }
 
@@ -16,9 +16,8 @@ double Tetrahedron::signed_volume() const {
 }
 
 Eigen::Vector4d Tetrahedron::barycentric(const Eigen::Vector3d& x) const {
-  Eigen::Vector4d h;
-  h << x, 1.0;
-  return inv_ * h;
+  const Eigen::Vector3d l = inv_ * (x - p_[0]);
+  return {1.0 - l.sum(), l.x(), l.y(), l.z()};
 }
 
 bool Tetrahedron::contains(const Eigen::Vector3d& x, double eps) const {

@@ -33,7 +33,7 @@ public:
 
 private:
   std::array<Eigen::Vector3d, 4> p_;
-  Eigen::Matrix<double, 4, 4> inv_;  // maps (x,1) to barycentric coordinates
+  Eigen::Matrix3d inv_;  // maps x − p₀ to barycentric coordinates 1..3 (relative: keeps digits far from 0)
 };
 
 /// True when the tetrahedron is degenerate: |volume| ≤ rel_eps · diameter³.

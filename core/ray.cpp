@@ -1,6 +1,7 @@
 #include "core/ray.h"
 
 #include <cmath>
+#include <limits>
 
 namespace quadrix {
 
@@ -23,7 +24,10 @@ Roots solve_ray_quadratic(const RayQuadratic& e) {
   // Discriminant β² − αγ without catastrophic loss (Kahan's fma trick).
   const double w = a * c;
   const double err = std::fma(-a, c, w);
-  const double disc = std::fma(b, b, -w) + err;
+  double disc = std::fma(b, b, -w) + err;
+  // A discriminant negative only by rounding (a tangent ray, or the two nearly coincident sheets
+  // of a near-double-plane) is a double root, not a miss.
+  if (disc < 0.0 && disc > -8.0 * std::numeric_limits<double>::epsilon() * (b * b + std::abs(w))) disc = 0.0;
   if (!(disc >= 0.0)) return r;
   const double sq = std::sqrt(disc);
   const double qf = -(b + std::copysign(sq, b));  // q-form: no cancellation in β ± √D
