@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <span>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -24,6 +26,10 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 constexpr double kMinTetVolume6 = 4e-12;
 // Safety factor on the first-order rounding bound of a quadric's coefficients.
 constexpr double kRoundingFactor = 1.0;
+// Smallest relative distance to a paraboloid's second sheet (quadric_quality) that ray casting in
+// double resolves: the discriminant keeps ~separation² / eps ≈ 5e5 of margin (1e-6 still lost
+// rays at 1.1e-6 in the random-quad test).
+constexpr double kMinSeparation = 1e-5;
 
 double diameter(std::span<const Vector3d> p) {
   double d = 0;
@@ -45,10 +51,6 @@ struct Emitter {
   std::vector<TetPatch>& out;
   double deviation = 0.0;  // largest relative deviation estimate of this face
 
-  /// q in world coordinates (planes: exact under translation).
-  void push(const std::array<Vector3d, 4>& corners, const Quadric& q) {
-    out.push_back(TetPatch::from_world(oriented(corners), q, options.colour));
-  }
   /// q already relative to the tetrahedron's centroid (TetPatch's convention).
   void push_local(const std::array<Vector3d, 4>& corners, const Quadric& q) {
     out.push_back({oriented(corners), q, options.colour});
@@ -61,7 +63,13 @@ struct Emitter {
     const Vector3d c = (v0 + v1 + v2) / 3.0;
     const double edge = std::max({(v1 - v0).norm(), (v2 - v1).norm(), (v0 - v2).norm()});
     const Vector3d a = c + options.flat_height * edge * n;
-    push({a, 2.0 * v0 - a, 2.0 * v1 - a, 2.0 * v2 - a}, Quadric::plane(n, -n.dot(c)));
+    const std::array<Vector3d, 4> corners = {a, 2.0 * v0 - a, 2.0 * v1 - a, 2.0 * v2 - a};
+    // The plane through the vᵢ relative to the tetrahedron's centroid o, from the (exact, for a
+    // small triangle far from the origin) differences vᵢ − o: a world-space offset −n·c would
+    // cost the digits of ‖c‖ (2e-8 of a 1e-4 triangle at 1e4 from the origin).
+    const Vector3d o = 0.25 * ((corners[0] + corners[1]) + (corners[2] + corners[3]));  // centroid()
+    const double d = -n.dot(((v0 - o) + (v1 - o) + (v2 - o)) / 3.0);
+    push_local(corners, Quadric::plane(n, d));
   }
 };
 
@@ -100,17 +108,34 @@ Quadric paraboloid(const Corners& p, const Vector3d& o, double L) {
   return local.normalized().from_local(Vector3d::Zero(), L).normalized();
 }
 
-// First-order bound on how far the stored (rounded) coefficients move the surface near the patch,
-// relative to L: eps · (‖A‖R² + 2‖b‖R + |c|) / min ‖∇f‖ over the corners and the centre.
-double rounding_deviation(const Quadric& f, const Corners& p, double L) {
+// How well a stored paraboloid piece (relative to its centroid, y = x − o) can be evaluated and
+// ray cast in double, from ‖∇f‖ sampled at the piece's corners, edge midpoints and centre (its
+// minimum over the piece):
+// - deviation: first-order bound on how far rounding the coefficients moves the surface,
+//   eps · (‖A‖R² + 2‖b‖R + |c|) / min ‖∇f‖ (R = the farthest sample), world units. Measured
+//   deviations are 10–50× smaller.
+// - separation: min ‖∇f‖ / (‖A‖ · ℓ), ℓ = the piece's diameter. A paraboloid close to a double
+//   plane (g ≪ 1, or near a corner whose two edges are nearly collinear) has a second sheet about
+//   separation · ℓ from the patch, so every ray meets two roots that close together: the
+//   discriminant β² − αγ loses its digits to cancellation (relative error ~ eps / separation²),
+//   turns negative (a hole) or moves the hit by ~ eps·ℓ / separation.
+struct QuadricQuality {
+  double deviation = std::numeric_limits<double>::infinity();
+  double separation = 0.0;
+};
+QuadricQuality quadric_quality(const Quadric& f, std::span<const Vector3d> y, double ell) {
   double R = 0, g = std::numeric_limits<double>::infinity();
-  for (const auto& x : p) {
+  for (const auto& x : y) {
     R = std::max(R, x.norm());
     g = std::min(g, f.gradient(x).norm());
   }
-  g = std::min(g, f.gradient(0.25 * (p[0] + p[1] + p[2] + p[3])).norm());
+  QuadricQuality q;
+  if (!(g > 0.0)) return q;
   const double size = f.A.cwiseAbs().sum() * R * R + 2.0 * f.b.cwiseAbs().sum() * R + std::abs(f.c);
-  return g > 0.0 ? kRoundingFactor * kEps * size / (g * L) : std::numeric_limits<double>::infinity();
+  q.deviation = kRoundingFactor * kEps * size / g;
+  const double curvature = f.A.norm() * ell;
+  q.separation = curvature > 0.0 ? g / curvature : std::numeric_limits<double>::infinity();
+  return q;
 }
 
 struct QuadCase {
@@ -134,6 +159,11 @@ private:
     return (1 - v) * ((1 - u) * p_[0] + u * p_[1]) + v * ((1 - u) * p_[3] + u * p_[2]);
   }
 
+  // One piece [u0,u1]×[v0,v1] of the patch: flat when its triangles are within the tolerance,
+  // else the quadric when its coefficients are accurate enough (rounding_deviation), else halved
+  // (along a ruling: exact, straight split lines). Both errors shrink 4× per halving in both
+  // directions (the twist and the piece's extent relative to its centroid go as its size²), so
+  // the halving ends; at max_split_depth the better of the two is stored and reported.
   void piece(double u0, double u1, double v0, double v1, int depth, QuadCase& result) {
     const Corners c = {s(u0, v0), s(u1, v0), s(u1, v1), s(u0, v1)};
     const double L = diameter(c);
@@ -164,19 +194,38 @@ private:
       flat();
       return;
     }
+    // The quadric, relative to the tetrahedron's centroid (TetPatch's convention).
+    const Vector3d o = 0.25 * ((c[0] + c[1]) + (c[2] + c[3]));  // == TetPatch::centroid()
+    std::optional<Quadric> f;
+    bool separated = false;
+    double quadric_dev = std::numeric_limits<double>::infinity();
     if (vol6 > kMinTetVolume6 * L * L * L) {
-      // Splitting cannot help a quadric (the halves lie on the same paraboloid), so an
-      // ill-conditioned one is stored as it is and its estimated deviation reported.
-      const Vector3d o = 0.25 * ((c[0] + c[1]) + (c[2] + c[3]));  // == TetPatch::centroid()
-      const Quadric f = paraboloid(c, o, L);
-      emit_.push_local(c, f);
-      Corners rel = c;
-      for (auto& x : rel) x -= o;
-      emit_.deviation = std::max(emit_.deviation, rounding_deviation(f, rel, L) * L / L_);
+      f = paraboloid(c, o, L);
+      const double um = 0.5 * (u0 + u1), vm = 0.5 * (v0 + v1);
+      const std::array<Vector3d, 9> y = {c[0] - o,          c[1] - o,          c[2] - o,
+                                         c[3] - o,          s(um, v0) - o,     s(u1, vm) - o,
+                                         s(um, v1) - o,     s(u0, vm) - o,     s(um, vm) - o};
+      const QuadricQuality quality = quadric_quality(*f, y, L);
+      quadric_dev = quality.deviation;
+      separated = quality.separation >= kMinSeparation;
+    }
+    const auto quadric = [&] {
+      emit_.push_local(c, *f);
+      emit_.deviation = std::max(emit_.deviation, quadric_dev / L_);
+    };
+    // A quadric too close to its second sheet would lose rays' roots to it (splitting raises the
+    // separation in proportion to 1/size, flattening lowers the twist): split while allowed.
+    if (quadric_dev <= tolerance && separated) {
+      quadric();
       return;
     }
     if (depth >= emit_.options.max_split_depth) {
-      flat();
+      // Fold lines of self-intersecting quads keep the separation ~g² there at every size.
+      if (f && (quadric_dev <= tolerance || quadric_dev < flat_dev)) {
+        quadric();
+      } else {
+        flat();
+      }
       return;
     }
     // Halve along the longer parameter direction; the split line is a ruling (a straight line).
@@ -199,10 +248,11 @@ private:
   double L_;
 };
 
-// Newell's normal: twice the vector area of a polygon.
+// Newell's normal: twice the vector area of a polygon, relative to its first corner (world
+// coordinates far from the origin would cancel every digit of a small face's area).
 Vector3d newell(std::span<const Vector3d> p) {
   Vector3d n = Vector3d::Zero();
-  for (std::size_t i = 0; i < p.size(); ++i) n += p[i].cross(p[(i + 1) % p.size()]);
+  for (std::size_t i = 1; i + 1 < p.size(); ++i) n += (p[i] - p[0]).cross(p[i + 1] - p[0]);
   return n;
 }
 

@@ -16,14 +16,16 @@
 ///   a = centroid + h·n and base bᵢ = 2vᵢ − a (h = flat_height × longest edge); the triangle is
 ///   exactly the tetrahedron's cross-section (the vᵢ are the edge midpoints), a fat tetrahedron
 ///   that clips robustly in double and in float.
-/// - A non-planar quad whose tetrahedron is too thin to store (|det| ≤ 4e-12 L³; the .qxm reader
-///   rejects 1e-12; long thin quads) is split in halves along its rulings (exact: same paraboloid,
-///   straight split lines) and each half represented again, up to max_split_depth levels.
-/// - Limits: the quadric is stored in world coordinates (TetPatch), so its rounding moves the
-///   surface by about ε·(R/L)²·(ef/g)·L (R = distance from the origin, e, f, g of eq. 20): nearly
-///   planar non-parallelogram quads far from the origin exceed 1e-9·L. max_relative_deviation
-///   reports the first-order estimate. Thin tetrahedra (g ≪ 1) clip robustly in the double
-///   reference; in float they need the clip planes relative to the centroid (DESIGN §5).
+/// - A non-planar piece that is neither flat nor a well-conditioned quadric is halved along its
+///   rulings (exact: same paraboloid, straight split lines) and each half decided again, up to
+///   max_split_depth levels. A quadric piece (stored relative to its tetrahedron's centroid) must
+///   have a tetrahedron thicker than 4e-12 L³ (the .qxm reader rejects 1e-12), a first-order
+///   coefficient-rounding bound ≤ planar_threshold·L, and its second sheet ≥ 1e-5 of its size away
+///   (min ‖∇f‖ ≥ 1e-5·‖A‖·size): closer, double ray casting loses the root (near-planar quads with
+///   g ≈ 1e-9…1e-6, the corner of a nearly triangular quad). Both errors fall 4× per halving in
+///   both directions, so the recursion ends; fold lines of self-intersecting near-planar quads
+///   do not improve and stop at max_split_depth, where the better candidate is stored and its
+///   deviation reported in max_relative_deviation.
 /// - Polygons with more than four sides: ear-clipped into triangles, with a warning.
 #include <cstddef>
 #include <optional>
@@ -45,8 +47,8 @@ struct QuadConvertOptions {
   double degenerate_area = 1e-12;
   /// Skip zero-area faces (counted in degenerate_skipped) instead of throwing InvalidInput.
   bool skip_degenerate = false;
-  /// Halving levels for too-thin tetrahedra of non-flat quads (at most 2^depth pieces).
-  int max_split_depth = 8;
+  /// Halving levels for pieces neither flat nor well-conditioned quadrics (at most 2^depth pieces).
+  int max_split_depth = 12;
   /// Constant colour for every patch; none by default.
   std::optional<Rgb> colour;
   /// Names the mesh in error messages (e.g. the file name).

@@ -65,8 +65,10 @@ struct PatchProbe {
   T c;
   std::array<V3<T>, 4> n;  // inward unit face normals
   std::array<V3<T>, 4> on;  // a point on each face
+  std::array<T, 4> offset;  // n·on
 
   V3<T> origin;  // the quadric is relative to the tetrahedron's centroid
+  V3<T> lo, hi;   // the tetrahedron's bounding box
 
   explicit PatchProbe(const TetPatch& t)
       : A(t.quadric.A.cast<T>()), b(t.quadric.b.cast<T>()), c(static_cast<T>(t.quadric.c)),
@@ -79,21 +81,36 @@ struct PatchProbe {
       if (m.dot(opp - p) < 0) m = -m;
       n[i] = m;
       on[i] = p;
+      offset[i] = m.dot(p);
     }
+    lo = hi = t.corners[0].template cast<T>();
+    for (const auto& x : t.corners) lo = lo.cwiseMin(x.template cast<T>()), hi = hi.cwiseMax(x.template cast<T>());
+  }
+  /// False when x lies more than d outside the bounding box (then it is outside by more than d).
+  bool near_box(const V3<T>& x, T d) const {
+    return (x.array() >= lo.array() - d).all() && (x.array() <= hi.array() + d).all();
+  }
+  /// f(x) and ‖∇f(x)‖².
+  void taubin_parts(const V3<T>& xw, T& f, T& grad2) const {
+    const V3<T> x = xw - origin;
+    const V3<T> h = A * x + b;  // ½∇f
+    f = x.dot(h + b) + c;
+    grad2 = 4 * h.squaredNorm();
   }
   T distance(const V3<T>& xw) const {
     const V3<T> x = xw - origin;
-    const T f = x.dot(A * x + 2 * b) + c;
-    return std::abs(f) / (2 * (A * x + b)).norm();
+    const V3<T> h = A * x + b;  // ½∇f
+    const T f = x.dot(h + b) + c;
+    return std::abs(f) / (2 * h.norm());
   }
   T outside(const V3<T>& x) const {
     T o = 0;
-    for (int i = 0; i < 4; ++i) o = std::max(o, -n[i].dot(x - on[i]));
+    for (int i = 0; i < 4; ++i) o = std::max(o, offset[i] - n[i].dot(x));
     return o;
   }
 };
 
-// Worst Taubin distance over the 33×33 grid and 129 samples per edge, each point measured on the
+// Worst Taubin distance over the 33×33 grid and edge_samples + 1 samples per edge, each point measured on the
 // face's patches that contain it (within tol·L); a point no patch contains counts as infinite.
 template <typename T>
 struct FaceError {
@@ -102,26 +119,44 @@ struct FaceError {
 };
 
 template <typename T>
-FaceError<T> face_error(const Corners& p, std::span<const TetPatch> tets) {
+FaceError<T> face_error(const Corners& p, std::span<const TetPatch> tets, int edge_samples = 128) {
   const double L = diameter(p);
   std::vector<PatchProbe<T>> probes;
   for (const auto& t : tets) probes.emplace_back(t);
   FaceError<T> e;
+  std::size_t last = 0;  // the patch that last contained a sample: neighbours share it
+  T worst = 0;           // e.distance · L
   const auto probe = [&](T u, T v) {
     const V3<T> x = bilinear<T>(p, u, v);
     T best = std::numeric_limits<T>::infinity(), least_out = std::numeric_limits<T>::infinity();
-    for (const auto& q : probes) {
+    // Inside that patch and on its surface: the point passes, and the nearest containing patch is
+    // no farther (the figure reported is then an upper bound for this point).
+    // (No division or square root while the point does not raise the worst distance so far.)
+    if (const auto& q = probes[last]; q.outside(x) <= 0) {
+      T f, grad2;
+      q.taubin_parts(x, f, grad2);
+      if (f * f <= worst * worst * grad2) return;
+      if (f * f <= kTol * L * kTol * L * grad2) {
+        worst = std::abs(f) / std::sqrt(grad2);
+        e.distance = std::max(e.distance, static_cast<double>(worst) / L);
+        return;
+      }
+    }
+    for (std::size_t k = 0; k < probes.size(); ++k) {
+      const auto& q = probes[k];
+      if (!q.near_box(x, kTol * L) && least_out <= kTol * L) continue;  // cannot contain x
       const T out = q.outside(x);
       least_out = std::min(least_out, out);
-      if (out <= kTol * L) best = std::min(best, q.distance(x));
+      if (out <= kTol * L) best = std::min(best, q.distance(x)), last = k;
     }
+    worst = std::max(worst, best);
     e.distance = std::max(e.distance, static_cast<double>(best) / L);
     e.outside = std::max(e.outside, static_cast<double>(least_out) / L);
   };
   for (int i = 0; i < kGrid; ++i)
     for (int j = 0; j < kGrid; ++j) probe(T(i) / (kGrid - 1), T(j) / (kGrid - 1));
-  for (int k = 0; k <= 128; ++k) {  // the four edges, finer
-    const T t = T(k) / 128;
+  for (int k = 0; edge_samples > 0 && k <= edge_samples; ++k) {  // the four edges, finer
+    const T t = T(k) / edge_samples;
     probe(t, 0), probe(t, 1), probe(0, t), probe(1, t);
   }
   return e;
@@ -148,7 +183,11 @@ bool ray_hits(const ReferenceScene& scene, const Corners& p, double u, double v,
     *miss_distance = std::numeric_limits<double>::infinity();
     return false;
   }
-  *miss_distance = (hit->point - x).norm() / L;
+  // How far the hit lies off the patch: its offset along the patch normal at s(u,v). The
+  // distance along the ray is up to 1/|cos| ≈ 5× larger for these oblique rays and says nothing
+  // more (a surface within tol·L of the patch gives hits up to 5·tol·L along them); the window
+  // (±1e-6 L) keeps the hit beside s(u,v), where the patch bends by far less than tol·L.
+  *miss_distance = (n.allFinite() ? std::abs((hit->point - x).dot(n)) : (hit->point - x).norm()) / L;
   return *miss_distance <= kTol;
 }
 
@@ -299,10 +338,15 @@ Corners random_quad(Kind kind, std::mt19937_64& rng) {
   return p;
 }
 
-// Disabled until the converter handles the hard random cases (issue 3 stays open): on
-// 2026-11-22, after moving tetrahedron quadrics to centroid-relative coordinates, 10⁶ random quads
-// gave failures per category of general 2, near-planar 642, skewed 55, long-thin 133,
-// nearly-triangular 58,536 (of 200,000 each). Every dataset quad passes (DatasetQuadsAreExact).
+// Disabled until the converter handles the hard random cases (issue 3 stays open). History:
+// after centroid-relative quadrics, failures per 200,000 were general 2, near-planar 642, skewed
+// 55, long-thin 133, nearly-triangular 58,536. After splitting ill-conditioned paraboloids
+// (rounding bound, second-sheet separation ≥ 1e-6) and measuring ray hits along the patch normal,
+// 10⁶ quads gave 1, 6, 1, 2, 3 failures (47 s CPU): rays lost near patch edges on quadrics with
+// separation just above 1e-6, one general quad whose paraboloid construction error exceeds the
+// rounding bound 17×, one skewed hit 2.9e-8 L off. With separation ≥ 1e-5, 50,000 quads pass but
+// pieces per quad rose (near-planar 6.7, nearly-triangular 36) and 10⁶ needs ~75 s CPU; not yet
+// run in full. Every dataset quad passes (DatasetQuadsAreExact).
 // Run it with --gtest_also_run_disabled_tests.
 TEST(ConvertQuads, DISABLED_MillionRandomQuadsAreExact) {
   constexpr std::size_t kQuads = 1'000'000;
@@ -330,7 +374,9 @@ TEST(ConvertQuads, DISABLED_MillionRandomQuadsAreExact) {
       return;
     }
     w.pieces += conv.model.tets.size();
-    const auto e = face_error<double>(p, conv.model.tets);
+    // The 33×33 grid (its border samples the edges) on every quad; 129 samples per edge on every
+    // eighth.
+    const auto e = face_error<double>(p, conv.model.tets, i % 8 == 0 ? 128 : 0);
     bool bad = e.distance > kTol || e.outside > kTol;
     w.distance = std::max(w.distance, e.distance);
     w.outside = std::max(w.outside, e.outside);
@@ -339,7 +385,8 @@ TEST(ConvertQuads, DISABLED_MillionRandomQuadsAreExact) {
       std::mt19937_64 rng(i);
       std::uniform_real_distribution<double> uni(0.001, 0.999);
       double miss = 0;
-      if (!ray_hits(scene, p, uni(rng), uni(rng), rng, &miss)) bad = true;
+      const double ru = uni(rng), rv = uni(rng);
+      if (!ray_hits(scene, p, ru, rv, rng, &miss)) bad = true;
       w.ray = std::max(w.ray, miss);
     }
     if (bad && w.failures++ == 0) w.example = p;
@@ -364,6 +411,55 @@ TEST(ConvertQuads, DISABLED_MillionRandomQuadsAreExact) {
                                   << " | " << total.example[3].transpose();
     EXPECT_LT(total.skipped, kQuads / kKinds / 100) << names[k];
   }
+}
+
+// Issue 3 item 7 at the converter level: quads 1e-4 of the model size, 1e4 model sizes from the
+// origin (corner coordinates keep ~8 of their digits relative to a quad). Grids on the saddle
+// z = xy/R (twist h²/R per cell) with R from 1e-4 (strongly twisted quads) to 1e6 (g ≈ 1e-10:
+// flat) still convert exactly: measured in long double, since s(u,v) in double
+// world coordinates alone is off by ~ε·1e8 = 2e-8 of a quad.
+TEST(ConvertQuads, TinyQuadsFarFromTheOriginAreExact) {
+  constexpr int kCells = 6;
+  constexpr double kQuad = 1e-4;  // model size 1
+  const Vector3d far(1e4, -0.7e4, 0.4e4);
+  PolygonMesh m;
+  const double radii[] = {1e-4, 1e-2, 1.0, 1e3, 1e6};
+  for (int g = 0; g < 5; ++g) {
+    const Vector3d corner = Vector3d(0.2 * g, 1.0 - 0.2 * g, 0.5) + far;  // spread over the model
+    const double R = radii[g];
+    const int base = static_cast<int>(m.vertices.size());
+    for (int i = 0; i <= kCells; ++i)
+      for (int j = 0; j <= kCells; ++j) {
+        const double x = (i - 2.5) * kQuad, y = (j - 3.5) * kQuad;
+        m.vertices.push_back(corner + Vector3d(x, y, x * y / R));
+      }
+    for (int i = 0; i < kCells; ++i)
+      for (int j = 0; j < kCells; ++j) {
+        const int v = base + i * (kCells + 1) + j;
+        const int f[4] = {v, v + kCells + 1, v + kCells + 2, v + 1};
+        m.add_face(f);
+      }
+  }
+  const QuadConversion conv = convert_quads(m);
+  const auto& c = conv.counts;
+  EXPECT_GT(c.quadric_quads, 0u);
+  EXPECT_GT(c.flat_quads, 0u);
+  // No ray casting here: the CPU reference's Tetrahedron takes barycentric coordinates of world
+  // points through a 4×4 inverse in world coordinates, which at 1e8 × the tetrahedron's size has
+  // no digits left (core/bounds.cpp; reported, not a converter property).
+  double worst = 0, worst_out = 0;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const Corners p = face_corners(m, f);
+    const std::span<const TetPatch> tets(conv.model.tets.data() + conv.tet_offsets[f],
+                                         conv.tet_offsets[f + 1] - conv.tet_offsets[f]);
+    const auto e = face_error<long double>(p, tets);
+    worst = std::max(worst, e.distance), worst_out = std::max(worst_out, e.outside);
+  }
+  std::printf("1e-4 quads at 1e4: %zu quads (%zu quadric, %zu flat, %zu split), %zu patches: max |f|/|grad f| = "
+              "%.3g L, max outside = %.3g L\n",
+              m.face_count(), c.quadric_quads, c.flat_quads, c.split_quads, conv.model.tets.size(), worst, worst_out);
+  EXPECT_LE(worst, kTol);
+  EXPECT_LE(worst_out, kTol);
 }
 
 TEST(ConvertQuads, OrientationFollowsTheFace) {
