@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <numeric>
+#include <optional>
+#include <span>
 #include <queue>
 #include <random>
 
@@ -40,7 +43,37 @@ struct Ball {
   bool is_bounded = true;    // error ≤ E was reached
   double max_taubin = 0, sum_sq_taubin = 0;  // local units × R = world
   std::size_t count = 0;     // points in the ball
+  std::optional<ClipPlane> clip;  // sharp features: the patch keeps the sheet of its centre
+  Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
+  // A point of the ball (local u, normal n) belongs to this patch's sheet.
+  bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
+    return !clip || (clip->keeps(u) && n.dot(sheet) >= n.dot(other));
+  }
 };
+
+// Two clusters of unit normals (2-means on the sphere, seeded with the centre's normal and the
+// normal farthest from it). Returns the cluster means, or nothing when they are closer than
+// min_angle_cos or a cluster is too small.
+std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> split_normals(std::span<const Eigen::Vector3d> n,
+                                                                         const Eigen::Vector3d& seed,
+                                                                         double min_angle_cos, std::size_t min_size) {
+  Eigen::Vector3d a = seed, b = seed;
+  double worst = 2;
+  for (const auto& x : n)
+    if (x.dot(seed) < worst) worst = x.dot(seed), b = x;
+  if (worst > min_angle_cos) return std::nullopt;
+  for (int it = 0; it < 4; ++it) {
+    Eigen::Vector3d sa = Eigen::Vector3d::Zero(), sb = Eigen::Vector3d::Zero();
+    std::size_t ca = 0, cb = 0;
+    for (const auto& x : n)
+      if (x.dot(a) >= x.dot(b)) sa += x, ++ca;
+      else sb += x, ++cb;
+    if (ca < min_size || cb < min_size || !(sa.norm() > 0) || !(sb.norm() > 0)) return std::nullopt;
+    a = sa.normalized(), b = sb.normalized();
+  }
+  if (a.dot(b) > min_angle_cos) return std::nullopt;
+  return std::pair{a, b};
+}
 
 struct Fitter {
   const std::vector<Eigen::Vector3d>& P;
@@ -97,13 +130,57 @@ struct Fitter {
       const double err = std::max(e.max_taubin, e.max_probe);
       if (!(e.within || accept_any) || (best && !(err < best_err))) return e.within;
       best_err = err;
-      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, m};
+      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, m, std::nullopt};
       return e.within && err <= bound;
     };
     if (m >= opt.min_points && consider(fit_general_quadric(sample, opt.normal_weight), false)) return best;
-    consider(fit_height_quadric(sample, opt.normal_weight), true);
+    if (consider(fit_height_quadric(sample, opt.normal_weight), true)) return best;
+    if (opt.sharp && !accept_any)
+      if (auto b = try_sharp(ci, R, s)) return b;
     if (best && !best->is_bounded && !accept_any) return std::nullopt;
     return best;
+  }
+
+  // The centre's sheet only, clipped by the plane where the two sheets' tangent planes are
+  // equally far (dA(u) = dB(u): it separates the sheets at convex and concave creases alike).
+  // Uses the check subset s.u, s.n that try_ball left behind.
+  std::optional<Ball> try_sharp(std::uint32_t ci, double R, Scratch& s) const {
+    const auto split = split_normals(s.n, N[ci], std::cos(opt.sharp_angle_deg * std::numbers::pi / 180.0), opt.min_points / 2);
+    if (!split) return std::nullopt;
+    const auto& [na, nb] = *split;
+    Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = Eigen::Vector3d::Zero();
+    std::size_t ca = 0, cb = 0;
+    for (std::size_t j = 0; j < s.u.size(); ++j)
+      if (s.n[j].dot(na) >= s.n[j].dot(nb)) pa += s.u[j], ++ca;
+      else pb += s.u[j], ++cb;
+    pa /= double(ca), pb /= double(cb);
+    ClipPlane clip;
+    clip.n = na - nb;
+    clip.d = -(na.dot(pa) - nb.dot(pb));
+    const double len = clip.n.norm();
+    clip.n /= len, clip.d /= len;
+    Ball probe_ball;
+    probe_ball.clip = clip, probe_ball.sheet = na, probe_ball.other = nb;
+    // The patch must own its centre, or covering could never reach that point.
+    if (!probe_ball.owns(Eigen::Vector3d::Zero(), N[ci])) return std::nullopt;
+    std::vector<Eigen::Vector3d> u, n, fu, fn;
+    std::vector<double> fw;
+    for (std::size_t j = 0; j < s.u.size(); ++j)
+      if (probe_ball.owns(s.u[j], s.n[j])) u.push_back(s.u[j]), n.push_back(s.n[j]);
+    if (u.size() < opt.min_points / 2) return std::nullopt;
+    const std::size_t stride = std::max<std::size_t>(1, (u.size() + opt.max_fit_points - 1) / opt.max_fit_points);
+    for (std::size_t j = 0; j < u.size(); j += stride) fu.push_back(u[j]), fn.push_back(n[j]), fw.push_back(fit_weight(u[j].norm()));
+    const LocalSample sample{fu, fn, fw};
+    const double bound = E / R, h = probe / R;
+    for (const bool is_height : {false, true}) {
+      const auto g = is_height ? fit_height_quadric(sample, opt.normal_weight) : fit_general_quadric(sample, opt.normal_weight);
+      if (!g) continue;
+      const LocalError e = local_error(*g, u, n, h, bound);
+      if (!e.within) continue;
+      Ball b{ci, R, *g, is_height, true, e.max_taubin * R, e.sum_sq_taubin * R * R, u.size(), clip, na, nb};
+      return b;
+    }
+    return std::nullopt;
   }
 
   // The largest R whose fit stays within E: growth from the min_points-th neighbour distance,
@@ -124,7 +201,7 @@ struct Fitter {
         R /= 0.7 * 0.7 * 0.7;
         auto any = try_ball(ci, R, s, true);
         // Last resort: the tangent plane at the centre.
-        Ball b = any ? *any : Ball{ci, R, Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1};
+        Ball b = any ? *any : Ball{ci, R, Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, std::nullopt};
         b.is_bounded = false;
         return b;
       }
@@ -174,6 +251,8 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
     throw InvalidInput(fmt::format("fit_slim: max_error must be positive and finite, got {}", o.max_error));
   if (!(o.normal_weight > 0)) throw InvalidInput(fmt::format("fit_slim: normal_weight must be > 0, got {}", o.normal_weight));
   if (!(o.radius_growth > 1)) throw InvalidInput(fmt::format("fit_slim: radius_growth must be > 1, got {}", o.radius_growth));
+  if (o.sharp && !(o.sharp_angle_deg > 0 && o.sharp_angle_deg < 180))
+    throw InvalidInput(fmt::format("fit_slim: sharp_angle_deg must lie in (0, 180), got {}", o.sharp_angle_deg));
   if (o.min_points < 3) throw InvalidInput(fmt::format("fit_slim: min_points must be ≥ 3, got {}", o.min_points));
   if (o.max_fit_points < 10) throw InvalidInput(fmt::format("fit_slim: max_fit_points must be ≥ 10, got {}", o.max_fit_points));
   // Degenerate point sets: coincident, or all on one plane (no surface to enclose).
@@ -245,8 +324,9 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
         Ball b = fitter.grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity());
         index.radius(P[centres[k]], 0.5 * b.R, s.nb);
         auto& cov = covers[first + k];
-        cov.resize(s.nb.size());
-        for (std::size_t j = 0; j < s.nb.size(); ++j) cov[j] = s.nb[j].first;
+        cov.clear();
+        for (const auto& [p, d2] : s.nb)
+          if (b.owns((P[p] - P[centres[k]]) / b.R, N[p])) cov.push_back(p);
         balls[first + k] = std::move(b);
       }
     });
@@ -348,6 +428,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
       s.centre = P[balls[b].centre];
       s.radius = balls[b].R;
       s.local = balls[b].g;
+      s.clip = balls[b].clip;
       result.model.slims.push_back(std::move(s));
     }
   };
@@ -443,6 +524,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
     in_balls += balls[b].count;
     st.height_patches += balls[b].is_height;
     st.unbounded_patches += !balls[b].is_bounded;
+    st.clipped_patches += balls[b].clip.has_value();
   }
   st.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
   st.candidates = balls.size();
@@ -460,6 +542,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
   md["patches"] = std::to_string(st.patches);
   md["candidates"] = std::to_string(st.candidates);
   md["height_patches"] = std::to_string(st.height_patches);
+  if (opt.sharp) md["clipped_patches"] = std::to_string(st.clipped_patches);
   md["measured_max_error"] = num(st.max_blend);
   md["measured_rms_error"] = num(st.rms_blend);
   md["measured_failures"] = std::to_string(st.blend_failures);

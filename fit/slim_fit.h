@@ -39,6 +39,11 @@ struct SlimFitOptions {
   double probe_factor = 4.0;
   /// Rounds of verification against the blended surface and repair of the patches at fault.
   int repair_rounds = 6;
+  /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
+  /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
+  /// only and gets a clip plane (SlimPatch::clip) between the two sheets.
+  bool sharp = false;
+  double sharp_angle_deg = 30.0;
   /// Neighbours for normal estimation when the cloud has no normals (fit/normals.h).
   std::size_t normal_neighbours = 16;
   std::uint64_t seed = 1;
@@ -51,6 +56,7 @@ struct SlimFitStats {
   std::size_t patches_before_pruning = 0;
   std::size_t height_patches = 0;    ///< patches using the height-function fallback
   std::size_t unbounded_patches = 0; ///< patches whose smallest ball still exceeded E (noise)
+  std::size_t clipped_patches = 0;   ///< patches with a clip plane (--sharp)
   bool normals_estimated = false;
   double max_error_abs = 0;          ///< E in world units
   double diagonal = 0;               ///< bounding-box diagonal of the points

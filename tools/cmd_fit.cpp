@@ -34,6 +34,11 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")
       ->check(CLI::Range(0.0, 0.9));
   app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)");
+  app->add_flag("--sharp", a->options.sharp,
+                "Sharp features: a clip plane per patch whose normals split into two clusters");
+  app->add_option("--sharp-angle", a->options.sharp_angle_deg,
+                  "Smallest angle in degrees between the two normal clusters of a sharp patch")
+      ->check(CLI::Range(1.0, 179.0));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         PointCloud cloud = read_points(a->points);
                         PointCloud held;
@@ -53,7 +58,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                         o.max_error = a->max_error_abs > 0 ? a->max_error_abs : a->max_error;
                         o.max_error_is_absolute = a->max_error_abs > 0;
                         SlimFitResult r = fit_slim(cloud, o);
-                        r.model.metadata["producer"] = fmt::format("quadrix fit {}", a->points);
+                        r.model.metadata["producer"] =
+                            fmt::format("quadrix fit {}{}", a->points,
+                                        o.sharp ? fmt::format(" --sharp --sharp-angle {:g}", o.sharp_angle_deg) : "");
                         const auto& s = r.stats;
                         nlohmann::json j = {{"points", s.points},
                                             {"patches", s.patches},
@@ -67,6 +74,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"measured_rms_rel", s.rms_blend / s.diagonal},
                                             {"points_beyond_bound", s.blend_failures},
                                             {"height_patches", s.height_patches},
+                                            {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},
                                                          {"candidates", s.time_candidates},
                                                          {"cover", s.time_cover},
