@@ -249,6 +249,13 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
           log::info("bench fit: {}: OpenMesh decimation to {:g}", d.name, E);
           const peers::Decimation dec = peers::decimate_quadric(*d.mesh, Eabs);
           const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, dec.mesh);
+          // Vertices on no face are outside what the Hausdorff bound tracks (the bunny has 1,113).
+          std::vector<char> on_face(n, 0);
+          for (int v : d.mesh->indices) on_face[v] = 1;
+          std::vector<Eigen::Vector3d> referenced;
+          for (std::size_t i = 0; i < n; ++i)
+            if (on_face[i]) referenced.push_back(d.cloud.points[i]);
+          const peers::MeshDistance ef = peers::point_mesh_distance(referenced, dec.mesh);
           const Row r{d.name, "decimation", E, dec.mesh.face_count(), "triangles", e.max / d.diagonal,
                       e.rms / d.diagonal, dec.seconds, 0};
           rows.push_back(r);
@@ -258,6 +265,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                {"max_rel", r.max_rel},
                                {"rms_rel", r.rms_rel},
                                {"skipped_faces", dec.skipped_faces},
+                               {"max_rel_face_vertices", ef.max / d.diagonal},
+                               {"face_vertices", referenced.size()},
                                {"error_measure", "distance of every original vertex to the decimated mesh"}};
           run["ratios"]["patches_per_decimation_triangle"] = number(ratio(double(slim.size), double(r.size)));
           run["ratios"]["patches_per_decimation_vertex"] =

@@ -8,6 +8,10 @@
 #include "tools/cli.h"
 
 namespace quadrix::cli {
+
+void add_convert_volume(CLI::App& convert, Commands& commands);
+void add_convert_skin(CLI::App& convert, Commands& commands);
+
 namespace {
 
 // "R,G,B" with components 0..255. \throws CLI::ValidationError.
@@ -26,6 +30,8 @@ void add_convert(CLI::App& root, Commands& commands) {
   // `convert` is only a group; main runs the leaf whose app parsed (its parent parses with it).
   auto* convert = root.add_subcommand("convert", "Convert meshes into quadric models");
   convert->require_subcommand(1);
+  add_convert_volume(*convert, commands);
+  add_convert_skin(*convert, commands);
   auto* app = convert->add_subcommand("quads", "Quad mesh (OBJ, OFF, PLY) to tetrahedron-clipped quadrics");
   struct Args {
     std::string mesh, out, colour;

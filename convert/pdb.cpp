@@ -1,0 +1,222 @@
+// PDB, .cin and .xyzr ball sets with element radii and CPK colours.
+#include "convert/pdb.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/log.h"
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Element {
+  const char* symbol;
+  double vdw, covalent;
+  Rgb cpk;
+};
+
+// Bondi (1964) van der Waals radii (H: Rowland & Taylor 1996), Cordero et al. (2008) covalent
+// radii, Jmol CPK colours.
+constexpr Element kElements[] = {
+    {"H", 1.10, 0.31, {255, 255, 255}},  {"C", 1.70, 0.76, {144, 144, 144}}, {"N", 1.55, 0.71, {48, 80, 248}},
+    {"O", 1.52, 0.66, {255, 13, 13}},    {"S", 1.80, 1.05, {255, 255, 48}},  {"P", 1.80, 1.07, {255, 128, 0}},
+    {"F", 1.47, 0.57, {144, 224, 80}},   {"CL", 1.75, 1.02, {31, 240, 31}},  {"BR", 1.85, 1.20, {166, 41, 41}},
+    {"I", 1.98, 1.39, {148, 0, 148}},    {"SE", 1.90, 1.20, {255, 161, 0}},  {"NA", 2.27, 1.66, {171, 92, 242}},
+    {"K", 2.75, 2.03, {143, 64, 212}},   {"MG", 1.73, 1.41, {138, 255, 0}},  {"CA", 2.31, 1.76, {61, 255, 0}},
+    {"FE", 2.00, 1.32, {224, 102, 51}},  {"ZN", 1.39, 1.22, {125, 128, 176}}, {"CU", 1.40, 1.32, {200, 128, 51}},
+    {"MN", 2.00, 1.39, {156, 122, 199}}, {"CO", 2.00, 1.26, {240, 144, 160}}, {"NI", 1.63, 1.24, {80, 208, 80}},
+};
+constexpr double kDefaultVdw = 1.8, kDefaultCovalent = 1.5;
+constexpr Rgb kUnknownColour{255, 20, 147};
+
+const Element* find_element(std::string_view e) {
+  for (const auto& x : kElements)
+    if (e == x.symbol) return &x;
+  return nullptr;
+}
+
+std::string upper_trim(std::string_view s) {
+  std::string out;
+  for (const char c : s)
+    if (!std::isspace(static_cast<unsigned char>(c))) out.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
+  return out;
+}
+
+double parse_field(std::string_view line, std::size_t first, std::size_t width, const std::string& where,
+                   const char* name) {
+  const std::string text = upper_trim(line.substr(first, width));
+  double v = 0;
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
+    throw FormatError(fmt::format("{}: {} (columns {}-{}) '{}' is not a number", where, name, first + 1,
+                                  first + width, line.substr(first, width)));
+  return v;
+}
+
+// Element of a PDB atom: columns 77-78, else from the atom name (columns 13-16).
+std::string pdb_element(std::string_view line) {
+  if (line.size() >= 78) {
+    std::string e = upper_trim(line.substr(76, 2));
+    e.erase(std::remove_if(e.begin(), e.end(), [](char c) { return !std::isalpha(static_cast<unsigned char>(c)); }),
+            e.end());
+    if (!e.empty()) return e;
+  }
+  const std::string name(line.substr(12, 4));
+  // Column 13 blank (or a digit): a one-letter element in column 14; otherwise two letters.
+  if (name[0] == ' ' || std::isdigit(static_cast<unsigned char>(name[0]))) {
+    return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(name[1]))));
+  }
+  std::string two = upper_trim(name.substr(0, 2));
+  if (find_element(two)) return two;
+  return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(name[0]))));
+}
+
+std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::vector<int>& lines) {
+  std::ifstream in(path);
+  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
+  std::vector<Ball> balls;
+  std::map<std::string, int> unknown;
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.rfind("ENDMDL", 0) == 0) break;  // first model only
+    if (line.rfind("ATOM  ", 0) != 0 && line.rfind("HETATM", 0) != 0) continue;
+    const std::string where = fmt::format("{}:{}", path.string(), line_no);
+    if (line.size() < 54)
+      throw FormatError(fmt::format("{}: {} record has {} columns, coordinates need 54", where, line.substr(0, 6),
+                                    line.size()));
+    const char alt = line[16];
+    if (alt != ' ' && alt != 'A') continue;
+    Ball b;
+    b.centre = {parse_field(line, 30, 8, where, "x"), parse_field(line, 38, 8, where, "y"),
+                parse_field(line, 46, 8, where, "z")};
+    b.element = pdb_element(line);
+    if (!find_element(b.element)) ++unknown[b.element];
+    b.radius = element_radius(b.element, o.radii) * o.radius_scale;
+    b.colour = cpk_colour(b.element);
+    balls.push_back(std::move(b));
+    lines.push_back(line_no);
+  }
+  for (const auto& [e, n] : unknown)
+    log::warn("{}: {} atoms of unknown element '{}' get the default radius", path.string(), n, e);
+  return balls;
+}
+
+std::vector<Ball> read_columns(const fs::path& path, const BallReadOptions& o, bool weights, std::vector<int>& lines) {
+  std::ifstream in(path);
+  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
+  std::vector<Ball> balls;
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream s(line);
+    std::array<double, 4> v{};
+    std::string extra;
+    const std::string where = fmt::format("{}:{}", path.string(), line_no);
+    for (auto& x : v) {
+      std::string w;
+      if (!(s >> w)) throw FormatError(fmt::format("{}: expected 4 numbers (x y z {}), got '{}'", where, weights ? "w" : "r", line));
+      const auto r = std::from_chars(w.data(), w.data() + w.size(), x);
+      if (r.ec != std::errc() || r.ptr != w.data() + w.size() || !std::isfinite(x))
+        throw FormatError(fmt::format("{}: '{}' is not a finite number", where, w));
+    }
+    if (s >> extra) throw FormatError(fmt::format("{}: more than 4 values ('{}')", where, extra));
+    if (!(v[3] > 0))
+      throw FormatError(fmt::format("{}: {} {} must be > 0", where, weights ? "weight (squared radius)" : "radius", v[3]));
+    Ball b;
+    b.centre = {v[0], v[1], v[2]};
+    b.radius = (weights ? std::sqrt(v[3]) : v[3]) * o.radius_scale;
+    balls.push_back(b);
+    lines.push_back(line_no);
+  }
+  return balls;
+}
+
+// Indices of the first pair of centres closer than tol, if any.
+std::optional<std::pair<std::size_t, std::size_t>> find_duplicate(const std::vector<Ball>& balls, double tol) {
+  std::vector<std::size_t> order(balls.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return balls[a].centre.x() < balls[b].centre.x(); });
+  for (std::size_t i = 0; i < order.size(); ++i)
+    for (std::size_t j = i + 1; j < order.size() && balls[order[j]].centre.x() - balls[order[i]].centre.x() <= tol; ++j)
+      if ((balls[order[i]].centre - balls[order[j]].centre).norm() <= tol)
+        return std::pair{std::min(order[i], order[j]), std::max(order[i], order[j])};
+  return std::nullopt;
+}
+
+double extent(const std::vector<Ball>& balls) {
+  Box3 box;
+  for (const auto& b : balls) box.extend(b.centre);
+  return std::max(box.diagonal(), 1e-300);
+}
+
+}  // namespace
+
+RadiusTable parse_radius_table(std::string_view name) {
+  if (name == "vdw") return RadiusTable::vdw;
+  if (name == "covalent") return RadiusTable::covalent;
+  if (name == "unit") return RadiusTable::unit;
+  throw InvalidInput(fmt::format("unknown radius table '{}' (vdw, covalent, unit)", name));
+}
+
+double element_radius(std::string_view element, RadiusTable table) {
+  const Element* e = find_element(element);
+  switch (table) {
+    case RadiusTable::vdw: return e ? e->vdw : kDefaultVdw;
+    case RadiusTable::covalent: return e ? e->covalent : kDefaultCovalent;
+    case RadiusTable::unit: return 1.0;
+  }
+  return kDefaultVdw;
+}
+
+Rgb cpk_colour(std::string_view element) {
+  const Element* e = find_element(element);
+  return e ? e->cpk : kUnknownColour;
+}
+
+void validate_balls(const std::vector<Ball>& balls, std::string_view source) {
+  if (balls.empty()) throw InvalidInput(fmt::format("{}: no balls", source));
+  for (std::size_t i = 0; i < balls.size(); ++i) {
+    if (!balls[i].centre.allFinite() || !std::isfinite(balls[i].radius))
+      throw InvalidInput(fmt::format("{}: ball {} is not finite", source, i));
+    if (!(balls[i].radius > 0)) throw InvalidInput(fmt::format("{}: ball {} has radius {} ≤ 0", source, i, balls[i].radius));
+  }
+  if (const auto d = find_duplicate(balls, 1e-6 * extent(balls)))
+    throw InvalidInput(fmt::format("{}: balls {} and {} have the same centre ({}, {}, {})", source, d->first, d->second,
+                                   balls[d->first].centre.x(), balls[d->first].centre.y(), balls[d->first].centre.z()));
+}
+
+std::vector<Ball> read_balls(const fs::path& path, const BallReadOptions& options) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (!(options.radius_scale > 0) || !std::isfinite(options.radius_scale))
+    throw InvalidInput(fmt::format("radius scale {} must be finite and > 0", options.radius_scale));
+  std::vector<int> lines;
+  std::vector<Ball> balls;
+  if (ext == ".pdb" || ext == ".ent") balls = read_pdb(path, options, lines);
+  else if (ext == ".cin") balls = read_columns(path, options, true, lines);
+  else if (ext == ".xyzr") balls = read_columns(path, options, false, lines);
+  else throw InvalidInput(fmt::format("'{}': unknown ball file type (.pdb, .ent, .cin, .xyzr)", path.string()));
+  if (balls.empty()) throw FormatError(fmt::format("{}: no atoms or balls found", path.string()));
+  if (const auto d = find_duplicate(balls, 1e-6 * extent(balls)))
+    throw FormatError(fmt::format("{}: lines {} and {}: duplicate ball at ({}, {}, {})", path.string(), lines[d->first],
+                                  lines[d->second], balls[d->first].centre.x(), balls[d->first].centre.y(),
+                                  balls[d->first].centre.z()));
+  return balls;
+}
+
+}  // namespace quadrix

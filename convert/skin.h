@@ -1,0 +1,70 @@
+#pragma once
+/// Skin surfaces of ball sets → tetrahedron-clipped quadrics ([Stoll06] §5.1.2; Edelsbrunner's
+/// skin surface as built by CGAL `Skin_surface_3`, convert/skin_cgal.cpp).
+///
+/// CGAL builds the mixed complex of the balls' regular triangulation and triangulates it
+/// (`triangulated_mixed_complex()`): every mixed cell is a convex polyhedron carrying one quadric,
+/// and every tetrahedron of the triangulated complex knows the simplex of its mixed cell. CGAL keeps
+/// the quadric's coefficients private, so we recompute them from the simplex with the closed forms
+/// of CGAL's `Skin_surface_quadratic_surface_3.h` (weighted circumcentre p, c = s(1−s)·radius² of
+/// the smallest orthogonal sphere, Q from the simplex's direction) and check them against CGAL's
+/// `value()` at the 10 quadratic nodes of every tetrahedron (max_quadric_disagreement).
+///
+/// Tetrahedra: CGAL's triangulated mixed complex already splits every mixed cell into tetrahedra,
+/// and SkinTetrahedra::cgal (the default) uses them as they are. With SkinTetrahedra::tetgen the tetrahedra of each crossed mixed cell are merged
+/// back into the cell (the convex hull of their corners) and the cell is tetrahedralised again by
+/// TetGen (convert/tetrahedralize.h: validated, in a child process; a cell TetGen aborts on keeps
+/// CGAL's tetrahedra and is counted in tetgen_failed_cells). Known issue: TetGen's output for
+/// cells with (nearly) coplanar boundary points contains flat tetrahedra, which are skipped, and
+/// a few CGAL mesh vertices then fall outside every kept tetrahedron (see tests/convert/test_skin.cpp).
+///
+/// Skipped: mixed cells of CGAL's bounding-octahedron vertices (weight −1), and tetrahedra whose
+/// Bézier control net of the quadric (b_ij = p̃ᵢᵀQ̃p̃ⱼ) has one strict sign (the surface cannot
+/// cross them). Colour: the CPK colour of the simplex's ball nearest (in power distance) to the
+/// tetrahedron's centroid.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "convert/pdb.h"
+#include "core/model.h"
+
+namespace quadrix {
+
+enum class SkinTetrahedra { tetgen, cgal };
+
+struct SkinOptions {
+  double shrink = 0.5;                              ///< CGAL's shrink factor s, in (0, 1)
+  SkinTetrahedra tetrahedra = SkinTetrahedra::cgal;
+  std::string source = "balls";                     ///< names the input in error messages
+};
+
+struct SkinConversion {
+  Model model;                           ///< tet patches only; metadata left to the caller
+  std::size_t mixed_cells = 0;           ///< mixed cells of the balls (bounding-box cells excluded)
+  std::size_t mixed_cells_crossed = 0;   ///< mixed cells the surface crosses
+  std::size_t bbox_cells_skipped = 0;    ///< CGAL tetrahedra of bounding-octahedron cells
+  std::size_t cgal_tets = 0;             ///< tetrahedra of CGAL's triangulated mixed complex
+  std::size_t cgal_tets_crossed = 0;     ///< of which the surface can cross
+  std::size_t tetgen_tets = 0;           ///< TetGen's tetrahedra of the crossed cells (tetgen mode)
+  std::size_t slivers_skipped = 0;       ///< tetrahedra of (near) zero volume, skipped
+  std::size_t tetgen_failed_cells = 0;   ///< crossed cells TetGen failed on: CGAL's tetrahedra kept
+  /// Largest |ours − CGAL value()| over the 10 nodes of every CGAL tetrahedron, relative to the
+  /// largest |value| there and the tetrahedron's squared diameter.
+  double max_quadric_disagreement = 0;
+  double cgal_seconds = 0, tetgen_seconds = 0;
+};
+
+/// \throws InvalidInput for an empty set, a non-positive radius, duplicate centres or a shrink
+///         factor outside (0, 1); SolverError when TetGen fails on a cell.
+SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& options = {});
+
+/// CGAL's own triangle mesh of the skin surface (`mesh_skin_surface_3`, then `subdivide_skin_surface_mesh_3`
+/// `subdivisions` times): the reference the conversion is checked against.
+struct TriangleMesh {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<std::array<int, 3>> triangles;
+};
+TriangleMesh cgal_skin_mesh(const std::vector<Ball>& balls, double shrink, int subdivisions);
+
+}  // namespace quadrix

@@ -1,0 +1,45 @@
+#pragma once
+/// Tetrahedralisation of convex cells with TetGen 1.5 (AGPL: linked only into the
+/// `quadrix_tetgen` library, convert/tetrahedralize_tetgen.cpp).
+///
+/// TetGen 1.5 crashes (double free, segfault) on some invalid inputs, so no input reaches it
+/// unchecked and every call runs in a forked child process: the input is validated first
+/// (finite coordinates, at least 4 distinct points, positive volume), and a TetGen crash or
+/// error in the child becomes a SolverError in the caller that names the cell, never a crash.
+#include <array>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace quadrix {
+
+using TetIndices = std::array<int, 4>;
+
+struct TetrahedralizeOptions {
+  /// Points closer than this fraction of the cell's diameter are merged before TetGen sees them.
+  double merge_tolerance = 1e-10;
+  /// Cells whose volume is below this fraction of diameter³ are degenerate (InvalidInput).
+  double min_relative_volume = 1e-14;
+  /// Names the cells' owner in error messages.
+  std::string source = "cells";
+  /// When TetGen fails or crashes on a cell: false → SolverError; true → the cell is listed in
+  /// Tetrahedralization::failed (no tetrahedra) and a fresh child process goes on with the next.
+  bool skip_failed = false;
+};
+
+struct Tetrahedralization {
+  std::vector<std::vector<TetIndices>> cells;  ///< cells[i] indexes the points of input cell i
+  std::vector<std::size_t> failed;             ///< cells TetGen failed on (skip_failed only)
+  std::string first_failure;                   ///< why the first of them failed
+};
+
+/// Tetrahedralises the convex hull of each point set (one TetGen run per cell, the cells in one
+/// child process, restarted after a failure). Every tetrahedron is positively oriented.
+/// \throws InvalidInput naming the cell for fewer than 4 distinct points, a non-finite point or a
+///         flat cell; SolverError naming the cell when TetGen fails or crashes (unless skip_failed).
+Tetrahedralization tetrahedralize_convex_cells(std::span<const std::vector<Eigen::Vector3d>> cells,
+                                               const TetrahedralizeOptions& options = {});
+
+}  // namespace quadrix

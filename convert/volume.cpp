@@ -1,0 +1,722 @@
+// Volume readers (NRRD, INRIMAGE-4, raw), the Marschner–Lobb function, and the quadratic
+// iso-surface conversion ([Stoll06] §5.1.2).
+#include "convert/volume.h"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include <Eigen/LU>
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <zlib.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/log.h"
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+using Eigen::Matrix4d;
+using Eigen::Vector3d;
+
+// ---------------------------------------------------------------------------------------------
+// Bytes and headers
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (auto& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string trim(std::string_view s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string_view::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+bool ends_with(const fs::path& p, std::string_view suffix) {
+  const std::string name = lower(p.filename().string());
+  return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (in.bad()) throw IoError(fmt::format("cannot read '{}'", path.string()));
+  return std::move(s).str();
+}
+
+// The whole decompressed content of a gzip file (or stream of gzip members).
+std::string read_gzip(const fs::path& path) {
+  gzFile f = gzopen(path.string().c_str(), "rb");
+  if (!f) throw IoError(fmt::format("cannot open '{}'", path.string()));
+  std::string out;
+  std::array<char, 1 << 16> buf{};
+  for (;;) {
+    const int n = gzread(f, buf.data(), static_cast<unsigned>(buf.size()));
+    if (n < 0) {
+      int code = 0;
+      const std::string msg = gzerror(f, &code);
+      gzclose(f);
+      throw FormatError(fmt::format("'{}': corrupt gzip data after {} decompressed bytes: {}", path.string(),
+                                    out.size(), msg));
+    }
+    if (n == 0) break;
+    out.append(buf.data(), static_cast<std::size_t>(n));
+  }
+  gzclose(f);
+  return out;
+}
+
+// zlib inflate of an in-memory gzip stream (NRRD `encoding: gzip`).
+std::string gunzip(std::string_view data, const std::string& what) {
+  z_stream z{};
+  if (inflateInit2(&z, 15 + 32) != Z_OK) throw FormatError(fmt::format("{}: cannot initialise zlib", what));
+  std::string out;
+  std::array<char, 1 << 16> buf{};
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+  z.avail_in = static_cast<uInt>(data.size());
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    z.next_out = reinterpret_cast<Bytef*>(buf.data());
+    z.avail_out = static_cast<uInt>(buf.size());
+    rc = inflate(&z, Z_NO_FLUSH);
+    if (rc != Z_OK && rc != Z_STREAM_END) {
+      inflateEnd(&z);
+      throw FormatError(fmt::format("{}: corrupt gzip data after {} decompressed bytes", what, out.size()));
+    }
+    out.append(buf.data(), buf.size() - z.avail_out);
+    if (rc == Z_OK && z.avail_in == 0 && z.avail_out != 0) {
+      inflateEnd(&z);
+      throw FormatError(fmt::format("{}: truncated gzip data after {} decompressed bytes", what, out.size()));
+    }
+  }
+  inflateEnd(&z);
+  return out;
+}
+
+std::size_t voxel_bytes(VoxelType t) {
+  switch (t) {
+    case VoxelType::uint8: case VoxelType::int8: return 1;
+    case VoxelType::uint16: case VoxelType::int16: return 2;
+    case VoxelType::uint32: case VoxelType::int32: case VoxelType::float32: return 4;
+    case VoxelType::float64: return 8;
+  }
+  return 1;
+}
+
+const char* voxel_name(VoxelType t) {
+  switch (t) {
+    case VoxelType::uint8: return "uint8";
+    case VoxelType::int8: return "int8";
+    case VoxelType::uint16: return "uint16";
+    case VoxelType::int16: return "int16";
+    case VoxelType::uint32: return "uint32";
+    case VoxelType::int32: return "int32";
+    case VoxelType::float32: return "float";
+    case VoxelType::float64: return "double";
+  }
+  return "?";
+}
+
+template <typename T>
+T load(const char* p, bool swap) {
+  std::array<char, sizeof(T)> b;
+  std::memcpy(b.data(), p, sizeof(T));
+  if (swap) std::reverse(b.begin(), b.end());
+  T v;
+  std::memcpy(&v, b.data(), sizeof(T));
+  return v;
+}
+
+// Decodes dims-many voxels from data (exactly the right size: checked here) into a Volume.
+Volume decode(std::string_view data, const std::array<int, 3>& dims, VoxelType type, bool big_endian,
+              const Vector3d& spacing, const std::string& what) {
+  for (int a = 0; a < 3; ++a)
+    if (dims[a] < 1 || dims[a] > (1 << 16))
+      throw FormatError(fmt::format("{}: size {} along axis {} is out of range [1, 65536]", what, dims[a], a));
+  const std::size_t n = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
+  const std::size_t need = n * voxel_bytes(type);
+  if (data.size() != need)
+    throw FormatError(fmt::format("{}: header says {}x{}x{} {} = {} bytes of data, the file holds {}", what, dims[0],
+                                  dims[1], dims[2], voxel_name(type), need, data.size()));
+  for (int a = 0; a < 3; ++a)
+    if (!(spacing[a] > 0) || !std::isfinite(spacing[a]))
+      throw FormatError(fmt::format("{}: spacing {} along axis {} must be finite and > 0", what, spacing[a], a));
+  Volume v;
+  v.dims = dims;
+  v.spacing = spacing;
+  v.source = what;
+  v.values.resize(n);
+  const bool swap = big_endian != (std::endian::native == std::endian::big);
+  const char* p = data.data();
+  const std::size_t s = voxel_bytes(type);
+  for (std::size_t i = 0; i < n; ++i, p += s) {
+    double x = 0;
+    switch (type) {
+      case VoxelType::uint8: x = static_cast<std::uint8_t>(*p); break;
+      case VoxelType::int8: x = static_cast<std::int8_t>(*p); break;
+      case VoxelType::uint16: x = load<std::uint16_t>(p, swap); break;
+      case VoxelType::int16: x = load<std::int16_t>(p, swap); break;
+      case VoxelType::uint32: x = load<std::uint32_t>(p, swap); break;
+      case VoxelType::int32: x = load<std::int32_t>(p, swap); break;
+      case VoxelType::float32: x = load<float>(p, swap); break;
+      case VoxelType::float64: x = load<double>(p, swap); break;
+    }
+    if (!std::isfinite(x))
+      throw FormatError(fmt::format("{}: voxel {} (byte offset {} of the data) is not finite", what, i, i * s));
+    v.values[i] = static_cast<float>(x);
+  }
+  return v;
+}
+
+template <typename T>
+T parse_number(std::string_view text, const std::string& what, std::string_view field) {
+  const std::string t = trim(text);
+  T v{};
+  const char* b = t.data();
+  const char* e = b + t.size();
+  if constexpr (std::is_floating_point_v<T>) {
+    // NRRD writes NaN for "unknown" spacing; callers decide what to do with it.
+    if (lower(t) == "nan") return std::numeric_limits<T>::quiet_NaN();
+  }
+  const auto r = std::from_chars(b, e, v);
+  if (r.ec != std::errc() || r.ptr != e)
+    throw FormatError(fmt::format("{}: field '{}': '{}' is not a number", what, field, t));
+  return v;
+}
+
+std::vector<std::string> split_ws(std::string_view s) {
+  std::vector<std::string> out;
+  std::istringstream in{std::string(s)};
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+}  // namespace
+
+std::pair<double, double> Volume::range() const {
+  if (values.empty()) return {0.0, 0.0};
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  return {*lo, *hi};
+}
+
+VoxelType parse_voxel_type(std::string_view name) {
+  const std::string t = lower(trim(name));
+  if (t == "uint8" || t == "uchar" || t == "unsigned char" || t == "uint8_t") return VoxelType::uint8;
+  if (t == "int8" || t == "signed char" || t == "int8_t") return VoxelType::int8;
+  if (t == "uint16" || t == "ushort" || t == "unsigned short" || t == "unsigned short int" || t == "uint16_t")
+    return VoxelType::uint16;
+  if (t == "int16" || t == "short" || t == "short int" || t == "signed short" || t == "signed short int" ||
+      t == "int16_t")
+    return VoxelType::int16;
+  if (t == "uint32" || t == "uint" || t == "unsigned int" || t == "uint32_t") return VoxelType::uint32;
+  if (t == "int32" || t == "int" || t == "signed int" || t == "int32_t") return VoxelType::int32;
+  if (t == "float" || t == "float32") return VoxelType::float32;
+  if (t == "double" || t == "float64") return VoxelType::float64;
+  throw InvalidInput(fmt::format("unknown voxel type '{}' (uint8, int8, uint16, int16, uint32, int32, float, double)",
+                                 name));
+}
+
+Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
+  std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_bytes(path);
+  const std::string what = path.string();
+  if (layout.header_bytes > bytes.size())
+    throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what,
+                                  layout.header_bytes, bytes.size()));
+  return decode(std::string_view(bytes).substr(layout.header_bytes), layout.dims, layout.type, layout.big_endian,
+                layout.spacing, what);
+}
+
+Volume read_nrrd(const fs::path& path) {
+  const std::string what = path.string();
+  const std::string text = read_bytes(path);
+  if (text.rfind("NRRD000", 0) != 0)
+    throw FormatError(fmt::format("{}: not a NRRD file (no NRRD000x magic on line 1)", what));
+  std::optional<VoxelType> type;
+  int dimension = 0;
+  std::vector<int> sizes;
+  Vector3d spacing = Vector3d::Ones();
+  Vector3d origin = Vector3d::Zero();
+  std::string endian, encoding = "raw", data_file;
+  long long byte_skip = 0;
+  long long line_skip = 0;
+  std::size_t pos = text.find('\n');
+  std::size_t data_start = std::string::npos;
+  int line_no = 1;
+  while (pos != std::string::npos && pos + 1 <= text.size()) {
+    const std::size_t b = pos + 1;
+    const std::size_t e = text.find('\n', b);
+    ++line_no;
+    const std::string line = trim(std::string_view(text).substr(b, (e == std::string::npos ? text.size() : e) - b));
+    pos = e;
+    if (line.empty()) {  // end of header: attached data follows
+      data_start = e == std::string::npos ? text.size() : e + 1;
+      break;
+    }
+    if (line[0] == '#') continue;
+    if (line.find(":=") != std::string::npos) continue;  // key/value pair
+    const auto colon = line.find(": ");
+    if (colon == std::string::npos)
+      throw FormatError(fmt::format("{}: line {}: expected 'field: value', got '{}'", what, line_no, line));
+    const std::string field = lower(trim(line.substr(0, colon)));
+    const std::string value = trim(line.substr(colon + 2));
+    const std::string where = fmt::format("{} line {}", what, line_no);
+    if (field == "type") {
+      try {
+        type = parse_voxel_type(value);
+      } catch (const InvalidInput& err) {
+        throw FormatError(fmt::format("{}: {}", where, err.what()));
+      }
+    } else if (field == "dimension") {
+      dimension = parse_number<int>(value, where, field);
+    } else if (field == "sizes") {
+      for (const auto& w : split_ws(value)) sizes.push_back(parse_number<int>(w, where, field));
+    } else if (field == "spacings") {
+      const auto w = split_ws(value);
+      if (w.size() != 3) throw FormatError(fmt::format("{}: 'spacings' needs 3 values, got '{}'", where, value));
+      for (int a = 0; a < 3; ++a) {
+        const double s = parse_number<double>(w[a], where, field);
+        spacing[a] = std::isnan(s) ? 1.0 : std::abs(s);
+      }
+    } else if (field == "space directions") {
+      // "(a,b,c) (d,e,f) (g,h,i)": the spacing is each vector's length (axis-aligned grids).
+      std::string v = value;
+      for (auto& c : v)
+        if (c == '(' || c == ')' || c == ',') c = ' ';
+      const auto w = split_ws(v);
+      if (w.size() != 9)
+        throw FormatError(fmt::format("{}: 'space directions' needs three 3-vectors, got '{}'", where, value));
+      for (int a = 0; a < 3; ++a)
+        spacing[a] = Vector3d(parse_number<double>(w[3 * a], where, field), parse_number<double>(w[3 * a + 1], where, field),
+                              parse_number<double>(w[3 * a + 2], where, field))
+                         .norm();
+    } else if (field == "space origin") {
+      std::string v = value;
+      for (auto& c : v)
+        if (c == '(' || c == ')' || c == ',') c = ' ';
+      const auto w = split_ws(v);
+      if (w.size() != 3) throw FormatError(fmt::format("{}: 'space origin' needs 3 values, got '{}'", where, value));
+      for (int a = 0; a < 3; ++a) origin[a] = parse_number<double>(w[a], where, field);
+    } else if (field == "endian") {
+      endian = lower(value);
+      if (endian != "little" && endian != "big")
+        throw FormatError(fmt::format("{}: endian must be 'little' or 'big', got '{}'", where, value));
+    } else if (field == "encoding") {
+      encoding = lower(value);
+    } else if (field == "data file" || field == "datafile") {
+      data_file = value;
+    } else if (field == "byte skip") {
+      byte_skip = parse_number<long long>(value, where, field);
+    } else if (field == "line skip") {
+      line_skip = parse_number<long long>(value, where, field);
+    }
+  }
+  if (!type) throw FormatError(fmt::format("{}: missing required field 'type'", what));
+  if (dimension != 3) throw FormatError(fmt::format("{}: dimension {} (only 3-D scalar volumes are supported)", what, dimension));
+  if (sizes.size() != 3)
+    throw FormatError(fmt::format("{}: 'sizes' has {} entries, dimension is 3", what, sizes.size()));
+  if (voxel_bytes(*type) > 1 && endian.empty())
+    throw FormatError(fmt::format("{}: missing field 'endian' for {}-byte type {}", what, voxel_bytes(*type),
+                                  voxel_name(*type)));
+  const bool gz = encoding == "gzip" || encoding == "gz";
+  if (!gz && encoding != "raw")
+    throw FormatError(fmt::format("{}: encoding '{}' is not supported (raw, gzip)", what, encoding));
+  if (byte_skip < -1 || line_skip < 0)
+    throw FormatError(fmt::format("{}: negative byte skip {} or line skip {}", what, byte_skip, line_skip));
+
+  std::string data;
+  std::string data_what = what;
+  if (!data_file.empty()) {
+    if (data_file.rfind("LIST", 0) == 0 || split_ws(data_file).size() > 1)
+      throw FormatError(fmt::format("{}: multi-file data ('data file: {}') is not supported", what, data_file));
+    fs::path df = data_file;
+    if (df.is_relative()) df = path.parent_path() / df;
+    data_what = df.string();
+    data = read_bytes(df);
+  } else {
+    if (data_start == std::string::npos)
+      throw FormatError(fmt::format("{}: no 'data file' field and no attached data after a blank line", what));
+    data = text.substr(data_start);
+  }
+  std::string_view d = data;
+  for (long long l = 0; l < line_skip; ++l) {
+    const auto nl = d.find('\n');
+    if (nl == std::string_view::npos)
+      throw FormatError(fmt::format("{}: 'line skip: {}' runs past the end of the data", data_what, line_skip));
+    d.remove_prefix(nl + 1);
+  }
+  std::string inflated;
+  if (gz) {
+    if (byte_skip > 0) d.remove_prefix(std::min<std::size_t>(d.size(), static_cast<std::size_t>(byte_skip)));
+    inflated = gunzip(d, data_what);
+    d = inflated;
+  } else if (byte_skip == -1) {
+    const std::size_t need = static_cast<std::size_t>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) *
+                             std::max(sizes[2], 0) * voxel_bytes(*type);
+    if (d.size() < need)
+      throw FormatError(fmt::format("{}: header says {} bytes of data, the file holds {}", data_what, need, d.size()));
+    d.remove_prefix(d.size() - need);
+  } else {
+    if (static_cast<std::size_t>(byte_skip) > d.size())
+      throw FormatError(fmt::format("{}: 'byte skip: {}' is past the end of the data ({} bytes)", data_what,
+                                    byte_skip, d.size()));
+    d.remove_prefix(static_cast<std::size_t>(byte_skip));
+  }
+  Volume v = decode(d, {sizes[0], sizes[1], sizes[2]}, *type, endian == "big", spacing, data_what);
+  v.origin = origin;
+  v.source = what;
+  return v;
+}
+
+Volume read_inr(const fs::path& path) {
+  const std::string what = path.string();
+  const std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_bytes(path);
+  if (bytes.rfind("#INRIMAGE-4#{", 0) != 0)
+    throw FormatError(fmt::format("{}: not an INRIMAGE-4 file (no '#INRIMAGE-4#{{' magic)", what));
+  const std::size_t end = bytes.find("##}");
+  if (end == std::string::npos) throw FormatError(fmt::format("{}: header has no closing '##}}'", what));
+  // The header is padded to a multiple of 256 bytes, ending with "##}\n".
+  const std::size_t header = (end + 4 + 255) / 256 * 256;
+  if (header > bytes.size())
+    throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what, header, bytes.size()));
+  std::array<int, 3> dims{-1, -1, -1};
+  int vdim = 1, pixsize = 0;
+  std::string type_name, cpu = "decm";
+  Vector3d spacing = Vector3d::Ones();
+  std::istringstream in(bytes.substr(0, end));
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    const auto eq = line.find('=');
+    if (line.empty() || line[0] == '#' || eq == std::string::npos) continue;
+    const std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
+    const std::string where = fmt::format("{} header line {}", what, line_no);
+    if (key == "XDIM") dims[0] = parse_number<int>(value, where, key);
+    else if (key == "YDIM") dims[1] = parse_number<int>(value, where, key);
+    else if (key == "ZDIM") dims[2] = parse_number<int>(value, where, key);
+    else if (key == "VDIM") vdim = parse_number<int>(value, where, key);
+    else if (key == "TYPE") type_name = lower(value);
+    else if (key == "PIXSIZE") pixsize = parse_number<int>(split_ws(value).empty() ? "" : split_ws(value)[0], where, key);
+    else if (key == "CPU") cpu = lower(value);
+    else if (key == "VX") spacing[0] = parse_number<double>(value, where, key);
+    else if (key == "VY") spacing[1] = parse_number<double>(value, where, key);
+    else if (key == "VZ") spacing[2] = parse_number<double>(value, where, key);
+  }
+  for (int a = 0; a < 3; ++a)
+    if (dims[a] < 0) throw FormatError(fmt::format("{}: missing {}DIM", what, "XYZ"[a]));
+  if (vdim != 1) throw FormatError(fmt::format("{}: VDIM={} (only scalar volumes are supported)", what, vdim));
+  VoxelType type;
+  if (type_name == "float" && pixsize == 32) type = VoxelType::float32;
+  else if (type_name == "float" && pixsize == 64) type = VoxelType::float64;
+  else if (type_name == "unsigned fixed" && pixsize == 8) type = VoxelType::uint8;
+  else if (type_name == "unsigned fixed" && pixsize == 16) type = VoxelType::uint16;
+  else if (type_name == "unsigned fixed" && pixsize == 32) type = VoxelType::uint32;
+  else if (type_name == "signed fixed" && pixsize == 8) type = VoxelType::int8;
+  else if (type_name == "signed fixed" && pixsize == 16) type = VoxelType::int16;
+  else if (type_name == "signed fixed" && pixsize == 32) type = VoxelType::int32;
+  else
+    throw FormatError(fmt::format("{}: unsupported TYPE='{}' with PIXSIZE={} bits", what, type_name, pixsize));
+  bool big = false;
+  if (cpu == "sun" || cpu == "sgi") big = true;
+  else if (cpu != "decm" && cpu != "alpha" && cpu != "pc")
+    throw FormatError(fmt::format("{}: unknown CPU='{}' (decm, alpha, pc, sun, sgi)", what, cpu));
+  Volume v = decode(std::string_view(bytes).substr(header), dims, type, big, spacing, what);
+  return v;
+}
+
+void write_nrrd(const Volume& volume, const fs::path& path) {
+  fs::path raw = path;
+  raw.replace_extension(".raw");
+  write_file_atomically(raw, [&](std::ostream& out) {
+    for (const float x : volume.values) {
+      std::array<char, 4> b;
+      std::memcpy(b.data(), &x, 4);
+      if constexpr (std::endian::native == std::endian::big) std::reverse(b.begin(), b.end());
+      out.write(b.data(), 4);
+    }
+  });
+  write_file_atomically(path, [&](std::ostream& out) {
+    const Vector3d& h = volume.spacing;
+    const Vector3d& o = volume.origin;
+    out << fmt::format("NRRD0004\n# {}\ntype: float\ndimension: 3\nspace dimension: 3\nsizes: {} {} {}\n"
+                       "space directions: ({:.17g},0,0) (0,{:.17g},0) (0,0,{:.17g})\n"
+                       "space origin: ({:.17g},{:.17g},{:.17g})\nendian: little\nencoding: raw\ndata file: {}\n",
+                       volume.source, volume.dims[0], volume.dims[1], volume.dims[2], h.x(), h.y(), h.z(), o.x(),
+                       o.y(), o.z(), raw.filename().string());
+  });
+}
+
+Volume read_volume(const fs::path& path, const std::optional<RawVolumeLayout>& raw) {
+  if (raw) return read_raw_volume(path, *raw);
+  if (ends_with(path, ".nhdr") || ends_with(path, ".nrrd")) return read_nrrd(path);
+  if (ends_with(path, ".inr") || ends_with(path, ".inr.gz")) return read_inr(path);
+  throw InvalidInput(fmt::format("'{}': unknown volume format (.nhdr, .nrrd, .inr, .inr.gz; raw files need "
+                                 "their dimensions and type)",
+                                 path.string()));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Marschner–Lobb
+
+namespace {
+constexpr double kMlFm = 6.0, kMlAlpha = 0.25;
+}
+
+double marschner_lobb(const Vector3d& p) {
+  using std::numbers::pi;
+  const double r = std::hypot(p.x(), p.y());
+  const double rho_r = std::cos(2 * pi * kMlFm * std::cos(pi * r / 2));
+  return (1 - std::sin(pi * p.z() / 2) + kMlAlpha * (1 + rho_r)) / (2 * (1 + kMlAlpha));
+}
+
+Eigen::Vector3d marschner_lobb_gradient(const Vector3d& p) {
+  using std::numbers::pi;
+  const double r = std::hypot(p.x(), p.y());
+  const double k = 1.0 / (2 * (1 + kMlAlpha));
+  const double drho_r = pi * pi * kMlFm * std::sin(pi * r / 2) * std::sin(2 * pi * kMlFm * std::cos(pi * r / 2));
+  Vector3d g(0, 0, -pi / 2 * std::cos(pi * p.z() / 2) * k);
+  if (r > 0) {
+    g.x() = k * kMlAlpha * drho_r * p.x() / r;
+    g.y() = k * kMlAlpha * drho_r * p.y() / r;
+  }
+  return g;
+}
+
+Volume marschner_lobb_volume(int n) {
+  if (n < 2 || n > 2048) throw InvalidInput(fmt::format("Marschner–Lobb grid size {} is outside [2, 2048]", n));
+  Volume v;
+  v.dims = {n, n, n};
+  const double h = 2.0 / (n - 1);
+  v.spacing = Vector3d::Constant(h);
+  v.origin = Vector3d::Constant(-1.0);
+  v.source = fmt::format("marschner-lobb {}^3", n);
+  v.values.resize(static_cast<std::size_t>(n) * n * n);
+  tbb::parallel_for(0, n, [&](int k) {
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) v.values[v.index(i, j, k)] = static_cast<float>(marschner_lobb(v.position(i, j, k)));
+  });
+  return v;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Conversion
+
+namespace {
+
+// Kuhn split of a cell: corner c sits at offset (c&1, c>>1&1, c>>2&1); the six monotone paths
+// 0 → 7 (as core/synth.cpp split_cube), each ordered to positive orientation.
+struct KuhnTets {
+  std::array<std::array<int, 4>, 6> tets;
+  KuhnTets() {
+    static constexpr int paths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+    const auto off = [](int c) { return Vector3d(c & 1, (c >> 1) & 1, (c >> 2) & 1); };
+    for (int t = 0; t < 6; ++t) {
+      std::array<int, 4> v{0, paths[t][0], paths[t][1], 7};
+      if ((off(v[1]) - off(v[0])).cross(off(v[2]) - off(v[0])).dot(off(v[3]) - off(v[0])) < 0) std::swap(v[1], v[2]);
+      tets[t] = v;
+    }
+  }
+};
+
+// Per-axis weights of a 1-D reconstruction at index coordinate 2u/2 (u = twice the coordinate).
+struct AxisWeights {
+  int count = 0;
+  std::array<int, 4> index{};
+  std::array<double, 4> weight{};
+};
+
+AxisWeights axis_weights(int twice, int n, Reconstruction r) {
+  AxisWeights w;
+  if (twice % 2 == 0) {
+    w.count = 1;
+    w.index[0] = twice / 2;
+    w.weight[0] = 1;
+    return w;
+  }
+  const int i0 = (twice - 1) / 2;  // the sample below the midpoint
+  if (r == Reconstruction::trilinear) {
+    w.count = 2;
+    w.index = {i0, i0 + 1, 0, 0};
+    w.weight = {0.5, 0.5, 0, 0};
+    return w;
+  }
+  // Catmull–Rom at t = ½: (−1, 9, 9, −1)/16, indices clamped to the grid (replicated border).
+  w.count = 4;
+  for (int a = 0; a < 4; ++a) w.index[a] = std::clamp(i0 - 1 + a, 0, n - 1);
+  w.weight = {-1.0 / 16, 9.0 / 16, 9.0 / 16, -1.0 / 16};
+  return w;
+}
+
+// The reconstruction at index point (twice[0], twice[1], twice[2]) / 2.
+double reconstruct(const Volume& v, const std::array<int, 3>& twice, Reconstruction r) {
+  const AxisWeights wx = axis_weights(twice[0], v.dims[0], r), wy = axis_weights(twice[1], v.dims[1], r),
+                    wz = axis_weights(twice[2], v.dims[2], r);
+  double s = 0;
+  for (int c = 0; c < wz.count; ++c)
+    for (int b = 0; b < wy.count; ++b) {
+      double row = 0;
+      for (int a = 0; a < wx.count; ++a) row += wx.weight[a] * v.at(wx.index[a], wy.index[b], wz.index[c]);
+      s += wz.weight[c] * wy.weight[b] * row;
+    }
+  return s;
+}
+
+// Quadric V − f on the tetrahedron, relative to its centroid, from the symmetric 4×4 Bézier
+// coefficient matrix B of f in barycentric coordinates (f = λᵀBλ, Σλ = 1).
+Quadric patch_quadric(const std::array<Vector3d, 4>& corners, const Vector3d& centroid, Eigen::Matrix4d B,
+                      double iso) {
+  std::array<Vector3d, 4> q;
+  for (int i = 0; i < 4; ++i) q[i] = corners[i] - centroid;
+  Eigen::Matrix3d T;
+  T << q[1] - q[0], q[2] - q[0], q[3] - q[0];
+  const Eigen::Matrix3d Ti = T.inverse();
+  // G̃: (y, 1) ↦ λ.
+  Matrix4d G = Matrix4d::Zero();
+  G.block<3, 3>(1, 0) = Ti;
+  G.block<3, 1>(1, 3) = -Ti * q[0];
+  G.block<1, 3>(0, 0) = -G.block<3, 3>(1, 0).colwise().sum();
+  G(0, 3) = 1.0 - G.block<3, 1>(1, 3).sum();
+  B = Matrix4d::Constant(iso) - B;  // V − f = λᵀ(V·11ᵀ − B)λ
+  Matrix4d Q = G.transpose() * B * G;
+  Q = 0.5 * (Q + Q.transpose());
+  return Quadric::from_matrix(Q).normalized();
+}
+
+}  // namespace
+
+VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& options) {
+  const auto& d = volume.dims;
+  const std::string& what = volume.source;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] < 2)
+      throw InvalidInput(fmt::format("{}: {} sample(s) along axis {}: an iso-surface needs at least 2", what, d[a], a));
+    if (!(volume.spacing[a] > 0) || !std::isfinite(volume.spacing[a]))
+      throw InvalidInput(fmt::format("{}: spacing {} along axis {} must be finite and > 0", what, volume.spacing[a], a));
+  }
+  if (volume.values.size() != static_cast<std::size_t>(d[0]) * d[1] * d[2])
+    throw InvalidInput(fmt::format("{}: {} values for a {}x{}x{} grid", what, volume.values.size(), d[0], d[1], d[2]));
+  for (std::size_t i = 0; i < volume.values.size(); ++i)
+    if (!std::isfinite(volume.values[i])) throw InvalidInput(fmt::format("{}: value {} is not finite", what, i));
+  const auto [vmin, vmax] = volume.range();
+  const double V = options.iso;
+  if (!std::isfinite(V) || !(V > vmin && V < vmax))
+    throw InvalidInput(fmt::format("{}: iso-value {} is outside the data range ({}, {})", what, V, vmin, vmax));
+
+  VolumeConversion out;
+  out.value_min = vmin;
+  out.value_max = vmax;
+  out.cells = static_cast<std::size_t>(d[0] - 1) * (d[1] - 1) * (d[2] - 1);
+  static const KuhnTets kuhn;
+  const Reconstruction rec = options.reconstruction;
+  // Control-net bound: a reconstructed value lies within [m − s·R, M + s·R] of its stencil's range
+  // (s = half the sum of |negative weights|·2), a Bézier edge coefficient 2f_ij − (f_i+f_j)/2 within
+  // another R; trilinear: R, Catmull–Rom (Σ|w| ≤ 1.25³): 2R.
+  const int halo = (rec == Reconstruction::catmull_rom && !options.linear) ? 1 : 0;
+  const double slack = options.linear ? 0.0 : (rec == Reconstruction::catmull_rom ? 2.0 : 1.0);
+
+  struct Slab {
+    std::vector<TetPatch> tets;
+    std::size_t visited = 0, tested = 0;
+  };
+  std::vector<Slab> slabs(d[2] - 1);
+  std::atomic<int> done{0};
+  tbb::parallel_for(0, d[2] - 1, [&](int k) {
+    Slab& slab = slabs[k];
+    for (int j = 0; j < d[1] - 1; ++j)
+      for (int i = 0; i < d[0] - 1; ++i) {
+        double m = std::numeric_limits<double>::infinity(), M = -m;
+        for (int c = k - halo; c <= k + 1 + halo; ++c)
+          for (int b = j - halo; b <= j + 1 + halo; ++b)
+            for (int a = i - halo; a <= i + 1 + halo; ++a) {
+              const double x = volume.at(std::clamp(a, 0, d[0] - 1), std::clamp(b, 0, d[1] - 1), std::clamp(c, 0, d[2] - 1));
+              m = std::min(m, x);
+              M = std::max(M, x);
+            }
+        const double R = M - m;
+        if (V < m - slack * R || V > M + slack * R || R == 0) continue;
+        ++slab.visited;
+        std::array<double, 8> f{};
+        std::array<Vector3d, 8> p;
+        for (int c = 0; c < 8; ++c) {
+          const int a = i + (c & 1), b = j + ((c >> 1) & 1), e = k + ((c >> 2) & 1);
+          f[c] = volume.at(a, b, e);
+          p[c] = volume.position(a, b, e);
+        }
+        std::array<double, 64> mid{};  // mid[8a + b] for a < b, computed on first use
+        std::array<bool, 64> has_mid{};
+        const auto midpoint = [&](int a, int b) {
+          if (a > b) std::swap(a, b);
+          const int key = 8 * a + b;
+          if (!has_mid[key]) {
+            const std::array<int, 3> twice{2 * i + (a & 1) + (b & 1), 2 * j + ((a >> 1) & 1) + ((b >> 1) & 1),
+                                           2 * k + ((a >> 2) & 1) + ((b >> 2) & 1)};
+            mid[key] = reconstruct(volume, twice, rec);
+            has_mid[key] = true;
+          }
+          return mid[key];
+        };
+        for (const auto& t : kuhn.tets) {
+          ++slab.tested;
+          Eigen::Matrix4d B;
+          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+          for (int r = 0; r < 4; ++r) {
+            B(r, r) = f[t[r]];
+            lo = std::min(lo, B(r, r));
+            hi = std::max(hi, B(r, r));
+          }
+          for (int r = 0; r < 4; ++r)
+            for (int s = r + 1; s < 4; ++s) {
+              // [linear] f = Σ fᵢλᵢ·Σλⱼ; [quadratic] Bernstein coefficient from the midpoint value.
+              const double bij = options.linear ? 0.5 * (f[t[r]] + f[t[s]])
+                                                : 2.0 * midpoint(t[r], t[s]) - 0.5 * (f[t[r]] + f[t[s]]);
+              B(r, s) = B(s, r) = bij;
+              lo = std::min(lo, bij);
+              hi = std::max(hi, bij);
+            }
+          if (!(lo <= V && V <= hi) || lo == hi) continue;
+          const std::array<Vector3d, 4> corners{p[t[0]], p[t[1]], p[t[2]], p[t[3]]};
+          TetPatch patch{corners, {}, options.colour};
+          const Vector3d centroid = patch.centroid();
+          if (options.linear) {
+            // V − Σ fᵢλᵢ exactly linear: A = 0.
+            Quadric lq = patch_quadric(corners, centroid, B, V);
+            lq.A.setZero();
+            patch.quadric = lq.normalized();
+          } else {
+            patch.quadric = patch_quadric(corners, centroid, B, V);
+          }
+          slab.tets.push_back(std::move(patch));
+        }
+      }
+    const int n = ++done;
+    if (options.progress) options.progress(static_cast<double>(n) / (d[2] - 1));
+  });
+  std::size_t total = 0;
+  for (const auto& s : slabs) total += s.tets.size();
+  out.model.tets.reserve(total);
+  for (auto& s : slabs) {
+    out.cells_visited += s.visited;
+    out.tets_tested += s.tested;
+    std::move(s.tets.begin(), s.tets.end(), std::back_inserter(out.model.tets));
+  }
+  log::debug("{}: iso {}: {} of {} cells visited, {} tetrahedra tested, {} kept", what, V, out.cells_visited,
+             out.cells, out.tets_tested, out.model.tets.size());
+  return out;
+}
+
+}  // namespace quadrix
