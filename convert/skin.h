@@ -18,6 +18,10 @@
 /// cells with (nearly) coplanar boundary points contains flat tetrahedra, which are skipped, and
 /// a few CGAL mesh vertices then fall outside every kept tetrahedron (see tests/convert/test_skin.cpp).
 ///
+/// Clipped: a tetrahedron reaching outside the box of its simplex's balls (always those of the
+/// outer, unbounded mixed cells) is cut to that box (core/bounds.h clip_tetrahedron_to_box); in a
+/// mixed cell the skin lies inside the union of the simplex's balls, so no surface is lost.
+///
 /// Skipped: mixed cells of CGAL's bounding-octahedron vertices (weight −1), and tetrahedra whose
 /// Bézier control net of the quadric (b_ij = p̃ᵢᵀQ̃p̃ⱼ) has one strict sign (the surface cannot
 /// cross them). Colour: the CPK colour of the simplex's ball nearest (in power distance) to the
@@ -48,6 +52,7 @@ struct SkinConversion {
   std::size_t cgal_tets_crossed = 0;     ///< of which the surface can cross
   std::size_t tetgen_tets = 0;           ///< TetGen's tetrahedra of the crossed cells (tetgen mode)
   std::size_t slivers_skipped = 0;       ///< tetrahedra of (near) zero volume, skipped
+  std::size_t tets_clipped_to_box = 0;   ///< tetrahedra clipped to their simplex's balls' box
   std::size_t tetgen_failed_cells = 0;   ///< crossed cells TetGen failed on: CGAL's tetrahedra kept
   /// Largest |ours − CGAL value()| over the 10 nodes of every CGAL tetrahedron, relative to the
   /// largest |value| there and the tetrahedron's squared diameter.

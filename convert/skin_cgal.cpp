@@ -229,7 +229,18 @@ SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& o
     }
     return balls[best].colour;
   };
-  const auto emit = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
+  // The skin body lies inside the union of the balls (a convex combination of balls lies inside
+  // their union and shrinking only shrinks it), and inside a mixed cell only the balls of the
+  // cell's simplex take part: each tetrahedron is clipped to the box of those balls. The model's
+  // bounds, automatic framing and rasterised area then follow the molecule, not CGAL's bounding
+  // octahedron, and no tetrahedron is much larger than its patch (float precision on the GPU).
+  double size = 0;
+  {
+    Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const auto& b : balls) lo = lo.cwiseMin(b.centre), hi = hi.cwiseMax(b.centre);
+    size = (hi - lo).norm();
+  }
+  const auto emit_piece = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
     // Slivers (corners coplanar on a cell face) hold no surface of positive area; the .qxm
     // reader rejects them.
     if (is_degenerate_tetrahedron(corners)) {  // the reader's test (1e-12 of diameter³)
@@ -243,6 +254,22 @@ SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& o
     t.quadric = q.normalized();
     t.colour = colour(m, g);
     out.model.tets.push_back(t);
+  };
+  const auto emit = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
+    Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    double rmax = 0;
+    for (const int b : m.balls) {
+      lo = lo.cwiseMin(balls[b].centre - Vector3d::Constant(balls[b].radius));
+      hi = hi.cwiseMax(balls[b].centre + Vector3d::Constant(balls[b].radius));
+      rmax = std::max(rmax, balls[b].radius);
+    }
+    const double margin = 1e-3 * std::max(rmax, 1e-3 * size);
+    lo -= Vector3d::Constant(margin), hi += Vector3d::Constant(margin);
+    bool inside = true;
+    for (const auto& c : corners) inside = inside && (c.array() >= lo.array()).all() && (c.array() <= hi.array()).all();
+    if (inside) return emit_piece(m, corners);
+    ++out.tets_clipped_to_box;
+    for (const auto& piece : clip_tetrahedron_to_box(corners, lo, hi)) emit_piece(m, piece);
   };
 
   std::vector<const MixedCell*> crossed;

@@ -40,6 +40,52 @@ bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double r
   return !(vol6 > rel_eps * diam * diam * diam);
 }
 
+std::vector<std::array<Eigen::Vector3d, 4>> clip_tetrahedron(const std::array<Eigen::Vector3d, 4>& t, int axis,
+                                                             double limit, int side) {
+  using V = Eigen::Vector3d;
+  std::array<int, 4> in{}, out{};
+  int ni = 0, no = 0;
+  for (int i = 0; i < 4; ++i) (side * t[i][axis] <= side * limit ? in[ni++] : out[no++]) = i;
+  if (no == 0) return {t};
+  if (ni == 0) return {};
+  // Where edge a (inside) → b (outside) crosses the plane; the axis coordinate is set exactly.
+  const auto cut = [&](int a, int b) {
+    const double s = (limit - t[a][axis]) / (t[b][axis] - t[a][axis]);
+    V p = t[a] + s * (t[b] - t[a]);
+    p[axis] = limit;
+    return p;
+  };
+  // Prism with triangles (a, b, c) and (a', b', c') and planar quads, split without a cyclic
+  // choice of diagonals.
+  const auto prism = [](const V& a, const V& b, const V& c, const V& a2, const V& b2, const V& c2) {
+    return std::vector<std::array<V, 4>>{{a, b, c, a2}, {b, c, a2, b2}, {c, a2, b2, c2}};
+  };
+  if (ni == 1) return {{t[in[0]], cut(in[0], out[0]), cut(in[0], out[1]), cut(in[0], out[2])}};
+  if (ni == 3) {
+    const int d = out[0];
+    return prism(t[in[0]], t[in[1]], t[in[2]], cut(in[0], d), cut(in[1], d), cut(in[2], d));
+  }
+  // Two inside (a, b), two outside (c, d): triangles (a, ac, ad) and (b, bc, bd).
+  const int a = in[0], b = in[1], c = out[0], d = out[1];
+  return prism(t[a], cut(a, c), cut(a, d), t[b], cut(b, c), cut(b, d));
+}
+
+std::vector<std::array<Eigen::Vector3d, 4>> clip_tetrahedron_to_box(const std::array<Eigen::Vector3d, 4>& t,
+                                                                    const Eigen::Vector3d& lo,
+                                                                    const Eigen::Vector3d& hi) {
+  std::vector<std::array<Eigen::Vector3d, 4>> pieces{t}, next;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const int side : {-1, 1}) {
+      next.clear();
+      for (const auto& p : pieces) {
+        const auto clipped = clip_tetrahedron(p, axis, side < 0 ? lo[axis] : hi[axis], side);
+        next.insert(next.end(), clipped.begin(), clipped.end());
+      }
+      pieces.swap(next);
+    }
+  return pieces;
+}
+
 bool sphere_backfacing(const Quadric& q_eye, const Eigen::Vector3d& centre_eye, double radius) {
   // [Stoll06] eq. 18: c′ < −c′ₛₚₕᵀb′ − r‖b′‖.
   return q_eye.c < -centre_eye.dot(q_eye.b) - radius * q_eye.b.norm();

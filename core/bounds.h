@@ -2,6 +2,7 @@
 /// Bounding volumes that clip quadric patches, and the per-quadric backface culling tests
 /// ([Stoll06] §4.4.4, eq. 17–19).
 #include <array>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -38,6 +39,18 @@ private:
 
 /// True when the tetrahedron is degenerate: |volume| ≤ rel_eps · diameter³.
 bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = 1e-12);
+
+/// The part of tetrahedron t inside the half-space {x : x[axis]·side ≤ limit·side} (side = ±1)
+/// as 0 to 3 tetrahedra that tile it exactly: 1 corner inside gives one tetrahedron, 2 or 3 give
+/// a triangular prism split into three. New corners lie on the plane exactly (their `axis`
+/// coordinate is `limit`). Pieces may be degenerate when the plane meets a corner; callers drop
+/// them with is_degenerate_tetrahedron.
+std::vector<std::array<Eigen::Vector3d, 4>> clip_tetrahedron(const std::array<Eigen::Vector3d, 4>& t, int axis,
+                                                             double limit, int side);
+/// The part of t inside the axis-aligned box [lo, hi] (six clip_tetrahedron steps), as tetrahedra.
+std::vector<std::array<Eigen::Vector3d, 4>> clip_tetrahedron_to_box(const std::array<Eigen::Vector3d, 4>& t,
+                                                                    const Eigen::Vector3d& lo,
+                                                                    const Eigen::Vector3d& hi);
 
 /// Per-quadric backface test for a bounding sphere ([Stoll06] eq. 18): q_eye is the quadric in
 /// eye-at-origin coordinates (Quadric::translated_to_origin), centre_eye the sphere centre

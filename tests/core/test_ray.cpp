@@ -2,6 +2,7 @@
 
 #include <random>
 
+#include "core/bounds.h"
 #include "core/ray.h"
 
 using namespace quadrix;
@@ -163,4 +164,58 @@ TEST(Ray, FarCameraKeepsRelativePrecisionWhenRebased) {
     const long double t = tc - std::sqrt((1.0L - (ol + tc * dl).squaredNorm()) / dl.squaredNorm());
     EXPECT_LE(std::abs(hit.t - t) / t, 1e-12) << dist;
   }
+}
+
+TEST(Bounds, ClippedTetrahedraTileThePartInsideTheBox) {
+  // Random tetrahedra against random boxes: the pieces of clip_tetrahedron_to_box contain a point
+  // of the tetrahedron exactly when the box does, never twice, and their volumes add up.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto vol = [](const std::array<Eigen::Vector3d, 4>& p) {
+    return std::abs((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0])) / 6.0;
+  };
+  int partial = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::array<Eigen::Vector3d, 4> t;
+    for (auto& c : t) c = Eigen::Vector3d(u(rng), u(rng), u(rng));
+    if (is_degenerate_tetrahedron(t, 1e-3)) continue;
+    const Eigen::Vector3d lo(u(rng) * 0.6 - 0.3, u(rng) * 0.6 - 0.3, u(rng) * 0.6 - 0.3);
+    const Eigen::Vector3d hi = lo + Eigen::Vector3d(0.2 + 0.8 * std::abs(u(rng)), 0.2 + 0.8 * std::abs(u(rng)), 1.0);
+    const auto pieces = clip_tetrahedron_to_box(t, lo, hi);
+    std::vector<Tetrahedron> tets;
+    double total = 0;
+    for (const auto& p : pieces) {
+      for (const auto& c : p) {
+        EXPECT_TRUE((c.array() >= lo.array() - 1e-12).all() && (c.array() <= hi.array() + 1e-12).all());
+        EXPECT_TRUE(Tetrahedron(t).contains(c, 1e-9));
+      }
+      total += vol(p);
+      if (!is_degenerate_tetrahedron(p)) tets.emplace_back(p);
+    }
+    EXPECT_LE(total, vol(t) * (1 + 1e-9));
+    partial += !pieces.empty() && total < vol(t) * (1 - 1e-6);
+    const Tetrahedron whole(t);
+    std::uniform_real_distribution<double> b(0.0, 1.0);
+    for (int s = 0; s < 200; ++s) {
+      // A random point of the tetrahedron (sorted uniforms give uniform barycentrics).
+      std::array<double, 5> k{0, b(rng), b(rng), b(rng), 1};
+      std::sort(k.begin() + 1, k.end() - 1);
+      const Eigen::Vector3d x = (k[1] - k[0]) * t[0] + (k[2] - k[1]) * t[1] + (k[3] - k[2]) * t[2] + (k[4] - k[3]) * t[3];
+      const bool in_box = (x.array() > lo.array() + 1e-9).all() && (x.array() < hi.array() - 1e-9).all();
+      const bool near_box = (x.array() >= lo.array() - 1e-9).all() && (x.array() <= hi.array() + 1e-9).all();
+      int inside = 0, strictly = 0;
+      for (const auto& p : tets) {
+        inside += p.contains(x, 1e-9);
+        strictly += p.contains(x, -1e-9);
+      }
+      if (in_box) {
+        EXPECT_GE(inside, 1) << "trial " << trial;
+      }
+      if (!near_box) {
+        EXPECT_EQ(inside, 0) << "trial " << trial;
+      }
+      EXPECT_LE(strictly, 1) << "pieces overlap, trial " << trial;
+    }
+  }
+  EXPECT_GT(partial, 100);  // most trials really cut the tetrahedron
 }

@@ -7,7 +7,10 @@
 
 #include <filesystem>
 
+#include "convert/pdb.h"
 #include "convert/quads.h"
+#include "convert/skin.h"
+#include "convert/volume.h"
 #include <fstream>
 
 #include "core/mesh_io.h"
@@ -184,6 +187,34 @@ TEST_F(GlRender, ConvertedQuadMeshesMatchTheCpuReference) {
       EXPECT_LE(c.depth_p99, 1e-5);
       EXPECT_LE(c.normal_median_deg, 0.1);
     }
+  }
+}
+
+TEST_F(GlRender, SkinSurfacesMatchTheCpuReference) {
+  // Molecules through quadrix convert skin (CGAL mixed complex), GL against the CPU reference.
+  for (const char* name : {"caffeine.cin", "molecule_tunnel.cin"}) {
+    const std::filesystem::path path = std::filesystem::path(QUADRIX_DATASETS) / "balls" / name;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+    SCOPED_TRACE(name);
+    const Model m = convert_skin(read_balls(path)).model;
+    ASSERT_GT(m.tets.size(), 100u);
+    for (const bool cull : {true, false})
+      for (const double az : {30.0, 200.0}) {
+        SCOPED_TRACE(testing::Message() << "cull=" << cull << " azimuth=" << az);
+        const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 25, .width = 240, .height = 240});
+        expect_accurate(run(m, cam, cull), 3000);
+      }
+  }
+}
+
+TEST_F(GlRender, VolumeIsoSurfacesMatchTheCpuReference) {
+  // Quadratic iso-surface patches of the Marschner–Lobb volume (quadrix convert volume).
+  const Model m = convert_volume(marschner_lobb_volume(25), {.iso = 0.5}).model;
+  ASSERT_GT(m.tets.size(), 1000u);
+  for (const bool cull : {true, false}) {
+    SCOPED_TRACE(testing::Message() << "cull=" << cull);
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 30, .width = 240, .height = 240});
+    expect_accurate(run(m, cam, cull), 3000);
   }
 }
 
