@@ -15,10 +15,13 @@
 #include <sstream>
 
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <zlib.h>
 
+#include "convert/tetmesh_io.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -597,6 +600,49 @@ Quadric patch_quadric(const std::array<Vector3d, 4>& corners, const Vector3d& ce
   return Quadric::from_matrix(Q).normalized();
 }
 
+// Edge r–s of a tetrahedron (r < s) → its slot in the midpoint array: 01 02 03 12 13 23.
+constexpr int kEdgeSlot[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
+// The patch of one tetrahedron from its corner values f and edge-midpoint values mid (kEdgeSlot
+// order; unused for linear patches), or none when its control net does not straddle V. Shared by
+// the grid and the tet-mesh paths.
+std::optional<TetPatch> iso_patch(const std::array<Vector3d, 4>& corners, const std::array<double, 4>& f,
+                                  const std::array<double, 6>& mid, double V, const VolumeIsoOptions& options) {
+  Eigen::Matrix4d B;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int r = 0; r < 4; ++r) {
+    B(r, r) = f[r];
+    lo = std::min(lo, B(r, r));
+    hi = std::max(hi, B(r, r));
+  }
+  for (int r = 0; r < 4; ++r)
+    for (int s = r + 1; s < 4; ++s) {
+      // [linear] f = Σ fᵢλᵢ·Σλⱼ; [quadratic] Bernstein coefficient from the midpoint value.
+      const double bij = options.linear ? 0.5 * (f[r] + f[s]) : 2.0 * mid[kEdgeSlot[r][s]] - 0.5 * (f[r] + f[s]);
+      B(r, s) = B(s, r) = bij;
+      lo = std::min(lo, bij);
+      hi = std::max(hi, bij);
+    }
+  if (!(lo <= V && V <= hi) || lo == hi) return std::nullopt;
+  TetPatch patch{corners, {}, options.colour};
+  const Vector3d centroid = patch.centroid();
+  if (options.linear) {
+    // V − Σ fᵢλᵢ exactly linear: A = 0.
+    Quadric lq = patch_quadric(corners, centroid, B, V);
+    lq.A.setZero();
+    patch.quadric = lq.normalized();
+  } else {
+    patch.quadric = patch_quadric(corners, centroid, B, V);
+  }
+  return patch;
+}
+
+// V strictly inside the data range [vmin, vmax]. \throws InvalidInput.
+void check_iso(double V, double vmin, double vmax, const std::string& what) {
+  if (!std::isfinite(V) || !(V > vmin && V < vmax))
+    throw InvalidInput(fmt::format("{}: iso-value {} is outside the data range ({}, {})", what, V, vmin, vmax));
+}
+
 }  // namespace
 
 VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& options) {
@@ -614,8 +660,7 @@ VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& op
     if (!std::isfinite(volume.values[i])) throw InvalidInput(fmt::format("{}: value {} is not finite", what, i));
   const auto [vmin, vmax] = volume.range();
   const double V = options.iso;
-  if (!std::isfinite(V) || !(V > vmin && V < vmax))
-    throw InvalidInput(fmt::format("{}: iso-value {} is outside the data range ({}, {})", what, V, vmin, vmax));
+  check_iso(V, vmin, vmax, what);
 
   VolumeConversion out;
   out.value_min = vmin;
@@ -672,35 +717,13 @@ VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& op
         };
         for (const auto& t : kuhn.tets) {
           ++slab.tested;
-          Eigen::Matrix4d B;
-          double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-          for (int r = 0; r < 4; ++r) {
-            B(r, r) = f[t[r]];
-            lo = std::min(lo, B(r, r));
-            hi = std::max(hi, B(r, r));
-          }
-          for (int r = 0; r < 4; ++r)
-            for (int s = r + 1; s < 4; ++s) {
-              // [linear] f = Σ fᵢλᵢ·Σλⱼ; [quadratic] Bernstein coefficient from the midpoint value.
-              const double bij = options.linear ? 0.5 * (f[t[r]] + f[t[s]])
-                                                : 2.0 * midpoint(t[r], t[s]) - 0.5 * (f[t[r]] + f[t[s]]);
-              B(r, s) = B(s, r) = bij;
-              lo = std::min(lo, bij);
-              hi = std::max(hi, bij);
-            }
-          if (!(lo <= V && V <= hi) || lo == hi) continue;
-          const std::array<Vector3d, 4> corners{p[t[0]], p[t[1]], p[t[2]], p[t[3]]};
-          TetPatch patch{corners, {}, options.colour};
-          const Vector3d centroid = patch.centroid();
-          if (options.linear) {
-            // V − Σ fᵢλᵢ exactly linear: A = 0.
-            Quadric lq = patch_quadric(corners, centroid, B, V);
-            lq.A.setZero();
-            patch.quadric = lq.normalized();
-          } else {
-            patch.quadric = patch_quadric(corners, centroid, B, V);
-          }
-          slab.tets.push_back(std::move(patch));
+          const std::array<double, 4> ft{f[t[0]], f[t[1]], f[t[2]], f[t[3]]};
+          std::array<double, 6> mt{};
+          if (!options.linear)
+            for (int r = 0; r < 4; ++r)
+              for (int q = r + 1; q < 4; ++q) mt[kEdgeSlot[r][q]] = midpoint(t[r], t[q]);
+          if (auto patch = iso_patch({p[t[0]], p[t[1]], p[t[2]], p[t[3]]}, ft, mt, V, options))
+            slab.tets.push_back(std::move(*patch));
         }
       }
     const int n = ++done;
@@ -716,6 +739,161 @@ VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& op
   }
   log::debug("{}: iso {}: {} of {} cells visited, {} tetrahedra tested, {} kept", what, V, out.cells_visited,
              out.cells, out.tets_tested, out.model.tets.size());
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tetrahedral meshes with per-vertex values
+
+namespace {
+
+// Vertex neighbours through the mesh edges, CSR: neighbours of v are adj[start[v] .. start[v+1]).
+struct Adjacency {
+  std::vector<std::size_t> start;
+  std::vector<int> adj;
+  std::span<const int> of(int v) const { return {adj.data() + start[v], adj.data() + start[v + 1]}; }
+};
+
+Adjacency vertex_adjacency(const TetMesh& mesh) {
+  std::vector<std::pair<int, int>> e;
+  e.reserve(mesh.tets.size() * 12);
+  for (const auto& t : mesh.tets)
+    for (int r = 0; r < 4; ++r)
+      for (int q = 0; q < 4; ++q)
+        if (r != q) e.emplace_back(t[r], t[q]);
+  std::sort(e.begin(), e.end());
+  e.erase(std::unique(e.begin(), e.end()), e.end());
+  Adjacency a;
+  a.start.assign(mesh.vertices.size() + 1, 0);
+  for (const auto& [u, w] : e) ++a.start[u + 1];
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) a.start[v + 1] += a.start[v];
+  a.adj.reserve(e.size());
+  for (const auto& [u, w] : e) a.adj.push_back(w);
+  return a;
+}
+
+constexpr std::size_t kMinFitNeighbours = 12;  // fewer 1-ring vertices: fit over the 2-ring
+constexpr double kFitRankThreshold = 1e-7;     // relative pivot below which a column counts as dependent
+
+}  // namespace
+
+VertexGradients estimate_vertex_gradients(const TetMesh& mesh, std::span<const double> values) {
+  if (values.size() != mesh.vertices.size())
+    throw InvalidInput(fmt::format("{}: {} values for {} vertices", mesh.source, values.size(), mesh.vertices.size()));
+  const Adjacency adj = vertex_adjacency(mesh);
+  const int n = static_cast<int>(mesh.vertices.size());
+  VertexGradients out;
+  out.gradients.assign(mesh.vertices.size(), Vector3d::Zero());
+  std::atomic<std::size_t> linear{0};
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& range) {
+    std::vector<int> ring;
+    Eigen::MatrixXd A;
+    Eigen::VectorXd rhs;
+    std::size_t local_linear = 0;
+    for (int v = range.begin(); v < range.end(); ++v) {
+      const auto one = adj.of(v);
+      if (one.empty()) continue;  // not in any tetrahedron
+      ring.assign(one.begin(), one.end());
+      if (ring.size() < kMinFitNeighbours) {
+        for (const int w : one)
+          for (const int u : adj.of(w))
+            if (u != v) ring.push_back(u);
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      }
+      const Vector3d& x = mesh.vertices[v];
+      double h2 = 0;
+      for (const int w : ring) h2 += (mesh.vertices[w] - x).squaredNorm();
+      const double h = std::sqrt(h2 / ring.size());  // unknowns scaled by h for conditioning
+      const auto m = static_cast<Eigen::Index>(ring.size());
+      A.resize(m, 9);
+      rhs.resize(m);
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const Vector3d d = (mesh.vertices[ring[r]] - x) / h;
+        A.row(r) << d.x(), d.y(), d.z(), 0.5 * d.x() * d.x(), 0.5 * d.y() * d.y(), 0.5 * d.z() * d.z(), d.x() * d.y(),
+            d.y() * d.z(), d.z() * d.x();
+        rhs[r] = values[ring[r]] - values[v];
+      }
+      Vector3d g = Vector3d::Zero();
+      bool done_fit = false;
+      if (m >= 9) {
+        Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+        qr.setThreshold(kFitRankThreshold);
+        if (qr.rank() == 9) {
+          g = qr.solve(rhs).head<3>() / h;
+          done_fit = true;
+        }
+      }
+      if (!done_fit) {
+        // Linear fallback (any vertex of a non-degenerate tetrahedron has 3 independent edges).
+        Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A.leftCols<3>());
+        qr.setThreshold(kFitRankThreshold);
+        if (qr.rank() == 3) g = qr.solve(rhs) / h;
+        ++local_linear;
+      }
+      out.gradients[v] = g;
+    }
+    linear += local_linear;
+  });
+  out.linear_fits = linear;
+  return out;
+}
+
+VolumeConversion convert_tet_mesh(const TetMesh& mesh, std::span<const double> values,
+                                  const VolumeIsoOptions& options) {
+  const std::string& what = mesh.source;
+  validate_tet_mesh(mesh);
+  if (values.size() != mesh.vertices.size())
+    throw InvalidInput(fmt::format("{}: {} values for {} vertices", what, values.size(), mesh.vertices.size()));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (!std::isfinite(values[i]))
+      throw InvalidInput(fmt::format("{}: value {} (vertex {}) is not finite", what, values[i], i));
+  const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+  const double V = options.iso;
+  check_iso(V, *lo, *hi, what);
+
+  VolumeConversion out;
+  out.value_min = *lo;
+  out.value_max = *hi;
+  out.cells = out.cells_visited = out.tets_tested = mesh.tets.size();
+  VertexGradients grad;
+  if (!options.linear) {
+    grad = estimate_vertex_gradients(mesh, values);
+    out.linear_gradients = grad.linear_fits;
+  }
+  if (options.progress) options.progress(0.1);
+
+  const std::size_t block = 4096, blocks = (mesh.tets.size() + block - 1) / block;
+  std::vector<std::vector<TetPatch>> kept(blocks);
+  std::atomic<std::size_t> done{0};
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+    const std::size_t end = std::min(mesh.tets.size(), (b + 1) * block);
+    for (std::size_t i = b * block; i < end; ++i) {
+      std::array<int, 4> t = mesh.tets[i];
+      const auto X = [&](int k) -> const Vector3d& { return mesh.vertices[t[k]]; };
+      if ((X(1) - X(0)).cross(X(2) - X(0)).dot(X(3) - X(0)) < 0) std::swap(t[1], t[2]);
+      const std::array<double, 4> f{values[t[0]], values[t[1]], values[t[2]], values[t[3]]};
+      std::array<double, 6> mid{};
+      if (!options.linear)
+        for (int r = 0; r < 4; ++r)
+          for (int q = r + 1; q < 4; ++q) {
+            // Cubic Hermite at the edge midpoint, in the order of the vertex ids so the value depends
+            // on the edge only: (f_a + f_b)/2 + (∇f_a − ∇f_b)·(x_b − x_a)/8.
+            const int a = std::min(t[r], t[q]), c = std::max(t[r], t[q]);
+            mid[kEdgeSlot[r][q]] = 0.5 * (values[a] + values[c]) +
+                                   (grad.gradients[a] - grad.gradients[c]).dot(mesh.vertices[c] - mesh.vertices[a]) / 8;
+          }
+      if (auto patch = iso_patch({X(0), X(1), X(2), X(3)}, f, mid, V, options)) kept[b].push_back(std::move(*patch));
+    }
+    const std::size_t d = ++done;
+    if (options.progress) options.progress(0.1 + 0.9 * static_cast<double>(d) / blocks);
+  });
+  std::size_t total = 0;
+  for (const auto& k : kept) total += k.size();
+  out.model.tets.reserve(total);
+  for (auto& k : kept) std::move(k.begin(), k.end(), std::back_inserter(out.model.tets));
+  log::debug("{}: iso {}: {} tetrahedra, {} kept; {} of {} vertex gradients from the linear fallback", what, V,
+             mesh.tets.size(), out.model.tets.size(), out.linear_gradients, mesh.vertices.size());
   return out;
 }
 

@@ -16,12 +16,18 @@
 /// towards lower values), written relative to the tetrahedron's centroid and normalised.
 /// Midpoint values depend only on the edge, so neighbouring patches agree on shared faces: the
 /// iso-surface is continuous (C0) across tetrahedra.
+///
+/// Unstructured meshes (convert_tet_mesh): the same patches on the tetrahedra of a given mesh
+/// with per-vertex values; the edge midpoints come from the cubic Hermite interpolant along the
+/// edge, f_ij = (f_i + f_j)/2 + (∇f_i − ∇f_j)·(x_j − x_i)/8, with vertex gradients from a local
+/// least-squares quadratic fit (estimate_vertex_gradients). Exact for quadratic data.
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -105,9 +111,10 @@ struct VolumeIsoOptions {
 
 struct VolumeConversion {
   Model model;                     ///< tet patches only; metadata left to the caller
-  std::size_t cells = 0;           ///< grid cells
-  std::size_t cells_visited = 0;   ///< cells whose neighbourhood range could reach V
+  std::size_t cells = 0;           ///< grid cells (a tet mesh: its tetrahedra)
+  std::size_t cells_visited = 0;   ///< cells whose neighbourhood range could reach V (tet mesh: all)
   std::size_t tets_tested = 0;     ///< tetrahedra whose control net was computed
+  std::size_t linear_gradients = 0;  ///< tet mesh: vertices whose gradient fell back to a linear fit
   double value_min = 0, value_max = 0;
 };
 
@@ -115,5 +122,27 @@ struct VolumeConversion {
 /// \throws InvalidInput when V is not strictly inside the data range, or for a volume with
 ///         fewer than 2 samples along an axis, non-positive spacing or non-finite values.
 VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& options);
+
+struct TetMesh;  // convert/tetmesh_io.h
+
+/// Per-vertex gradients of values on a tetrahedral mesh, least squares over the vertex's
+/// neighbours: a full quadratic f(x_j) − f(x_i) ≈ g·d + ½dᵀHd, d = x_j − x_i (9 unknowns) over the
+/// 1-ring, or the 2-ring when the 1-ring has fewer than 12 vertices (mesh borders); a linear fit
+/// g·d over the same vertices where the quadratic one is rank-deficient. Exact for quadratic data
+/// wherever the quadratic fit applies. values: one per vertex.
+struct VertexGradients {
+  std::vector<Eigen::Vector3d> gradients;  ///< one per vertex; zero for an unreferenced vertex
+  std::size_t linear_fits = 0;              ///< vertices that fell back to the linear fit
+};
+VertexGradients estimate_vertex_gradients(const TetMesh& mesh, std::span<const double> values);
+
+/// The iso-surface {f = V} of per-vertex values on a tetrahedral mesh, as convert_volume does on
+/// a grid (same keep rule, same quadrics, one patch per kept tetrahedron, corners positively
+/// oriented); edge midpoints from the Hermite rule in the file comment. options.reconstruction is
+/// not used. values: one per vertex.
+/// 	hrows InvalidInput for a values count other than the vertex count, a non-finite value, V not
+///         strictly inside the value range, or a mesh failing validate_tet_mesh.
+VolumeConversion convert_tet_mesh(const TetMesh& mesh, std::span<const double> values,
+                                  const VolumeIsoOptions& options);
 
 }  // namespace quadrix

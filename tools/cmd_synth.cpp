@@ -1,26 +1,58 @@
-// quadrix synth KIND -o FILE: small analytic models for tests and the demo.
+// quadrix synth KIND -o FILE: small analytic models for tests and the demo, and the
+// Marschner–Lobb test volume (`synth marschner-lobb -o ml.nhdr`, a NRRD for `convert volume`).
+#include <filesystem>
+
 #include <fmt/format.h>
 
+#include "convert/volume.h"
 #include "core/log.h"
 #include "core/model_io.h"
 #include "core/synth.h"
 #include "tools/cli.h"
 
 namespace quadrix::cli {
+namespace {
+
+constexpr const char* kMarschnerLobb = "marschner-lobb";
+constexpr int kMarschnerLobbSamples = 41;  // the classic 41³ grid
+
+}  // namespace
 
 void add_synth(CLI::App& root, Commands& commands) {
-  auto* app = root.add_subcommand("synth", "Write a small analytic model");
+  auto* app = root.add_subcommand("synth", "Write a small analytic model (or the Marschner–Lobb test volume)");
   struct Args {
     std::string kind, out;
     SynthOptions options;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("KIND", a->kind, "Model kind")->required()->check(CLI::IsMember(synth_kinds()));
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  std::vector<std::string> kinds = synth_kinds();
+  kinds.push_back(kMarschnerLobb);
+  app->add_option("KIND", a->kind, "Model kind, or marschner-lobb for the volume")
+      ->required()
+      ->check(CLI::IsMember(kinds));
+  app->add_option("-o,--out", a->out, "Output .qxm file (marschner-lobb: a .nhdr header, its .raw data beside it)")
+      ->required();
   app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere)")->check(CLI::Range(0, 50'000'000));
-  app->add_option("--resolution", a->options.resolution, "Grid cells per axis (hyperboloids)")->check(CLI::Range(0, 512));
+  app->add_option("--resolution", a->options.resolution,
+                  "Grid cells per axis (hyperboloids); samples per axis for marschner-lobb (default 41)")
+      ->check(CLI::Range(0, 512));
   app->add_option("--seed", a->options.seed, "Random seed (glyphs)");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
+                        if (a->kind == kMarschnerLobb) {
+                          if (std::filesystem::path(a->out).extension() != ".nhdr")
+                            throw CLI::ValidationError("--out", fmt::format("marschner-lobb writes a NRRD header: "
+                                                                            "name it FILE.nhdr, not '{}'", a->out));
+                          const int n = a->options.resolution > 0 ? a->options.resolution : kMarschnerLobbSamples;
+                          const Volume v = marschner_lobb_volume(n);
+                          write_nrrd(v, a->out);
+                          std::filesystem::path raw = a->out;
+                          raw.replace_extension(".raw");
+                          const auto [lo, hi] = v.range();
+                          report.json["synth"] = {{"kind", a->kind}, {"out", a->out},     {"data", raw.string()},
+                                                  {"dims", v.dims},  {"value_min", lo},   {"value_max", hi}};
+                          log::info("wrote {} and {} ({}³ samples over [-1, 1]³)", a->out, raw.string(), n);
+                          return kOk;
+                        }
                         Model m = synth_model(a->kind, a->options);
                         write_model(m, a->out);
                         report.json["synth"] = {{"kind", a->kind},     {"out", a->out},

@@ -1,4 +1,5 @@
-// Volume readers and quadratic iso-surfaces (issue 6, items 4, 5 and 7).
+// Volume readers and quadratic iso-surfaces (issue 6, items 4, 5 and 7), on grids and on
+// tetrahedral meshes with per-vertex values.
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -10,18 +11,23 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <random>
 #include <set>
 #include <cstring>
+#include <functional>
 #include <string>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
+#include "convert/tetmesh_io.h"
 #include "convert/volume.h"
 #include "core/camera.h"
 #include "core/error.h"
+#include "core/model_io.h"
 #include "core/reference.h"
 
 namespace quadrix {
@@ -31,6 +37,15 @@ namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
 const fs::path kVolumes = fs::path(QUADRIX_DATASETS) / "volumes";
+
+std::string fmt_double(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", x);
+  return b;
+}
+
+// `"key": N` as nlohmann::json's dump(2) writes it.
+std::string fmt_count(const std::string& key, std::size_t n) { return key + ": " + std::to_string(n); }
 
 class TempDir : public ::testing::Test {
 protected:
@@ -510,6 +525,408 @@ void convert_and_render(const fs::path& file, double iso, double max_median_voxe
 TEST(ConvertVolume, SkullConvertsAndRenders) { convert_and_render(kVolumes / "skull_2.9.inr", 2.9, 0.25); }
 TEST(ConvertVolume, LobsterConvertsAndRenders) {
   convert_and_render(kVolumes / "lobster_120x120x34_uint16.nhdr", 1600, 0.25);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tetrahedral meshes with per-vertex values
+
+// The Kuhn split (6 tetrahedra per cell around its main diagonal) of an n³-cell grid over
+// [lo, lo + size]³; interior vertices moved by up to jitter·h per coordinate (seeded), so the
+// mesh is not a regular grid; every other tetrahedron listed with negative orientation.
+TetMesh kuhn_mesh(int n, const Vector3d& lo, double size, double jitter, unsigned seed = 7) {
+  TetMesh m;
+  m.source = "kuhn";
+  const double h = size / n;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter * h, jitter * h);
+  const auto id = [n](int i, int j, int k) { return (k * (n + 1) + j) * (n + 1) + i; };
+  for (int k = 0; k <= n; ++k)
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        Vector3d x = lo + h * Vector3d(i, j, k);
+        const bool interior = i > 0 && j > 0 && k > 0 && i < n && j < n && k < n;
+        const Vector3d d(u(rng), u(rng), u(rng));
+        if (interior) x += d;
+        m.vertices.push_back(x);
+      }
+  static constexpr int paths[6][2] = {{1, 3}, {1, 5}, {2, 3}, {2, 6}, {4, 5}, {4, 6}};
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (int t = 0; t < 6; ++t) {
+          std::array<int, 4> v{};
+          const int corner[4] = {0, paths[t][0], paths[t][1], 7};
+          for (int c = 0; c < 4; ++c)
+            v[c] = id(i + (corner[c] & 1), j + ((corner[c] >> 1) & 1), k + ((corner[c] >> 2) & 1));
+          if (m.tets.size() % 2) std::swap(v[0], v[1]);
+          m.tets.push_back(v);
+        }
+  return m;
+}
+
+std::string values_text(const std::vector<double>& values) {
+  std::string s = "# per-vertex values\n";
+  for (std::size_t i = 0; i < values.size(); ++i) s += fmt_double(values[i]) + (i % 4 == 3 ? "\n" : " ");
+  return s + "\n";
+}
+
+// Points of each patch inside its tetrahedron: Newton projections onto the patch's quadric from
+// the centroid and the points halfway to each corner, kept when they land inside the tetrahedron.
+std::vector<Vector3d> patch_points(const Model& m) {
+  std::vector<Vector3d> out;
+  for (const auto& t : m.tets) {
+    Eigen::Matrix4d bary;  // (x, 1) ↦ λ
+    for (int c = 0; c < 4; ++c) bary.col(c) << t.corners[c] - t.centroid(), 1.0;
+    bary = bary.inverse().eval();
+    for (int s = 0; s < 5; ++s) {
+      Vector3d y = (s == 0 ? t.centroid() : 0.5 * (t.centroid() + t.corners[s - 1])) - t.centroid();
+      for (int it = 0; it < 40; ++it) {
+        const Vector3d g = t.quadric.gradient(y);
+        if (g.squaredNorm() == 0) break;
+        y -= t.quadric.eval(y) * g / g.squaredNorm();
+      }
+      const Vector3d g = t.quadric.gradient(y);
+      if (!(std::abs(t.quadric.eval(y)) <= 1e-13 * g.norm() + 1e-15)) continue;
+      const Eigen::Vector4d l = bary * Eigen::Vector4d(y.x(), y.y(), y.z(), 1.0);
+      if (l.minCoeff() < -1e-9) continue;
+      out.push_back(y + t.centroid());
+    }
+  }
+  return out;
+}
+
+class TetMeshIo : public TempDir {
+protected:
+  // FormatError whose message names `file` and contains each needle.
+  void expect_format(const std::function<void()>& f, const fs::path& file, std::initializer_list<std::string> needles) {
+    try {
+      f();
+      ADD_FAILURE() << "no FormatError for " << file.filename();
+    } catch (const FormatError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(file.string()), std::string::npos) << "message does not name the file: " << msg;
+      for (const auto& n : needles) EXPECT_NE(msg.find(n), std::string::npos) << "'" << n << "' not in: " << msg;
+    }
+  }
+};
+
+constexpr const char* kTwoTets =
+    "MeshVersionFormatted 1\n"  // line 1
+    "# two tetrahedra sharing a face\n"
+    "Dimension\n3\n"
+    "Vertices\n5\n"  // lines 5, 6
+    "0 0 0 1\n1 0 0 1\n0 1 0 1\n0 0 1 1\n1 1 1 2  # apex\n"  // lines 7-11
+    "Triangles\n1\n1 2 3 4\n"                                   // lines 12-14
+    "Edges 2\n1 2 0\n2 3 0\n"                                   // lines 15-17
+    "Tetrahedra\n2\n"                                           // lines 18, 19
+    "1 2 3 4 7\n"                                               // line 20
+    "2 3 4 5 7\n"                                               // line 21
+    "Corners 1 1\n"
+    "End\n";
+
+TEST_F(TetMeshIo, MeditSkipsOtherSectionsAndTetGenReadsTheSameMesh) {
+  const TetMesh m = read_tet_mesh(write("two.mesh", kTwoTets));
+  ASSERT_EQ(m.vertices.size(), 5u);
+  ASSERT_EQ(m.tets.size(), 2u);
+  EXPECT_EQ(m.vertices[4], Vector3d(1, 1, 1));
+  EXPECT_EQ(m.tets[1], (std::array<int, 4>{1, 2, 3, 4}));
+  write("two.node", "# TetGen\n5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 1\n");
+  write("two.ele", "2 4 1\n0 0 1 2 3 7\n1 1 2 3 4 7\n");
+  for (const char* name : {"two.node", "two.ele"}) {
+    const TetMesh t = read_tet_mesh(dir_ / name);
+    EXPECT_EQ(t.vertices, m.vertices);
+    EXPECT_EQ(t.tets, m.tets);
+  }
+  // 1-based TetGen files.
+  write("one.node", "5 3 0 1\n1 0 0 0 0\n2 1 0 0 0\n3 0 1 0 0\n4 0 0 1 0\n5 1 1 1 0\n");
+  write("one.ele", "2 4 0\n1 1 2 3 4\n2 2 3 4 5\n");
+  EXPECT_EQ(read_tet_mesh(dir_ / "one.ele").tets, m.tets);
+  // write_medit_mesh round trip.
+  write_medit_mesh(m, dir_ / "back.mesh");
+  const TetMesh b = read_tet_mesh(dir_ / "back.mesh");
+  EXPECT_EQ(b.vertices, m.vertices);
+  EXPECT_EQ(b.tets, m.tets);
+  const auto v = read_vertex_values(write("v.txt", "# values\n0.5 1e-3\n-2 # third\n+4 5.25\n"), 5);
+  EXPECT_EQ(v, (std::vector<double>{0.5, 1e-3, -2, 4, 5.25}));
+}
+
+TEST_F(TetMeshIo, MalformedMeshesAndValuesNameFileAndLine) {
+  const std::string good = kTwoTets;
+  const auto edit = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    const auto at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  const auto mesh = [&](const std::string& text) { return write("bad.mesh", text); };
+  fs::path f;
+  // Truncated inside a section.
+  f = mesh(good.substr(0, good.find("0 0 1 1\n")));
+  expect_format([&] { read_tet_mesh(f); }, f, {"ends inside 'Vertices' (line 5) after 3 of its 5 entries"});
+  // Truncated at a section boundary: no End.
+  f = mesh(good.substr(0, good.find("Corners")));
+  expect_format([&] { read_tet_mesh(f); }, f, {"no 'End'"});
+  // A count larger than the section: the next keyword is not a number.
+  f = mesh(edit("Vertices\n5\n", "Vertices\n6\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 12", "'Triangles' is not a number", "entry 6 of 6"});
+  // Index out of range and zero index.
+  f = mesh(edit("2 3 4 5 7\n", "2 3 4 9 7\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 21", "tetrahedron 2", "vertex index 9 is outside 1..5"});
+  f = mesh(edit("1 2 3 4 7\n", "1 2 0 4 7\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 20", "vertex index 0"});
+  // Non-finite coordinate.
+  f = mesh(edit("1 0 0 1\n", "1 nan 0 1\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 8", "vertex 2", "non-finite"});
+  f = mesh(edit("0 1 0 1\n", "0 1 inf 1\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 9", "non-finite"});
+  // Degenerate (coplanar and repeated-vertex) tetrahedra.
+  f = mesh(edit("1 1 1 2  # apex", "0.5 0.5 0 2"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 21", "tetrahedron 2 (2 3 4 5) is degenerate"});
+  f = mesh(edit("1 2 3 4 7\n", "1 2 3 2 7\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 20", "degenerate"});
+  // Header problems.
+  f = mesh(edit("Dimension\n3", "Dimension\n2"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 3", "Dimension 2"});
+  f = mesh(edit("Corners", "Cornets"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 22", "unknown keyword 'Cornets'"});
+  f = mesh(edit("Tetrahedra\n2\n", "Tetrahedra\n-2\n"));
+  expect_format([&] { read_tet_mesh(f); }, f, {"line 19", "'-2'"});
+  // TetGen.
+  write("t.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+  write("t.ele", "1 4 0\n0 0 1 2 3\n");
+  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.node", {"says 5 points, the file holds 4"});
+  write("t.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
+  write("t.ele", "1 4 0\n0 0 1 2 4\n");
+  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {"line 2", "vertex index 4 is outside 0..3"});
+  write("t.ele", "1 4 0\n0 0 1 2\n");
+  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {"line 2", "4 numbers, a tetrahedron has 5"});
+  write("t.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 nan 1\n");
+  expect_format([&] { read_tet_mesh(dir_ / "t.node"); }, dir_ / "t.node", {"line 5", "non-finite"});
+
+  // Values: wrong count (short, long), NaN, Inf, not a number.
+  fs::path v = write("v.txt", "1 2\n3\n");
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"3 values for 5 vertices", "line 3"});
+  v = write("v.txt", "1 2 3\n4 5\n# trailing\n6\n");
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 4", "more values than the mesh's 5 vertices"});
+  v = write("v.txt", "1 2\n3 nan 5\n");
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 2", "value 4 ('nan', vertex 4) is not finite"});
+  v = write("v.txt", "1 2\n3 4\n-inf\n");
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 3", "not finite"});
+  v = write("v.txt", "1 2\n3 4,5\n");
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 2", "'4,5' is not a number"});
+  EXPECT_THROW(read_tet_mesh(dir_ / "missing.mesh"), IoError);
+  EXPECT_THROW(read_tet_mesh(dir_ / "mesh.obj"), InvalidInput);
+}
+
+TEST_F(TetMeshIo, QuadraticValuesReproduceTheIsoSurfaceExactly) {
+  // f(x) = (x − c)ᵀM(x − c) (an ellipsoid, M SPD and not diagonal) on a jittered Kuhn mesh far
+  // from the origin: the quadratic least-squares gradients are exact, so the Hermite midpoints and
+  // the patches are exact: every patch point lies on {f = V} up to rounding.
+  const Vector3d lo(40, -20, 7);
+  const double size = 2.0;
+  const TetMesh gen = kuhn_mesh(6, lo, size, 0.15);
+  Eigen::Matrix3d M;
+  M << 1.0, 0.3, -0.2, 0.3, 1.6, 0.25, -0.2, 0.25, 0.8;
+  const Vector3d c = lo + Vector3d(1.05, 0.93, 1.1);
+  const auto f = [&](const Vector3d& x) { return (x - c).dot(M * (x - c)); };
+  std::vector<double> vals;
+  for (const auto& x : gen.vertices) vals.push_back(f(x));
+  write_medit_mesh(gen, dir_ / "e.mesh");
+  write("e.txt", values_text(vals));
+  const TetMesh mesh = read_tet_mesh(dir_ / "e.mesh");
+  const std::vector<double> values = read_vertex_values(dir_ / "e.txt", mesh.vertices.size());
+  ASSERT_EQ(values, vals);
+
+  const VertexGradients g = estimate_vertex_gradients(mesh, values);
+  EXPECT_EQ(g.linear_fits, 0u);
+  double grad_err = 0;
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    grad_err = std::max(grad_err, (g.gradients[i] - 2 * M * (mesh.vertices[i] - c)).norm());
+  EXPECT_LT(grad_err, 1e-9) << "quadratic fit gradients are not exact";
+
+  const double V = 0.5;
+  const VolumeConversion conv = convert_tet_mesh(mesh, values, {.iso = V});
+  EXPECT_EQ(conv.cells, mesh.tets.size());
+  EXPECT_EQ(conv.linear_gradients, 0u);
+  ASSERT_GT(conv.model.tets.size(), 50u);
+  // Orientation: every patch positively oriented.
+  for (const auto& t : conv.model.tets)
+    EXPECT_GT((t.corners[1] - t.corners[0]).cross(t.corners[2] - t.corners[0]).dot(t.corners[3] - t.corners[0]), 0);
+  const auto pts = patch_points(conv.model);
+  ASSERT_GT(pts.size(), conv.model.tets.size());
+  double worst = 0;  // |f − V| / ‖∇f‖: first-order distance to {f = V}, relative to the mesh size
+  for (const auto& x : pts) worst = std::max(worst, std::abs(f(x) - V) / (2 * M * (x - c)).norm() / size);
+  std::printf("quadratic data on a jittered Kuhn mesh (%zu tets, %zu patches): max gradient error %.2e, "
+              "max |f - V|/|grad f| %.2e of the mesh size over %zu patch points\n",
+              mesh.tets.size(), conv.model.tets.size(), grad_err, worst, pts.size());
+  EXPECT_LT(worst, 1e-10);
+
+  // Every tetrahedron whose corners straddle V (a marching-tetrahedra cell) is kept.
+  const VolumeConversion lin = convert_tet_mesh(mesh, values, {.iso = V, .linear = true});
+  std::size_t straddle = 0;
+  for (const auto& t : mesh.tets) {
+    double a = 1e300, b = -1e300;
+    for (const int k : t) a = std::min(a, values[k]), b = std::max(b, values[k]);
+    straddle += a <= V && V <= b && a < b;
+  }
+  EXPECT_EQ(lin.model.tets.size(), straddle);
+  EXPECT_GE(conv.model.tets.size(), straddle);
+
+  // The iso-value must lie strictly inside the value range: InvalidInput, not FormatError.
+  const auto [vmin, vmax] = std::minmax_element(values.begin(), values.end());
+  for (const double iso : {*vmin, *vmax + 1, std::nan("")}) {
+    try {
+      convert_tet_mesh(mesh, values, {.iso = iso});
+      ADD_FAILURE() << "iso " << iso << " accepted";
+    } catch (const FormatError&) {
+      ADD_FAILURE() << "iso out of range must be InvalidInput, not FormatError";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("outside the data range"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(convert_tet_mesh(mesh, std::span(values).first(values.size() - 1), {.iso = V}), InvalidInput);
+}
+
+TEST(ConvertTetMesh, SphereDistanceConverges) {
+  // f(x) = ‖x − c‖ on jittered Kuhn meshes of [−1, 1]³, iso R: the distance of patch points to the
+  // sphere drops as the mesh refines (third order for the quadratic patches: Hermite midpoints
+  // from O(h²) gradients), and beats linear patches on the same mesh.
+  const Vector3d c(0.05, -0.03, 0.02);
+  const double R = 0.6;
+  struct Row {
+    int n;
+    std::size_t patches;
+    double max_q, rms_q, max_l;
+  };
+  std::vector<Row> rows;
+  std::printf("\nsphere distance field, R = %.1f, jittered Kuhn meshes of [-1,1]^3 (distances in domain units)\n", R);
+  std::printf("%4s %8s %9s | %10s %10s %6s | %10s %6s\n", "n", "tets", "patches", "quad max", "quad rms", "order",
+              "linear max", "order");
+  for (const int n : {4, 8, 16, 32}) {
+    const TetMesh mesh = kuhn_mesh(n, Vector3d::Constant(-1), 2.0, 0.1, 11u + n);
+    std::vector<double> values;
+    for (const auto& x : mesh.vertices) values.push_back((x - c).norm());
+    const VolumeConversion q = convert_tet_mesh(mesh, values, {.iso = R});
+    const VolumeConversion l = convert_tet_mesh(mesh, values, {.iso = R, .linear = true});
+    Row r{n, q.model.tets.size(), 0, 0, 0};
+    const auto pq = patch_points(q.model), pl = patch_points(l.model);
+    for (const auto& x : pq) {
+      const double e = std::abs((x - c).norm() - R);
+      r.max_q = std::max(r.max_q, e);
+      r.rms_q += e * e;
+    }
+    r.rms_q = std::sqrt(r.rms_q / std::max<std::size_t>(1, pq.size()));
+    for (const auto& x : pl) r.max_l = std::max(r.max_l, std::abs((x - c).norm() - R));
+    const double oq = rows.empty() ? 0 : std::log2(rows.back().max_q / r.max_q);
+    const double ol = rows.empty() ? 0 : std::log2(rows.back().max_l / r.max_l);
+    std::printf("%4d %8zu %9zu | %10.3e %10.3e %6.2f | %10.3e %6.2f\n", n, mesh.tets.size(), r.patches, r.max_q,
+                r.rms_q, oq, r.max_l, ol);
+    ASSERT_GT(pq.size(), r.patches / 2);
+    EXPECT_LT(r.max_q, r.max_l) << "n = " << n;
+    rows.push_back(r);
+  }
+  std::fflush(stdout);
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    EXPECT_LT(rows[i].max_q, rows[i - 1].max_q / 4) << "n = " << rows[i].n << ": less than second-order convergence";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Command line
+
+struct CmdResult {
+  int code = -1;
+  std::string out;
+};
+
+CmdResult quadrix_run(const std::string& args) {
+  const std::string cmd = std::string(QUADRIX_BINARY) + " " + args + " 2>&1";
+  CmdResult r;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  if (!p) return r;
+  std::array<char, 4096> buf;
+  std::size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  return r;
+}
+
+std::string quoted(const fs::path& p) {
+  std::string s(1, '\'');
+  s += p.string();
+  s += '\'';
+  return s;
+}
+
+class VolumeCli : public TempDir {
+protected:
+  void SetUp() override {
+    if (!fs::exists(QUADRIX_BINARY)) GTEST_SKIP() << "quadrix binary not built: " << QUADRIX_BINARY;
+    TempDir::SetUp();
+  }
+};
+
+TEST_F(VolumeCli, SynthMarschnerLobbWritesANrrd) {
+  const fs::path hdr = dir_ / "ml.nhdr";
+  CmdResult r = quadrix_run("synth marschner-lobb --resolution 13 -o " + quoted(hdr));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Volume v = read_nrrd(hdr);
+  EXPECT_EQ(v.dims, (std::array<int, 3>{13, 13, 13}));
+  EXPECT_TRUE(v.origin.isApprox(Vector3d::Constant(-1), 1e-15));
+  EXPECT_TRUE(v.spacing.isApprox(Vector3d::Constant(2.0 / 12), 1e-15));
+  double worst = 0;
+  for (int k = 0; k < 13; ++k)
+    for (int j = 0; j < 13; ++j)
+      for (int i = 0; i < 13; ++i)
+        worst = std::max(worst, std::abs(v.at(i, j, k) - marschner_lobb(v.position(i, j, k))));
+  EXPECT_LT(worst, 1e-7) << "samples differ from the analytic function beyond float rounding";
+  EXPECT_EQ(v.values, marschner_lobb_volume(13).values);
+  // Default resolution: the classic 41³; other kinds unchanged.
+  r = quadrix_run("synth marschner-lobb -o " + quoted(dir_ / "d.nhdr"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(read_nrrd(dir_ / "d.nhdr").dims, (std::array<int, 3>{41, 41, 41}));
+  EXPECT_EQ(quadrix_run("synth marschner-lobb -o " + quoted(dir_ / "ml.qxm")).code, 2);
+  r = quadrix_run("synth hyperboloid1 --resolution 4 -o " + quoted(dir_ / "h.qxm"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_GT(read_model(dir_ / "h.qxm").tets.size(), 0u);
+}
+
+TEST_F(VolumeCli, ConvertVolumeTets) {
+  const TetMesh mesh = kuhn_mesh(5, Vector3d::Constant(-1), 2.0, 0.1);
+  std::vector<double> values;
+  for (const auto& x : mesh.vertices) values.push_back(x.squaredNorm());
+  write_medit_mesh(mesh, dir_ / "m.mesh");
+  write("v.txt", values_text(values));
+  const fs::path out = dir_ / "iso.qxm", report = dir_ / "r.json";
+  CmdResult r = quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --values " + quoted(dir_ / "v.txt") +
+                            " --iso 0.5 -o " + quoted(out) + " --report " + quoted(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Model m = read_model(out);
+  EXPECT_EQ(m.tets.size(), convert_tet_mesh(mesh, values, {.iso = 0.5}).model.tets.size());
+  std::ifstream in(report);
+  const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find(fmt_count("\"tets\"", m.tets.size())), std::string::npos) << json;
+  EXPECT_NE(json.find(fmt_count("\"cells\"", mesh.tets.size())), std::string::npos) << json;
+  // Bad input: exit code 3 with file and line; iso outside the range: 3; option misuse: 2.
+  write("short.txt", "1 2 3\n");
+  r = quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --values " + quoted(dir_ / "short.txt") +
+                  " --iso 0.5 -o " + quoted(out));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("short.txt: 3 values for 216 vertices"), std::string::npos) << r.out;
+  r = quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --values " + quoted(dir_ / "v.txt") +
+                  " --iso 7 -o " + quoted(out));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("outside the data range"), std::string::npos) << r.out;
+  write("bad.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n1\n0 0 0 0\nTetrahedra\n1\n1 1 1 2 0\nEnd\n");
+  r = quadrix_run("convert volume --tets " + quoted(dir_ / "bad.mesh") + " --values " + quoted(dir_ / "v.txt") +
+                  " --iso 0.5 -o " + quoted(out));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("line 8"), std::string::npos) << r.out;
+  EXPECT_EQ(quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --iso 0.5 -o " + quoted(out)).code, 2);
+  EXPECT_EQ(quadrix_run("convert volume --synth marschner-lobb --tets " + quoted(dir_ / "m.mesh") + " --values " +
+                        quoted(dir_ / "v.txt") + " --iso 0.5 -o " + quoted(out))
+                .code,
+            2);
 }
 
 }  // namespace
