@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # make demo: the pipeline on real and analytic data. Fits the Stanford bunny (SLIM) and renders it
-# with the CPU reference and with the GL three-pass SLIM renderer (OSMesa/EGL), converts a quad mesh into tetrahedron-clipped quadrics and ray-casts it
-# with OpenGL (OSMesa/EGL), and renders analytic glyph and hyperboloid models.
+# with the CPU reference and with the GL three-pass SLIM renderer (OSMesa/EGL); converts a quad
+# mesh, a molecule's skin surface and CT iso-surfaces into tetrahedron-clipped quadrics and
+# ray-casts them with OpenGL (OSMesa/EGL); renders analytic glyph and hyperboloid models.
 set -euo pipefail
 q=${1:?quadrix binary}; out=${2:-out/demo}
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -12,11 +13,28 @@ run() { echo "+ quadrix ${*}"; "$q" "$@"; }
 # Real data: ../shared/datasets, or the copies Debian's libcgal-demo ships.
 bunny="$data/meshes/bunny.ply"
 quads="$data/quads/spot_quadrangulated.obj"
-if [ ! -f "$bunny" ] && [ -f /usr/share/doc/libcgal-dev/data.tar.gz ]; then
+molecule="$data/molecules/4ins.pdb"
+skull="$data/volumes/skull_2.9.inr"
+lobster="$data/volumes/lobster_120x120x34_uint16.nhdr"
+cgal_doc=/usr/share/doc/libcgal-dev
+if [ ! -d "$data" ] && [ ! -f $cgal_doc/data.tar.gz ]; then
+  # No ../shared: Debian's libcgal-demo ships the real data (bunny, skull, molecules).
+  if [ "$(id -u)" -eq 0 ]; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libcgal-demo >/dev/null ||
+      echo "demo: could not install libcgal-demo; analytic models only"
+  else
+    echo "demo: no datasets; for real data run as root: apt-get install libcgal-demo"
+  fi
+fi
+if [ ! -f "$bunny" ] && [ -f $cgal_doc/data.tar.gz ]; then
   mkdir -p "$out/data"
-  tar -xzf /usr/share/doc/libcgal-dev/data.tar.gz -C "$out/data" --wildcards '*bunny*' '*quad*' 2>/dev/null || true
+  tar -xzf $cgal_doc/data.tar.gz -C "$out/data" --wildcards '*bunny*' '*quad*' '*skull_2.9.inr' 2>/dev/null || true
+  [ -f $cgal_doc/examples.tar.gz ] &&
+    tar -xzf $cgal_doc/examples.tar.gz -C "$out/data" --wildcards '*Skin_surface_3/data/*' 2>/dev/null || true
   bunny=$(find "$out/data" -name 'bunny*.off' -o -name 'bunny*.ply' -o -name 'bunny*.xyz' | head -n1)
   quads=$(find "$out/data" -name 'cube_quad.off' -o -name 'torus_quad.off' | head -n1)
+  molecule=$(find "$out/data" -name 'caffeine.cin' -o -name '*.pdb' | head -n1)
+  skull=$(find "$out/data" -name 'skull_2.9.inr' | head -n1)
 fi
 
 if [ -n "$bunny" ] && [ -f "$bunny" ]; then
@@ -35,6 +53,25 @@ if "$q" --help | grep -q "^  convert " && [ -n "$quads" ] && [ -f "$quads" ]; th
   run render "$out/quads.qxm" -o "$out/quads.png" --size 640x640 --azimuth 150 --elevation 15 --shading envmap \
     --report "$out/quads_render.json"
 fi
+
+if [ -n "$molecule" ] && [ -f "$molecule" ]; then
+  run convert skin "$molecule" -o "$out/molecule_skin.qxm" --report "$out/molecule_skin_convert.json"
+  run render "$out/molecule_skin.qxm" -o "$out/molecule_skin.png" --size 640x640 --azimuth 30 --elevation 20 \
+    --report "$out/molecule_skin_render.json"
+fi
+if [ -n "$skull" ] && [ -f "$skull" ]; then
+  run convert volume "$skull" --iso 2.9 -o "$out/skull_iso.qxm" --colour 230,220,200 --report "$out/skull_convert.json"
+  run render "$out/skull_iso.qxm" -o "$out/skull_iso.png" --size 640x640 --azimuth 200 --elevation 10 \
+    --report "$out/skull_render.json"
+fi
+if [ -f "$lobster" ]; then
+  run convert volume "$lobster" --iso 900 -o "$out/lobster_iso.qxm" --colour 220,90,60
+  run render "$out/lobster_iso.qxm" -o "$out/lobster_iso.png" --size 800x600 --elevation 60 --shading envmap
+fi
+# The classic analytic test volume: quadratic patches against the exact surface (issue 6 table).
+run convert volume --synth marschner-lobb --grid 41 --iso 0.5 -o "$out/marschner_lobb.qxm" \
+  --report "$out/marschner_lobb_convert.json"
+run render "$out/marschner_lobb.qxm" -o "$out/marschner_lobb.png" --size 640x640 --elevation 35 --shading envmap
 
 run synth glyphs --count 400 -o "$out/glyphs.qxm"
 run synth hyperboloid1 --resolution 12 -o "$out/hyperboloid.qxm"
