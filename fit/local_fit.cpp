@@ -1,6 +1,7 @@
 #include "fit/local_fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -10,54 +11,84 @@ namespace {
 
 // Monomials in the order of QuadricCoefficients: xx yy zz xy yz zx x y z 1.
 using Vec10 = Eigen::Matrix<double, 10, 1>;
-
-inline void basis(const Eigen::Vector3d& u, Vec10& phi, Vec10& gx, Vec10& gy, Vec10& gz) {
-  const double x = u.x(), y = u.y(), z = u.z();
-  phi << x * x, y * y, z * z, x * y, y * z, z * x, x, y, z, 1.0;
-  gx << 2 * x, 0, 0, y, 0, z, 1, 0, 0, 0;
-  gy << 0, 2 * y, 0, x, z, 0, 0, 1, 0, 0;
-  gz << 0, 0, 2 * z, 0, y, x, 0, 0, 1, 0;
-}
+constexpr int kExponents[10][3] = {{2, 0, 0}, {0, 2, 0}, {0, 0, 2}, {1, 1, 0}, {0, 1, 1},
+                                   {1, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}};
+// Index of the moment xᵃyᵇzᶜ (a + b + c ≤ 4) in the accumulation below (−1: not used).
+constexpr auto kMoment = [] {
+  std::array<std::array<std::array<int, 5>, 5>, 5> idx{};
+  int k = 0;
+  for (int a = 0; a < 5; ++a)
+    for (int b = 0; b < 5; ++b)
+      for (int c = 0; c < 5; ++c) idx[a][b][c] = a + b + c <= 4 ? k++ : -1;
+  return idx;
+}();
 
 }  // namespace
 
 std::optional<Quadric> fit_general_quadric(const LocalSample& s, double mu) {
   const std::size_t m = s.u.size();
   if (m < 3) return std::nullopt;
-  // Stacked rows √w·φ (target 0) and √(wμ)·∂φ (target √(wμ)·n), normal equations XᵀX k = Xᵀy.
-  Eigen::Matrix<double, Eigen::Dynamic, 10> X(4 * m, 10);
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(4 * m);
-  Vec10 phi, gx, gy, gz;
+  // Normal equations of the stacked rows √w·φ (target 0) and √(wμ)·∂φ (target √(wμ)·n):
+  // M = Σ w·(φφᵀ + μ·Σ_axes ∂φ∂φᵀ). Every entry is a weighted moment Σ w·xⁱyʲzᵏ of degree ≤ 4,
+  // so the points are summed once into the 35 moments (the hot loop of the fitter).
+  double S[35] = {};  // Σ w·xᵃyᵇzᶜ, a + b + c ≤ 4, indexed by kMoment
   for (std::size_t i = 0; i < m; ++i) {
-    basis(s.u[i], phi, gx, gy, gz);
-    const double sw = std::sqrt(s.w[i]), sg = std::sqrt(s.w[i] * mu);
-    X.row(4 * i) = sw * phi.transpose();
-    X.row(4 * i + 1) = sg * gx.transpose();
-    X.row(4 * i + 2) = sg * gy.transpose();
-    X.row(4 * i + 3) = sg * gz.transpose();
-    y.segment<3>(4 * i + 1) = sg * s.n[i];
+    const double x = s.u[i].x(), y = s.u[i].y(), z = s.u[i].z(), w = s.w[i];
+    const double x2 = x * x, y2 = y * y, z2 = z * z, x3 = x2 * x, y3 = y2 * y, z3 = z2 * z;
+    const double x4 = x2 * x2, y4 = y2 * y2, z4 = z2 * z2;
+    const double t[35] = {
+        1, z, z2, z3, z4, y, y * z, y * z2, y * z3, y2, y2 * z, y2 * z2, y3, y3 * z, y4, x,
+        x * z, x * z2, x * z3, x * y, x * y * z, x * y * z2, x * y2, x * y2 * z, x * y3, x2,
+        x2 * z, x2 * z2, x2 * y, x2 * y * z, x2 * y2, x3, x3 * z, x3 * y, x4
+    };
+    for (int k = 0; k < 35; ++k) S[k] += w * t[k];
   }
-  Eigen::Matrix<double, 10, 10> M = Eigen::Matrix<double, 10, 10>::Zero();
-  M.selfadjointView<Eigen::Lower>().rankUpdate(X.transpose());
-  M = M.selfadjointView<Eigen::Lower>();
+  Eigen::Matrix<double, 10, 10> M;
+  for (int a = 0; a < 10; ++a)
+    for (int b = 0; b <= a; ++b) {
+      const auto &ea = kExponents[a], &eb = kExponents[b];
+      double v = S[kMoment[ea[0] + eb[0]][ea[1] + eb[1]][ea[2] + eb[2]]];
+      for (int k = 0; k < 3; ++k)  // ∂/∂x_k of xᵉ is e_k·x^(e − 1_k)
+        if (ea[k] > 0 && eb[k] > 0) {
+          int e[3] = {ea[0] + eb[0], ea[1] + eb[1], ea[2] + eb[2]};
+          e[k] -= 2;
+          v += mu * ea[k] * eb[k] * S[kMoment[e[0]][e[1]][e[2]]];
+        }
+      M(a, b) = M(b, a) = v;
+    }
   const double ridge = 1e-9 * M.diagonal().maxCoeff();
   if (!(ridge > 0)) return std::nullopt;
   M.diagonal().array() += ridge;
   Eigen::LDLT<Eigen::Matrix<double, 10, 10>> ldlt(M);
   if (ldlt.info() != Eigen::Success) return std::nullopt;
-  Vec10 k = ldlt.solve(X.transpose() * y);
+  // Right-hand side Σ wμ·len·J·n with the gradient targets scaled by len per point (1 at first).
+  auto rhs = [&](const Vec10* k) {
+    double r[10] = {};
+    for (std::size_t i = 0; i < m; ++i) {
+      const double x = s.u[i].x(), y = s.u[i].y(), z = s.u[i].z();
+      double len = 1.0;
+      if (k) {
+        const Vec10& c = *k;  // ∇g = (2c0x + c3y + c5z + c6, 2c1y + c3x + c4z + c7, 2c2z + c4y + c5x + c8)
+        const double gx = 2 * c[0] * x + c[3] * y + c[5] * z + c[6];
+        const double gy = 2 * c[1] * y + c[3] * x + c[4] * z + c[7];
+        const double gz = 2 * c[2] * z + c[4] * y + c[5] * x + c[8];
+        len = std::clamp(std::sqrt(gx * gx + gy * gy + gz * gz), 0.2, 5.0);
+      }
+      const double f = s.w[i] * mu * len;
+      const double nx = f * s.n[i].x(), ny = f * s.n[i].y(), nz = f * s.n[i].z();
+      r[0] += 2 * x * nx, r[1] += 2 * y * ny, r[2] += 2 * z * nz;
+      r[3] += y * nx + x * ny, r[4] += z * ny + y * nz, r[5] += z * nx + x * nz;
+      r[6] += nx, r[7] += ny, r[8] += nz;
+    }
+    return Vec10(Eigen::Map<const Vec10>(r));
+  };
+  Vec10 k = ldlt.solve(rhs(nullptr));
   if (!k.allFinite()) return std::nullopt;
   // A unit-length gradient target biases the zero set of any quadric whose ‖∇g‖ varies
   // (an ellipsoid). Re-target the gradients to ‖∇g(uᵢ)‖·nᵢ with the previous solution: the exact
   // quadric of exact data is then a fixed point. Only the right-hand side changes.
   for (int iteration = 0; iteration < 2; ++iteration) {
-    for (std::size_t i = 0; i < m; ++i) {
-      basis(s.u[i], phi, gx, gy, gz);
-      const double len = Eigen::Vector3d(gx.dot(k), gy.dot(k), gz.dot(k)).norm();
-      const double sg = std::sqrt(s.w[i] * mu);
-      y.segment<3>(4 * i + 1) = sg * std::clamp(len, 0.2, 5.0) * s.n[i];
-    }
-    const Vec10 next = ldlt.solve(X.transpose() * y);
+    const Vec10 next = ldlt.solve(rhs(&k));
     if (!next.allFinite()) break;
     k = next;
   }

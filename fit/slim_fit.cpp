@@ -9,6 +9,7 @@
 #include <span>
 #include <queue>
 #include <random>
+#include <memory>
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -29,10 +30,11 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Weight of a point in the local least squares, r = ‖p − c‖/R: the SLIM blend weight's shape
-// (DESIGN §2) with a floor so rim points, which are checked too, still pull on the fit.
-double fit_weight(double r) {
-  const double w = r < 0.5 ? std::exp(-8.0 * r * r) : 16.0 * std::exp(-2.0) * std::pow(1.0 - std::min(r, 1.0), 4);
-  return w + 0.05;
+// (DESIGN §2) plus a floor so rim points, which are checked too, still pull on the fit.
+double fit_weight(double r, double floor) {
+  if (r < 0.5) return std::exp(-8.0 * r * r) + floor;
+  const double s = 1.0 - std::min(r, 1.0);
+  return 16.0 * std::exp(-2.0) * (s * s) * (s * s) + floor;
 }
 
 struct Ball {
@@ -86,7 +88,7 @@ struct Fitter {
   struct Scratch {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> u, n, fu, fn;
-    std::vector<double> fw;
+    std::vector<double> fw, fe;
   };
 
   // Fits and checks one ball (c, R); the fit with the smaller error when both kinds are tried.
@@ -108,7 +110,7 @@ struct Fitter {
     for (std::size_t j = 0; j < m; j += stride) {
       s.fu.push_back(s.u[j]);
       s.fn.push_back(s.n[j]);
-      s.fw.push_back(fit_weight(s.u[j].norm()));
+      s.fw.push_back(fit_weight(s.u[j].norm(), opt.weight_floor));
     }
     const LocalSample sample{s.fu, s.fn, s.fw};
     if (m > opt.max_check_points) {  // strided subset for the check (in place: u, n are scratch)
@@ -133,7 +135,24 @@ struct Fitter {
       best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, m, std::nullopt};
       return e.within && err <= bound;
     };
-    if (m >= opt.min_points && consider(fit_general_quadric(sample, opt.normal_weight), false)) return best;
+    if (m >= opt.min_points) {
+      auto g = fit_general_quadric(sample, opt.normal_weight);
+      if (consider(g, false)) return best;
+      // The bound is a maximum: reweight towards the minimax fit (Lawson), the points the fit
+      // misses most gaining weight.
+      for (int it = 0; it < opt.reweight_rounds && g && !accept_any; ++it) {
+        double emax = 0;
+        s.fe.resize(s.fu.size());
+        for (std::size_t j = 0; j < s.fu.size(); ++j) emax = std::max(emax, s.fe[j] = g->taubin_distance(s.fu[j]));
+        if (!(emax > 0)) break;
+        for (std::size_t j = 0; j < s.fu.size(); ++j) {
+          const double e = s.fe[j] / emax;
+          s.fw[j] *= 0.1 + e * e;
+        }
+        g = fit_general_quadric(sample, opt.normal_weight);
+        if (consider(g, false)) return best;
+      }
+    }
     if (consider(fit_height_quadric(sample, opt.normal_weight), true)) return best;
     if (opt.sharp && !accept_any)
       if (auto b = try_sharp(ci, R, s)) return b;
@@ -169,7 +188,7 @@ struct Fitter {
       if (probe_ball.owns(s.u[j], s.n[j])) u.push_back(s.u[j]), n.push_back(s.n[j]);
     if (u.size() < opt.min_points / 2) return std::nullopt;
     const std::size_t stride = std::max<std::size_t>(1, (u.size() + opt.max_fit_points - 1) / opt.max_fit_points);
-    for (std::size_t j = 0; j < u.size(); j += stride) fu.push_back(u[j]), fn.push_back(n[j]), fw.push_back(fit_weight(u[j].norm()));
+    for (std::size_t j = 0; j < u.size(); j += stride) fu.push_back(u[j]), fn.push_back(n[j]), fw.push_back(fit_weight(u[j].norm(), opt.weight_floor));
     const LocalSample sample{fu, fn, fw};
     const double bound = E / R, h = probe / R;
     for (const bool is_height : {false, true}) {
@@ -185,7 +204,41 @@ struct Fitter {
 
   // The largest R whose fit stays within E: growth from the min_points-th neighbour distance,
   // then bisection in log R.
-  Ball grow(std::uint32_t ci, Scratch& s, double limit = std::numeric_limits<double>::infinity()) const {
+  // With a guess (the radius of a nearby candidate): from there, growth or shrinking by
+  // warm_growth, then bisection; the search from scratch below when no radius down to
+  // guess/warm_growth¹² fits.
+  Ball grow(std::uint32_t ci, Scratch& s, double limit = std::numeric_limits<double>::infinity(), double guess = 0) const {
+    if (guess > 0 && opt.warm_growth > 1) {
+      const double cap = std::min(0.5 * diagonal, limit);
+      const double R = std::min(guess, cap);
+      std::optional<Ball> ok = try_ball(ci, R, s);
+      double lo = 0, hi = 0;
+      if (ok) {
+        lo = R;
+        while (lo < cap) {
+          const double next = std::min(cap, lo * opt.warm_growth);
+          auto b = try_ball(ci, next, s);
+          if (!b) { hi = next; break; }
+          ok = b, lo = next;
+        }
+      } else {
+        hi = R;
+        for (int k = 0; k < 12 && !ok; ++k) {
+          const double next = hi / opt.warm_growth;
+          if (auto b = try_ball(ci, next, s)) ok = b, lo = next;
+          else hi = next;
+        }
+      }
+      if (ok) {
+        if (hi > 0)
+          for (int k = 0; k < opt.warm_bisection_steps; ++k) {
+            const double mid = std::sqrt(lo * hi);
+            if (auto b = try_ball(ci, mid, s)) ok = b, lo = mid;
+            else hi = mid;
+          }
+        return *ok;
+      }
+    }
     index.nearest(P[ci], opt.min_points, s.nb);
     double R = std::sqrt(s.nb.back().second) * 1.05;
     if (!(R > 0)) R = E;
@@ -198,6 +251,12 @@ struct Fitter {
         ok = try_ball(ci, R, s);
       }
       if (!ok) {
+        // Noise beyond E: the tangent plane at the centre in a ball that holds no other point, so
+        // the blend at this point mixes it only with patches checked against it (bunny at 1e-4:
+        // the best fit at R instead left 15 points beyond E, 2 of them with no hit at all).
+        index.nearest(P[ci], 2 * opt.min_points, s.nb);
+        for (const auto& [j, d2] : s.nb)
+          if (d2 > 0) return Ball{ci, 0.5 * std::sqrt(d2), Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, std::nullopt};
         R /= 0.7 * 0.7 * 0.7;
         auto any = try_ball(ci, R, s, true);
         // Last resort: the tangent plane at the centre.
@@ -251,6 +310,9 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
     throw InvalidInput(fmt::format("fit_slim: max_error must be positive and finite, got {}", o.max_error));
   if (!(o.normal_weight > 0)) throw InvalidInput(fmt::format("fit_slim: normal_weight must be > 0, got {}", o.normal_weight));
   if (!(o.radius_growth > 1)) throw InvalidInput(fmt::format("fit_slim: radius_growth must be > 1, got {}", o.radius_growth));
+  if (!(o.cover_fraction > 0 && o.cover_fraction <= 1))
+    throw InvalidInput(fmt::format("fit_slim: cover_fraction must lie in (0, 1], got {}", o.cover_fraction));
+  if (!(o.weight_floor >= 0)) throw InvalidInput(fmt::format("fit_slim: weight_floor must be ≥ 0, got {}", o.weight_floor));
   if (o.sharp && !(o.sharp_angle_deg > 0 && o.sharp_angle_deg < 180))
     throw InvalidInput(fmt::format("fit_slim: sharp_angle_deg must lie in (0, 180), got {}", o.sharp_angle_deg));
   if (o.min_points < 3) throw InvalidInput(fmt::format("fit_slim: min_points must be ≥ 3, got {}", o.min_points));
@@ -311,18 +373,29 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
   std::mt19937_64 rng(opt.seed);
 
   std::vector<Ball> balls;                  // evaluated candidates
-  std::vector<std::vector<std::uint32_t>> covers;  // points within ½R of each candidate
+  std::vector<std::vector<std::uint32_t>> covers;  // points within cover_fraction·R of each candidate
   std::vector<std::uint8_t> is_candidate(n, 0);
+  std::vector<Eigen::Vector3d> pilot_centres;
+  std::vector<double> pilot_R;
+  std::unique_ptr<PointIndex> pilot_index;
+  // Radius search warm starts: the nearest pilot candidate's radius (none while the pilots run).
   auto evaluate = [&](const std::vector<std::uint32_t>& centres, const std::vector<double>* caps) {
     const std::size_t first = balls.size();
     balls.resize(first + centres.size());
     covers.resize(first + centres.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.size(), 4), [&](const tbb::blocked_range<std::size_t>& r) {
       Fitter::Scratch s;
+      std::vector<Neighbour> pn;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        double guess = 0;
+        if (pilot_index) {
+          pilot_index->nearest(P[centres[k]], 1, pn);
+          guess = pilot_R[pn[0].first];
+        }
         // Repair rounds: no larger than the cap of this centre.
-        Ball b = fitter.grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity());
-        index.radius(P[centres[k]], 0.5 * b.R, s.nb);
+        Ball b = fitter.grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity(), guess);
+        // A ball that never reached E covers within ½R only.
+        index.radius(P[centres[k]], (b.is_bounded ? opt.cover_fraction : 0.5) * b.R, s.nb);
         auto& cov = covers[first + k];
         cov.clear();
         for (const auto& [p, d2] : s.nb)
@@ -340,7 +413,16 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
       std::min({n, opt.max_candidates, std::max(opt.min_candidates, std::size_t(opt.candidate_fraction * double(n)))});
   std::vector<std::uint32_t> centres(order.begin(), order.begin() + m0);
   for (auto c : centres) is_candidate[c] = 1;
-  evaluate(centres, nullptr);
+  if (const std::size_t pilot = opt.pilot_candidates; pilot > 0 && pilot < centres.size()) {
+    std::vector<std::uint32_t> first(centres.begin(), centres.begin() + pilot), rest(centres.begin() + pilot, centres.end());
+    evaluate(first, nullptr);
+    for (const auto& b : balls)
+      if (b.is_bounded) pilot_centres.push_back(P[b.centre]), pilot_R.push_back(b.R);
+    if (!pilot_centres.empty()) pilot_index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(pilot_centres));
+    evaluate(rest, nullptr);
+  } else {
+    evaluate(centres, nullptr);
+  }
   st.time_candidates = seconds_since(t0);
 
   // Greedy covering (lazy: a candidate's gain only decreases), adding uncovered points as new

@@ -2,6 +2,21 @@
 /// SLIM fitting (Ohtake, Belyaev, Alexa 2005; DESIGN §2, issue 4): sphere-bounded local quadrics
 /// fitted to an oriented point cloud so that every point lies within a bound E of the blended
 /// surface the renderer shows.
+///
+/// Deviations from the letter of issue 4, with the measurements behind them (bunny vertices with
+/// mesh normals, E = 1e-3 of the diagonal, every point within E of the blended surface each time):
+/// - Covering within 0.9·R, not ½R (cover_fraction). Each ball's quadric is checked against every
+///   point of its whole ball and the blend is a convex combination of the patches' hits, so a point
+///   near the rim is as well served as one near the centre; the final verification against the
+///   blended surface (and repair) is the safety net. With the fit as it was (floor 0.05, no
+///   reweighting): ½R 5,497 patches · 0.7R 2,863 · 0.8R 2,146 · 0.9R 1,672 · 0.95R 1,521; at 1.0·R
+///   a point on a ball's very rim got no usable sample and the bound broke (max 7.3e-2). With the
+///   fit below: ½R 3,706, 0.9R 1,107. Balls that never reached E keep ½R.
+/// - The fit weight is the SLIM weight w(r) plus a floor of 0.3 (was 0.05), and when a fit misses
+///   E the weights are multiplied by (0.1 + (eᵢ/e_max)²) and the fit repeated up to twice (Lawson's
+///   reweighting towards the minimax fit, as the bound is a maximum). At 0.9R: neither 1,582
+///   patches, floor only 1,385, reweighting only 1,159, both 1,107 (+0.5 s of CPU for the refits).
+///   Larger radii cost RMS: about 0.4·E instead of 0.18·E.
 #include <cstddef>
 #include <cstdint>
 
@@ -19,17 +34,33 @@ struct SlimFitOptions {
   /// μ: weight of the normal term ‖∇g(u) − n‖² against g(u)² in the local least squares
   /// (local coordinates u = (x − c)/R, so both terms are dimensionless).
   double normal_weight = 0.01;
+  /// Fit weight of a point at r = ‖p − c‖/R: the SLIM weight w(r) plus this floor (rim points are
+  /// checked against E too, so they must pull on the fit).
+  double weight_floor = 0.3;
+  /// When a ball's first fit misses E: up to this many refits with each fit point's weight
+  /// multiplied by (0.1 + (eᵢ/e_max)²), eᵢ its Taubin distance (towards the minimax fit).
+  int reweight_rounds = 2;
+  /// Greedy covering: a point is covered by a ball when it lies within cover_fraction·R of the
+  /// centre (issue 4 says ½R; see the file comment for why 0.9).
+  double cover_fraction = 0.9;
   /// A ball needs at least this many points for a general quadric; sparser balls use the
   /// height-function fallback.
   std::size_t min_points = 12;
   /// Candidate centres: this fraction of the points (at least min_candidates, at most all),
   /// drawn at random; uncovered points become candidates later as needed.
-  double candidate_fraction = 0.12;
+  double candidate_fraction = 0.08;
   std::size_t min_candidates = 400;
   std::size_t max_candidates = 8000;
-  /// Support radius search: geometric growth by this factor, then this many bisection steps.
+  /// Support radius search: geometric growth by this factor from the min_points-th neighbour
+  /// distance, then this many bisection steps (in log R).
   double radius_growth = 2.0;
   int bisection_steps = 3;
+  /// The first pilot_candidates candidates search from scratch; every later one starts at the
+  /// radius of the nearest pilot and grows or shrinks by warm_growth, then bisects
+  /// warm_bisection_steps times (about a third fewer fits for the same precision).
+  std::size_t pilot_candidates = 300;
+  double warm_growth = 1.25;
+  int warm_bisection_steps = 3;
   /// At most this many points of a ball enter its least squares (every point is still checked).
   std::size_t max_fit_points = 200;
   /// While searching R, at most this many points of a ball (evenly strided) are checked; the
@@ -76,8 +107,10 @@ struct SlimFitResult {
 /// Fits a SLIM surface to cloud (points in world units; normals optional, outward, unit —
 /// estimated with fit/normals.h when absent). kd-tree, candidate centres among the points, per
 /// candidate the largest support radius whose local quadric keeps the error ≤ E, greedy
-/// covering (a point is covered within ½R of a chosen centre), pruning of redundant balls, then
-/// verification against the blended surface and repair (TBB-parallel throughout).
+/// covering (a point is covered within cover_fraction·R of a chosen centre), pruning of redundant
+/// balls, then verification against the blended surface and repair (TBB-parallel throughout).
+/// A point that no ball around it fits within E (noise) gets its tangent plane in a ball holding
+/// no other point.
 /// \throws InvalidInput for fewer than 10 points, non-finite coordinates or normals, a normal
 ///         count that differs from the point count, zero normals, coincident or coplanar points,
 ///         or bad options.
