@@ -294,18 +294,21 @@ TEST_F(GlSlim, AccumulationPrecision16Against32Bit) {
   EXPECT_LE(full.c.depth_p99, half.c.depth_p99 + 1e-12);  // 16-bit depth sums are coarser
 }
 
-TEST_F(GlSlim, FittedBunnyMatchesTheCpuBlend) {
-  const std::filesystem::path path = std::filesystem::path(QUADRIX_DATASETS) / "meshes" / "bunny.ply";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
-  const Model m = fit_slim(read_points(path), {.max_error = 1e-3}).model;
-  for (const double az : {0.0, 120.0, 250.0}) {
-    SCOPED_TRACE(az);
-    const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 15, .width = 256, .height = 256});
-    const Result r = run_slim(m, cam);
-    EXPECT_GT(r.c.covered, 6000);
-    EXPECT_GE(r.c.coverage_agreement, 0.995);
-    EXPECT_LE(r.c.normal_median_deg, 0.5);
-    EXPECT_EQ(r.cracks, 0);
+TEST_F(GlSlim, FittedBunnyAndArmadilloMatchTheCpuBlend) {
+  for (const char* name : {"bunny.ply", "armadillo.obj"}) {
+    const std::filesystem::path path = std::filesystem::path(QUADRIX_DATASETS) / "meshes" / name;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+    SCOPED_TRACE(name);
+    const Model m = fit_slim(read_points(path), {.max_error = 1e-3}).model;
+    for (const double az : {0.0, 120.0, 250.0}) {
+      SCOPED_TRACE(az);
+      const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 15, .width = 256, .height = 256});
+      const Result r = run_slim(m, cam);
+      EXPECT_GT(r.c.covered, 6000);
+      EXPECT_GE(r.c.coverage_agreement, 0.995);
+      EXPECT_LE(r.c.normal_median_deg, 0.5);
+      EXPECT_EQ(r.cracks, 0);
+    }
   }
 }
 
