@@ -63,6 +63,15 @@ std::pair<int, int> parse_size(const std::string& text) {
   return {w, h};
 }
 
+Rgb parse_rgb(const std::string& text, const std::string& option) {
+  int r = -1, g = -1, b = -1;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%d,%d,%d%c", &r, &g, &b, &tail) != 3 || r < 0 || r > 255 || g < 0 || g > 255 ||
+      b < 0 || b > 255)
+    throw CLI::ValidationError(option, fmt::format("expected R,G,B with components 0..255, got '{}'", text));
+  return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
+}
+
 bool progress_allowed(const CommonOptions& o) { return !o.quiet && ::isatty(STDERR_FILENO); }
 
 }  // namespace quadrix::cli

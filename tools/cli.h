@@ -12,6 +12,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/model.h"
+
 namespace quadrix::cli {
 
 /// Documented in the README; distinct per failure kind.
@@ -70,6 +72,10 @@ void add_common_options(CLI::App& app, CommonOptions& options);
 
 /// Parses "WxH" (e.g. 1024x768). \throws CLI::ValidationError.
 std::pair<int, int> parse_size(const std::string& text);
+
+/// Parses "R,G,B" with components 0..255 (option names the option in the message).
+/// \throws CLI::ValidationError.
+Rgb parse_rgb(const std::string& text, const std::string& option = "--colour");
 
 /// True when progress output is allowed (stderr is a terminal and not quiet).
 bool progress_allowed(const CommonOptions& options);

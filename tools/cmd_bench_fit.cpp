@@ -17,6 +17,7 @@
 #include "core/image.h"
 #include "core/log.h"
 #include "core/mesh_io.h"
+#include "core/model_io.h"
 #include "core/points_io.h"
 #include "fit/evaluate.h"
 #include "fit/normals.h"
@@ -168,6 +169,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     std::vector<std::string> models{"bunny", "armadillo", "kitten"};
     std::string out = ".";
     bool peers = true;
+    bool keep_models = false;
   };
   auto a = std::make_shared<Args>();
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
@@ -181,6 +183,9 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->capture_default_str();
   app->add_option("--out", a->out, "Folder for bench_fit.csv, bench_fit.json and bench_fit.png")->capture_default_str();
   app->add_flag("--peers,!--no-peers", a->peers, "Run OpenMesh decimation and CGAL Poisson on the same data");
+  app->add_flag("--keep-models", a->keep_models,
+                "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "
+                "e.g. for bench render --baseline-mesh");
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
     const fs::path out_dir(a->out);
     std::error_code ec;
@@ -231,6 +236,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
         const SlimFitResult fit = fit_slim(d.cloud, {.max_error = E});
         const SlimError se = evaluate_slim(fit.model, d.cloud, {.keep_per_point = true});
+        if (a->keep_models) write_model(fit.model, out_dir / fmt::format("{}_{:g}.qxm", d.name, E));
         const double Eabs = E * d.diagonal;
         const Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
                        fit.stats.time_total, se.count_above(Eabs)};
@@ -248,6 +254,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         if (a->peers && d.mesh) {
           log::info("bench fit: {}: OpenMesh decimation to {:g}", d.name, E);
           const peers::Decimation dec = peers::decimate_quadric(*d.mesh, Eabs);
+          if (a->keep_models) write_mesh(dec.mesh, out_dir / fmt::format("{}_{:g}_decimated.off", d.name, E));
           const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, dec.mesh);
           // Vertices on no face are outside what the Hausdorff bound tracks (the bunny has 1,113).
           std::vector<char> on_face(n, 0);

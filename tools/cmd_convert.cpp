@@ -12,20 +12,6 @@ namespace quadrix::cli {
 void add_convert_volume(CLI::App& convert, Commands& commands);
 void add_convert_skin(CLI::App& convert, Commands& commands);
 
-namespace {
-
-// "R,G,B" with components 0..255. \throws CLI::ValidationError.
-Rgb parse_colour(const std::string& text) {
-  int r = -1, g = -1, b = -1;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%d,%d,%d%c", &r, &g, &b, &tail) != 3 || r < 0 || r > 255 || g < 0 || g > 255 ||
-      b < 0 || b > 255)
-    throw CLI::ValidationError("--colour", fmt::format("expected R,G,B with components 0..255, got '{}'", text));
-  return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
-}
-
-}  // namespace
-
 void add_convert(CLI::App& root, Commands& commands) {
   // `convert` is only a group; main runs the leaf whose app parsed (its parent parses with it).
   auto* convert = root.add_subcommand("convert", "Convert meshes into quadric models");
@@ -46,7 +32,7 @@ void add_convert(CLI::App& root, Commands& commands) {
       ->check(CLI::Range(0.0, 1.0));
   app->add_flag("--skip-degenerate", a->options.skip_degenerate, "Skip zero-area faces instead of failing");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
-                        if (!a->colour.empty()) a->options.colour = parse_colour(a->colour);
+                        if (!a->colour.empty()) a->options.colour = parse_rgb(a->colour);
                         a->options.source = a->mesh;
                         const PolygonMesh mesh = read_mesh(a->mesh);
                         const double start = report.elapsed();

@@ -15,15 +15,6 @@
 namespace quadrix::cli {
 namespace {
 
-// "R,G,B" with components 0..255. \throws CLI::ValidationError.
-Rgb parse_rgb(const std::string& text) {
-  int r = -1, g = -1, b = -1;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%d,%d,%d%c", &r, &g, &b, &tail) != 3 || r < 0 || r > 255 || g < 0 || g > 255 ||
-      b < 0 || b > 255)
-    throw CLI::ValidationError("--colour", fmt::format("expected R,G,B with components 0..255, got '{}'", text));
-  return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
-}
 
 // "A,B,C" of three numbers. \throws CLI::ValidationError.
 template <typename T>

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "tests/support.h"
 #include <tbb/parallel_for.h>
 
 #include "convert/pdb.h"
@@ -32,26 +34,7 @@ using Eigen::Vector3d;
 
 const fs::path kData = fs::path(QUADRIX_DATASETS);
 
-class TempDir : public ::testing::Test {
-protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("quadrix_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  fs::path dir_;
-};
+using test_support::TempDir;
 
 // ---------------------------------------------------------------------------------------------
 // Readers

@@ -21,6 +21,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "tests/support.h"
 #include <tbb/parallel_for.h>
 
 #include "convert/tetmesh_io.h"
@@ -47,26 +49,7 @@ std::string fmt_double(double x) {
 // `"key": N` as nlohmann::json's dump(2) writes it.
 std::string fmt_count(const std::string& key, std::size_t n) { return key + ": " + std::to_string(n); }
 
-class TempDir : public ::testing::Test {
-protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("quadrix_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  fs::path write(const std::string& name, const std::string& bytes) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << bytes;
-    return p;
-  }
-  fs::path dir_;
-};
+using test_support::TempDir;
 
 // ---------------------------------------------------------------------------------------------
 // Readers
@@ -833,23 +816,8 @@ TEST(ConvertTetMesh, SphereDistanceConverges) {
 // ---------------------------------------------------------------------------------------------
 // Command line
 
-struct CmdResult {
-  int code = -1;
-  std::string out;
-};
-
-CmdResult quadrix_run(const std::string& args) {
-  const std::string cmd = std::string(QUADRIX_BINARY) + " " + args + " 2>&1";
-  CmdResult r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return r;
-}
+using test_support::CmdResult;
+CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
 
 std::string quoted(const fs::path& p) {
   std::string s(1, '\'');

@@ -1,6 +1,8 @@
 // Polygon mesh (OFF/OBJ/PLY), PNG and PFM I/O: real data sets, round trips, malformed files.
 #include <gtest/gtest.h>
 
+#include "tests/support.h"
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -46,27 +48,7 @@ void expect_valid(const PolygonMesh& mesh) {
   for (const auto& p : mesh.vertices) ASSERT_TRUE(p.allFinite());
 }
 
-/// A fresh folder per test, removed afterwards.
-class TempDir : public ::testing::Test {
-protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("quadrix_") + info->test_suite_name() + "_" + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  fs::path write_text(const std::string& name, const std::string& text) const {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-  fs::path dir_;
-};
+using test_support::TempDir;
 
 /// Expects a FormatError whose message names the file (and, if given, contains `also`).
 template <typename F>

@@ -1,5 +1,7 @@
 // End-to-end tests of the `quadrix` command: exit codes, messages, outputs written atomically.
 #include <gtest/gtest.h>
+
+#include "tests/support.h"
 #include <sys/wait.h>
 
 #include <array>
@@ -16,23 +18,8 @@ using namespace quadrix;
 using quadrix::test::ScratchDir;
 
 namespace {
-struct CmdResult {
-  int code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-CmdResult quadrix_run(const std::string& args) {
-  const std::string cmd = std::string(QUADRIX_BINARY) + " " + args + " 2>&1";
-  CmdResult r;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return r;
-}
+using test_support::CmdResult;
+CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 }  // namespace
