@@ -35,11 +35,11 @@
 
 namespace quadrix {
 
-enum class SkinTetrahedra { tetgen, cgal };
+enum class SkinTetrahedra { tetgen, cgal, regular };
 
 struct SkinOptions {
   double shrink = 0.5;                              ///< CGAL's shrink factor s, in (0, 1)
-  SkinTetrahedra tetrahedra = SkinTetrahedra::cgal;
+  SkinTetrahedra tetrahedra = SkinTetrahedra::regular;
   std::string source = "balls";                     ///< names the input in error messages
 };
 
@@ -57,6 +57,9 @@ struct SkinConversion {
   /// Largest |ours − CGAL value()| over the 10 nodes of every CGAL tetrahedron, relative to the
   /// largest |value| there and the tetrahedron's squared diameter.
   double max_quadric_disagreement = 0;
+  std::size_t mixed_tets = 0;            ///< tetrahedra of the mixed cells tested (regular mode)
+  std::size_t hidden_balls = 0;          ///< balls with no vertex in the regular triangulation (regular mode)
+  double triangulation_seconds = 0;      ///< regular triangulation and power centres (regular mode)
   double cgal_seconds = 0, tetgen_seconds = 0;
 };
 

@@ -16,6 +16,7 @@
 #include <CGAL/subdivide_skin_surface_mesh_3.h>
 #include <fmt/format.h>
 
+#include "convert/skin_detail.h"
 #include "convert/tetrahedralize.h"
 #include "core/bounds.h"
 #include "core/error.h"
@@ -24,14 +25,19 @@
 namespace quadrix {
 namespace {
 
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using namespace skin_detail;
 using Traits = CGAL::Skin_surface_traits_3<K>;
 using Skin = CGAL::Skin_surface_3<Traits>;
-using WeightedPoint = K::Weighted_point_3;
 using Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 
-Vector3d to_eigen(const K::Point_3& p) { return {p.x(), p.y(), p.z()}; }
+// Weighted points for Skin_surface_3, which grows them itself (weight r²/s).
+std::vector<WeightedPoint> weighted_points(const std::vector<Ball>& balls) {
+  std::vector<WeightedPoint> wp;
+  wp.reserve(balls.size());
+  for (const auto& b : balls) wp.emplace_back(K::Point_3(b.centre.x(), b.centre.y(), b.centre.z()), b.radius * b.radius);
+  return wp;
+}
 template <typename P>
 Vector3d exact_to_eigen(const P& p) {
   return {CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())};
@@ -64,75 +70,6 @@ std::vector<Skin::Vertex_handle> simplex_vertices(const Skin::Simplex& s) {
   return v;
 }
 
-// The skin quadric of a simplex in world coordinates as (centre p, symmetric Q, constant c):
-// value(x) = (x − p)ᵀQ(x − p) + c, the closed forms of CGAL's Skin_surface_quadratic_surface_3.h.
-struct SkinQuadric {
-  Vector3d p = Vector3d::Zero();
-  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();
-  double c = 0;
-
-  double value(const Vector3d& x) const { return (x - p).dot(Q * (x - p)) + c; }
-  // The quadric relative to the point g: f(y) = value(y + g).
-  Quadric relative_to(const Vector3d& g) const {
-    const Vector3d d = g - p;
-    Quadric q;
-    q.A = Q;
-    q.b = Q * d;
-    q.c = d.dot(Q * d) + c;
-    return q;
-  }
-};
-
-SkinQuadric skin_quadric(const std::vector<WeightedPoint>& w, double s) {
-  const K k;
-  SkinQuadric q;
-  const auto I = Eigen::Matrix3d::Identity();
-  switch (w.size()) {
-    case 1:
-      q.p = to_eigen(w[0].point());
-      q.Q = (1 - s) * I;
-      q.c = -s * (1 - s) * w[0].weight();
-      break;
-    case 2: {
-      q.p = to_eigen(k.construct_weighted_circumcenter_3_object()(w[0], w[1]));
-      q.c = s * (1 - s) * k.compute_squared_radius_smallest_orthogonal_sphere_3_object()(w[0], w[1]);
-      const Vector3d t = (to_eigen(w[0].point()) - to_eigen(w[1].point())).normalized();
-      q.Q = (1 - s) * I - t * t.transpose();
-      break;
-    }
-    case 3: {
-      q.p = to_eigen(k.construct_weighted_circumcenter_3_object()(w[0], w[1], w[2]));
-      q.c = s * (1 - s) * k.compute_squared_radius_smallest_orthogonal_sphere_3_object()(w[0], w[1], w[2]);
-      const Vector3d a = to_eigen(w[0].point()), b = to_eigen(w[1].point()), cc = to_eigen(w[2].point());
-      const Vector3d t = (b - a).cross(cc - a).normalized();
-      q.Q = t * t.transpose() - s * I;
-      break;
-    }
-    case 4:
-      q.p = to_eigen(k.construct_weighted_circumcenter_3_object()(w[0], w[1], w[2], w[3]));
-      q.c = s * (1 - s) * k.compute_squared_radius_smallest_orthogonal_sphere_3_object()(w[0], w[1], w[2], w[3]);
-      q.Q = -s * I;
-      break;
-    default: throw SolverError("skin: a simplex with no vertices");
-  }
-  return q;
-}
-
-// Bézier net of a quadric (relative to the centroid) over a tetrahedron: can it change sign?
-bool can_cross(const std::array<Vector3d, 4>& corners, const Quadric& q, const Vector3d& centroid) {
-  const Eigen::Matrix4d M = q.matrix();
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (int i = 0; i < 4; ++i)
-    for (int j = i; j < 4; ++j) {
-      const Eigen::Vector4d a = (Eigen::Vector4d() << corners[i] - centroid, 1.0).finished();
-      const Eigen::Vector4d b = (Eigen::Vector4d() << corners[j] - centroid, 1.0).finished();
-      const double v = a.dot(M * b);
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-  return lo <= 0 && hi >= 0;
-}
-
 struct MixedCell {
   std::vector<WeightedPoint> weighted;
   std::vector<int> balls;  // ball index per simplex vertex
@@ -142,19 +79,13 @@ struct MixedCell {
   bool crossed = false;
 };
 
-std::vector<WeightedPoint> weighted_points(const std::vector<Ball>& balls) {
-  std::vector<WeightedPoint> wp;
-  wp.reserve(balls.size());
-  for (const auto& b : balls) wp.emplace_back(K::Point_3(b.centre.x(), b.centre.y(), b.centre.z()), b.radius * b.radius);
-  return wp;
-}
-
 }  // namespace
 
 SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& options) {
   validate_balls(balls, options.source);
   const double s = options.shrink;
   if (!(s > 0 && s < 1)) throw InvalidInput(fmt::format("{}: shrink factor {} is outside (0, 1)", options.source, s));
+  if (options.tetrahedra == SkinTetrahedra::regular) return convert_skin_regular(balls, options);
   SkinConversion out;
   const auto t0 = Clock::now();
   const std::vector<WeightedPoint> wp = weighted_points(balls);
@@ -219,57 +150,9 @@ SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& o
   }
   out.cgal_seconds = seconds_since(t0);
 
-  // Colour of a tetrahedron: the simplex's ball nearest in power distance to its centroid.
-  const auto colour = [&](const MixedCell& m, const Vector3d& x) {
-    int best = m.balls[0];
-    double bd = std::numeric_limits<double>::infinity();
-    for (const int b : m.balls) {
-      const double d = (x - balls[b].centre).squaredNorm() - balls[b].radius * balls[b].radius;
-      if (d < bd) bd = d, best = b;
-    }
-    return balls[best].colour;
-  };
-  // The skin body lies inside the union of the balls (a convex combination of balls lies inside
-  // their union and shrinking only shrinks it), and inside a mixed cell only the balls of the
-  // cell's simplex take part: each tetrahedron is clipped to the box of those balls. The model's
-  // bounds, automatic framing and rasterised area then follow the molecule, not CGAL's bounding
-  // octahedron, and no tetrahedron is much larger than its patch (float precision on the GPU).
-  double size = 0;
-  {
-    Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const auto& b : balls) lo = lo.cwiseMin(b.centre), hi = hi.cwiseMax(b.centre);
-    size = (hi - lo).norm();
-  }
-  const auto emit_piece = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
-    // Slivers (corners coplanar on a cell face) hold no surface of positive area; the .qxm
-    // reader rejects them.
-    if (is_degenerate_tetrahedron(corners)) {  // the reader's test (1e-12 of diameter³)
-      ++out.slivers_skipped;
-      return;
-    }
-    TetPatch t{corners, {}, std::nullopt};
-    const Vector3d g = t.centroid();
-    const Quadric q = m.quadric.relative_to(g);
-    if (!can_cross(corners, q, g)) return;
-    t.quadric = q.normalized();
-    t.colour = colour(m, g);
-    out.model.tets.push_back(t);
-  };
+  PatchEmitter emitter(balls, out);
   const auto emit = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
-    Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    double rmax = 0;
-    for (const int b : m.balls) {
-      lo = lo.cwiseMin(balls[b].centre - Vector3d::Constant(balls[b].radius));
-      hi = hi.cwiseMax(balls[b].centre + Vector3d::Constant(balls[b].radius));
-      rmax = std::max(rmax, balls[b].radius);
-    }
-    const double margin = 1e-3 * std::max(rmax, 1e-3 * size);
-    lo -= Vector3d::Constant(margin), hi += Vector3d::Constant(margin);
-    bool inside = true;
-    for (const auto& c : corners) inside = inside && (c.array() >= lo.array()).all() && (c.array() <= hi.array()).all();
-    if (inside) return emit_piece(m, corners);
-    ++out.tets_clipped_to_box;
-    for (const auto& piece : clip_tetrahedron_to_box(corners, lo, hi)) emit_piece(m, piece);
+    emitter.emit(m.balls, m.quadric, corners);
   };
 
   std::vector<const MixedCell*> crossed;

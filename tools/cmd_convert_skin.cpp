@@ -15,7 +15,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   auto* app = convert.add_subcommand(
       "skin", "Skin surface of a ball set (.pdb, .cin, .xyzr) to tetrahedron-clipped quadrics (CGAL + TetGen)");
   struct Args {
-    std::string input, out, radii = "vdw", tetrahedra = "cgal";
+    std::string input, out, radii = "vdw", tetrahedra = "regular";
     double shrink = 0.5, radius_scale = 1.0;
   };
   auto a = std::make_shared<Args>();
@@ -30,9 +30,10 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   app->add_option("--radius-scale", a->radius_scale, "Multiply every radius by this factor (default 1)")
       ->check(CLI::PositiveNumber);
   app->add_option("--tetrahedra", a->tetrahedra,
-                  "Tetrahedra of the mixed cells: cgal (CGAL's triangulated mixed complex as is; default) or "
-                  "tetgen (re-tetrahedralise each crossed cell with TetGen)")
-      ->check(CLI::IsMember({"tetgen", "cgal"}));
+                  "Mixed cells and their tetrahedra: regular (our mixed complex over CGAL's regular "
+                  "triangulation, each cell split directly; default), cgal (CGAL Skin_surface_3's triangulated "
+                  "mixed complex as is) or tetgen (CGAL's cells re-tetrahedralised by TetGen)")
+      ->check(CLI::IsMember({"regular", "tetgen", "cgal"}));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const double t0 = report.elapsed();
                         const auto balls = read_balls(
@@ -40,7 +41,9 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                         const double read_seconds = report.elapsed() - t0;
                         SkinOptions o;
                         o.shrink = a->shrink;
-                        o.tetrahedra = a->tetrahedra == "cgal" ? SkinTetrahedra::cgal : SkinTetrahedra::tetgen;
+                        o.tetrahedra = a->tetrahedra == "cgal"      ? SkinTetrahedra::cgal
+                                       : a->tetrahedra == "tetgen" ? SkinTetrahedra::tetgen
+                                                                   : SkinTetrahedra::regular;
                         o.source = a->input;
                         const double t1 = report.elapsed();
                         SkinConversion conv = convert_skin(balls, o);
@@ -56,7 +59,8 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                         meta["mixed_cells"] = fmt::format("{}", conv.mixed_cells);
                         meta["mixed_cells_crossed"] = fmt::format("{}", conv.mixed_cells_crossed);
                         meta["tetrahedra"] = a->tetrahedra;
-                        meta["quadric_disagreement"] = fmt::format("{:.3g}", conv.max_quadric_disagreement);
+                        if (o.tetrahedra != SkinTetrahedra::regular)  // checked against CGAL's value()
+                          meta["quadric_disagreement"] = fmt::format("{:.3g}", conv.max_quadric_disagreement);
                         write_model(conv.model, a->out);
                         report.json["convert"] = {{"kind", "skin"},
                                                   {"input", a->input},
@@ -70,6 +74,9 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                                                   {"cgal_tets", conv.cgal_tets},
                                                   {"cgal_tets_crossed", conv.cgal_tets_crossed},
                                                   {"tetgen_tets", conv.tetgen_tets},
+                                                  {"mixed_tets", conv.mixed_tets},
+                                                  {"hidden_balls", conv.hidden_balls},
+                                                  {"triangulation_seconds", conv.triangulation_seconds},
                                                   {"tets_clipped_to_box", conv.tets_clipped_to_box},
                                                   {"slivers_skipped", conv.slivers_skipped},
                                                   {"tetgen_failed_cells", conv.tetgen_failed_cells},
