@@ -1,31 +1,37 @@
 #pragma once
 /// Skin surfaces of ball sets → tetrahedron-clipped quadrics ([Stoll06] §5.1.2; Edelsbrunner's
-/// skin surface as built by CGAL `Skin_surface_3`, convert/skin_cgal.cpp).
+/// skin surface, as CGAL `Skin_surface_3` defines it: balls grown to weight r²/s, shrink s).
 ///
-/// CGAL builds the mixed complex of the balls' regular triangulation and triangulates it
-/// (`triangulated_mixed_complex()`): every mixed cell is a convex polyhedron carrying one quadric,
-/// and every tetrahedron of the triangulated complex knows the simplex of its mixed cell. CGAL keeps
-/// the quadric's coefficients private, so we recompute them from the simplex with the closed forms
-/// of CGAL's `Skin_surface_quadratic_surface_3.h` (weighted circumcentre p, c = s(1−s)·radius² of
-/// the smallest orthogonal sphere, Q from the simplex's direction) and check them against CGAL's
-/// `value()` at the 10 quadratic nodes of every tetrahedron (max_quadric_disagreement).
+/// Every simplex δ of the balls' regular triangulation and its dual power-diagram face ν span a
+/// mixed cell (1−s)δ + sν, a convex polyhedron carrying one quadric: the closed forms of CGAL's
+/// `Skin_surface_quadratic_surface_3.h` (weighted circumcentre p, c = s(1−s)·radius² of the
+/// smallest orthogonal sphere, Q from the simplex's direction).
 ///
-/// Tetrahedra: CGAL's triangulated mixed complex already splits every mixed cell into tetrahedra,
-/// and SkinTetrahedra::cgal (the default) uses them as they are. With SkinTetrahedra::tetgen the tetrahedra of each crossed mixed cell are merged
-/// back into the cell (the convex hull of their corners) and the cell is tetrahedralised again by
-/// TetGen (convert/tetrahedralize.h: validated, in a child process; a cell TetGen aborts on keeps
-/// CGAL's tetrahedra and is counted in tetgen_failed_cells). Known issue: TetGen's output for
-/// cells with (nearly) coplanar boundary points contains flat tetrahedra, which are skipped, and
-/// a few CGAL mesh vertices then fall outside every kept tetrahedron (see tests/convert/test_skin.cpp).
+/// Three ways to the tetrahedra (SkinTetrahedra):
+/// - regular (default; convert/skin_regular.cpp): our own mixed complex over CGAL's
+///   `Regular_triangulation_3`. δ and ν span orthogonal complementary spaces, so each cell is the
+///   product of the scaled simplex and the scaled dual face and splits into tetrahedra directly
+///   (fans and prisms). Cells are visited one at a time and only tetrahedra the surface can cross
+///   are kept: 1aon (58,870 atoms) in 13 s and 2.4 GB.
+/// - cgal (convert/skin_cgal.cpp): CGAL's `triangulated_mixed_complex()` as is; the quadrics are
+///   checked against CGAL's `value()` at the 10 quadratic nodes of every tetrahedron
+///   (max_quadric_disagreement). CGAL triangulates every cell first: 5.8 GB for 5,684 atoms.
+/// - tetgen: CGAL's crossed cells (the convex hull of their tetrahedra's corners) tetrahedralised
+///   again by TetGen (convert/tetrahedralize.h: validated, in a child process; a cell TetGen aborts
+///   on keeps CGAL's tetrahedra and is counted in tetgen_failed_cells). Known issue: TetGen's
+///   output for cells with (nearly) coplanar boundary points contains flat tetrahedra, which are
+///   skipped, and a few CGAL mesh vertices then fall outside every kept tetrahedron.
+/// tests/convert/test_skin.cpp renders all three against each other and checks them against
+/// CGAL's own mesh of the skin (`mesh_skin_surface_3`).
 ///
 /// Clipped: a tetrahedron reaching outside the box of its simplex's balls (always those of the
 /// outer, unbounded mixed cells) is cut to that box (core/bounds.h clip_tetrahedron_to_box); in a
 /// mixed cell the skin lies inside the union of the simplex's balls, so no surface is lost.
 ///
-/// Skipped: mixed cells of CGAL's bounding-octahedron vertices (weight −1), and tetrahedra whose
-/// Bézier control net of the quadric (b_ij = p̃ᵢᵀQ̃p̃ⱼ) has one strict sign (the surface cannot
-/// cross them). Colour: the CPK colour of the simplex's ball nearest (in power distance) to the
-/// tetrahedron's centroid.
+/// Skipped: mixed cells of the bounding-octahedron vertices (weight −1, as CGAL adds them), and
+/// tetrahedra whose Bézier control net of the quadric (b_ij = p̃ᵢᵀQ̃p̃ⱼ) has one strict sign (the
+/// surface cannot cross them). Colour: the CPK colour of the simplex's ball nearest (in power
+/// distance) to the tetrahedron's centroid.
 #include <cstddef>
 #include <string>
 #include <vector>

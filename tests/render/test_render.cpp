@@ -191,19 +191,22 @@ TEST_F(GlRender, ConvertedQuadMeshesMatchTheCpuReference) {
 }
 
 TEST_F(GlRender, SkinSurfacesMatchTheCpuReference) {
-  // Molecules through quadrix convert skin (CGAL mixed complex), GL against the CPU reference.
+  // Molecules through quadrix convert skin (our mixed complex, and CGAL's triangulated one), GL
+  // against the CPU reference.
   for (const char* name : {"caffeine.cin", "molecule_tunnel.cin"}) {
-    const std::filesystem::path path = std::filesystem::path(QUADRIX_DATASETS) / "balls" / name;
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
-    SCOPED_TRACE(name);
-    const Model m = convert_skin(read_balls(path)).model;
-    ASSERT_GT(m.tets.size(), 100u);
-    for (const bool cull : {true, false})
-      for (const double az : {30.0, 200.0}) {
-        SCOPED_TRACE(testing::Message() << "cull=" << cull << " azimuth=" << az);
-        const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 25, .width = 240, .height = 240});
-        expect_accurate(run(m, cam, cull), 3000);
-      }
+    for (const auto mode : {SkinTetrahedra::regular, SkinTetrahedra::cgal}) {
+      const std::filesystem::path path = std::filesystem::path(QUADRIX_DATASETS) / "balls" / name;
+      if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+      SCOPED_TRACE(testing::Message() << name << (mode == SkinTetrahedra::cgal ? " (CGAL tetrahedra)" : ""));
+      const Model m = convert_skin(read_balls(path), {.tetrahedra = mode}).model;
+      ASSERT_GT(m.tets.size(), 100u);
+      for (const bool cull : {true, false})
+        for (const double az : {30.0, 200.0}) {
+          SCOPED_TRACE(testing::Message() << "cull=" << cull << " azimuth=" << az);
+          const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 25, .width = 240, .height = 240});
+          expect_accurate(run(m, cam, cull), 3000);
+        }
+    }
   }
 }
 
