@@ -81,6 +81,9 @@ MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const 
                              to_cgal(mesh.vertices[vs[k + 1]]));
   }
   Tree tree(triangles.begin(), triangles.end());
+  // Build the tree and its distance kd-tree here, before the parallel queries (CGAL builds both
+  // lazily on the first query otherwise).
+  tree.build();
   tree.accelerate_distance_queries();
   struct Sum {
     double max = 0, sq = 0;
