@@ -77,6 +77,38 @@ std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> split_normals(std::sp
   return std::pair{a, b};
 }
 
+// Nested random subsamples of the cloud (level k holds n/4^k points), each with its own kd-tree:
+// a large ball's fit and check use at most max_fit_points and max_check_points of its points, so
+// its radius query can run on the coarsest level that still returns max_check_points, not on
+// all n (1M torus points: balls of 10⁵ points, queried ~10 times per candidate).
+struct Subsamples {
+  struct Level {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::uint32_t> ids;  // into the full cloud
+    std::unique_ptr<PointIndex> index;
+    double scale = 1;  // full-cloud points per point of this level
+  };
+  std::vector<Level> levels;  // coarsest first; the full cloud is not among them
+
+  Subsamples(const std::vector<Eigen::Vector3d>& P, std::size_t min_points, std::uint64_t seed) {
+    const std::size_t n = P.size();
+    if (n / 4 < min_points) return;
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
+    std::mt19937_64 rng(seed ^ 0x5eed5eedULL);
+    std::shuffle(order.begin(), order.end(), rng);
+    for (std::size_t m = n / 4; m >= min_points; m /= 4) {
+      Level l;
+      l.ids.assign(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(m));
+      l.points.reserve(m);
+      for (const auto i : l.ids) l.points.push_back(P[i]);
+      l.index = std::make_unique<PointIndex>(l.points);
+      l.scale = double(n) / double(m);
+      levels.insert(levels.begin(), std::move(l));
+    }
+  }
+};
+
 struct Fitter {
   const std::vector<Eigen::Vector3d>& P;
   const std::vector<Eigen::Vector3d>& N;
@@ -90,11 +122,28 @@ struct Fitter {
     std::vector<Eigen::Vector3d> u, n, fu, fn;
     std::vector<double> fw, fe;
   };
+  const Subsamples* subsamples = nullptr;
+
+  // The points of ball (c, R) into s.nb (full-cloud ids): from the coarsest subsample that holds
+  // at least max_check_points of them, else from the whole cloud. Returns the estimated number of
+  // cloud points in the ball.
+  std::size_t ball_points(const Eigen::Vector3d& c, double R, Scratch& s) const {
+    if (subsamples)
+      for (const auto& l : subsamples->levels) {
+        l.index->radius(c, R, s.nb);
+        if (s.nb.size() >= opt.max_check_points) {
+          for (auto& [id, d2] : s.nb) id = l.ids[id];
+          return static_cast<std::size_t>(double(s.nb.size()) * l.scale);
+        }
+      }
+    index.radius(c, R, s.nb);
+    return s.nb.size();
+  }
 
   // Fits and checks one ball (c, R); the fit with the smaller error when both kinds are tried.
   std::optional<Ball> try_ball(std::uint32_t ci, double R, Scratch& s, bool accept_any = false) const {
     const Eigen::Vector3d& c = P[ci];
-    index.radius(c, R, s.nb);
+    const std::size_t in_ball = ball_points(c, R, s);
     const std::size_t m = s.nb.size();
     s.u.resize(m);
     s.n.resize(m);
@@ -132,7 +181,7 @@ struct Fitter {
       const double err = std::max(e.max_taubin, e.max_probe);
       if (!(e.within || accept_any) || (best && !(err < best_err))) return e.within;
       best_err = err;
-      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, m, std::nullopt};
+      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, in_ball, std::nullopt};
       return e.within && err <= bound;
     };
     if (m >= opt.min_points) {
@@ -368,7 +417,10 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
 
   t0 = Clock::now();
   const PointIndex index(P);
+  const Subsamples subsamples(P, 4 * opt.max_check_points, opt.seed);
   Fitter fitter{P, N, index, opt, E, opt.probe_factor * E};
+  fitter.subsamples = &subsamples;
+  st.subsample_levels = subsamples.levels.size();
   fitter.diagonal = st.diagonal;
   std::mt19937_64 rng(opt.seed);
 
@@ -623,6 +675,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
   md["points"] = std::to_string(n);
   md["patches"] = std::to_string(st.patches);
   md["candidates"] = std::to_string(st.candidates);
+  md["subsample_levels"] = std::to_string(st.subsample_levels);
   md["height_patches"] = std::to_string(st.height_patches);
   if (opt.sharp) md["clipped_patches"] = std::to_string(st.clipped_patches);
   md["measured_max_error"] = num(st.max_blend);

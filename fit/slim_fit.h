@@ -64,7 +64,10 @@ struct SlimFitOptions {
   /// At most this many points of a ball enter its least squares (every point is still checked).
   std::size_t max_fit_points = 200;
   /// While searching R, at most this many points of a ball (evenly strided) are checked; the
-  /// final verification against the blended surface checks every point and repairs.
+  /// final verification against the blended surface checks every point and repairs. Clouds of
+  /// more than 4 × 4 × max_check_points points also get nested random subsamples (n/4, n/16, …
+  /// down to 4 × max_check_points), and a ball's points come from the coarsest one that holds
+  /// max_check_points of them.
   std::size_t max_check_points = 3000;
   /// Probe height h for the blended-surface check, in units of E (rays start at p + h·n).
   double probe_factor = 4.0;
@@ -95,6 +98,7 @@ struct SlimFitStats {
   double max_blend = 0, rms_blend = 0;    ///< blended surface vs every point (fit/evaluate.h), world units
   std::size_t blend_failures = 0;    ///< points still farther than E from the blended surface
   int repair_rounds = 0;
+  std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries
   // Wall-clock seconds per stage.
   double time_normals = 0, time_candidates = 0, time_cover = 0, time_verify = 0, time_total = 0;
 };

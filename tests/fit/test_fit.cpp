@@ -121,6 +121,14 @@ TEST(FitSlim, EllipsoidIsAHandfulOfPatches) {
   EXPECT_LE(r.stats.patches, 30u);
 }
 
+TEST(FitSlim, LargeCloudFitsOnSubsamplesAndStaysWithinE) {
+  // 60k points: large balls take their fit and check points from nested random subsamples
+  // (n/4 = 15k ≥ 4 × max_check_points); the final verification still checks every point.
+  const auto r = fit_and_check(torus(60000, 1.0, 0.35, 21), 1e-3);
+  EXPECT_EQ(r.stats.subsample_levels, 1u);
+  EXPECT_GT(r.stats.patches, 4u);
+}
+
 TEST(FitSlim, TorusWithinE) {
   const auto r = fit_and_check(torus(8000, 1.0, 0.35, 3), 1e-3);
   EXPECT_GT(r.stats.patches, 4u);  // a torus is quartic: one quadric cannot do
