@@ -23,6 +23,7 @@ uniform vec3 u_target_minus_eye;   // (target − eye), from double
 uniform float u_target_distance;   // ‖target − eye‖: the target is at (0, 0, −distance) in eye space
 uniform int u_cull;        // per-quadric and per-fragment backface culling
 uniform int u_count_stats;
+uniform int u_indexed;
 
 out vec3 v_o;
 out vec3 v_dir;
@@ -39,7 +40,12 @@ flat out int v_id;
 const int kFace[12] = int[12](1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1);
 
 void main() {
-  Tet t = tets[gl_InstanceID];
+  // Indexed: 4 vertices per tetrahedron (gl_VertexID = 4·tet + corner) shared by its 4 faces
+  // through the element buffer, so each corner is shaded once, not three times. Instanced (the
+  // statistics frame): 12 vertices per instance, each counted exactly once.
+  int tet = u_indexed != 0 ? gl_VertexID >> 2 : gl_InstanceID;
+  int k = u_indexed != 0 ? gl_VertexID & 3 : kFace[gl_VertexID];
+  Tet t = tets[tet];
   mat3 A = mat3(t.q0.x, t.q0.w, t.q1.y,
                 t.q0.w, t.q0.y, t.q1.x,
                 t.q1.y, t.q1.x, t.q0.z);
@@ -64,7 +70,7 @@ void main() {
       if (f - dot(y, g) >= 0.0) { culled = false; break; }
     }
   }
-  if (u_count_stats != 0 && gl_VertexID == 0) {
+  if (u_count_stats != 0 && u_indexed == 0 && gl_VertexID == 0) {
     if (culled) atomicAdd(stats.culled, 1u); else atomicAdd(stats.drawn, 1u);
   }
   if (culled) {
@@ -72,7 +78,6 @@ void main() {
     return;
   }
 
-  int k = kFace[gl_VertexID];
   vec3 o = t.corner[k].xyz;
   vec3 rel = rel_centre + s * o;           // eye-relative world position of this corner
   vec3 eye_pos = u_view_rot * (centre_from_target + s * o) + vec3(0.0, 0.0, -u_target_distance);
