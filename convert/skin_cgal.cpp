@@ -140,7 +140,7 @@ SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& o
       }
     out.max_quadric_disagreement = std::max(out.max_quadric_disagreement, dmax / std::max(vmax, diam2));
     const Vector3d centroid = 0.25 * ((corners[0] + corners[1]) + (corners[2] + corners[3]));
-    if (!can_cross(corners, m.quadric.relative_to(centroid), centroid)) {
+    if (!quadric_may_vanish(corners, m.quadric.relative_to(centroid), centroid)) {
       m.tets.push_back(corners);  // keeps the cell's full vertex set for TetGen
       continue;
     }

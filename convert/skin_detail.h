@@ -37,13 +37,7 @@ struct SkinQuadric {
 };
 SkinQuadric skin_quadric(const std::vector<WeightedPoint>& simplex, double shrink);
 
-/// Can the quadric (relative to `centroid`) change sign over the tetrahedron? Its Bézier control
-/// net b_ij = p̃ᵢᵀQ̃p̃ⱼ bounds it: a net of one strict sign means no surface inside. With depth > 0
-/// a straddling net is refined by splitting the tetrahedron at its longest edge (up to 2^depth
-/// pieces), which converges to the exact answer.
-bool can_cross(const std::array<Eigen::Vector3d, 4>& corners, const Quadric& q, const Eigen::Vector3d& centroid,
-               int depth = 0);
-/// The refinement depth patches are kept with.
+/// The refinement depth of quadric_may_vanish (core/bounds.h) patches are kept with.
 inline constexpr int kCrossingDepth = 6;
 
 /// Turns the tetrahedra of a mixed cell into patches of `out.model`: clipped to the box of the

@@ -23,6 +23,7 @@
 
 #include "convert/tetmesh_io.h"
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -600,6 +601,9 @@ Quadric patch_quadric(const std::array<Vector3d, 4>& corners, const Vector3d& ce
   return Quadric::from_matrix(Q).normalized();
 }
 
+// Refinement depth of the quadratic patches' crossing test (core/bounds.h quadric_may_vanish).
+constexpr int kRefineDepth = 6;
+
 // Edge r–s of a tetrahedron (r < s) → its slot in the midpoint array: 01 02 03 12 13 23.
 constexpr int kEdgeSlot[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
 
@@ -633,6 +637,8 @@ std::optional<TetPatch> iso_patch(const std::array<Vector3d, 4>& corners, const 
     patch.quadric = lq.normalized();
   } else {
     patch.quadric = patch_quadric(corners, centroid, B, V);
+    // The net straddles V; refined nets (longest-edge splits) often do not: no surface inside.
+    if (!quadric_may_vanish(corners, patch.quadric, centroid, kRefineDepth)) return std::nullopt;
   }
   return patch;
 }

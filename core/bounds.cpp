@@ -2,6 +2,8 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <limits>
+#include <utility>
 
 namespace quadrix {
 
@@ -29,6 +31,54 @@ double Tetrahedron::diameter() const {
   for (int i = 0; i < 4; ++i)
     for (int j = i + 1; j < 4; ++j) d = std::max(d, (p_[i] - p_[j]).norm());
   return d;
+}
+
+namespace {
+
+using Eigen::Vector3d;
+
+// Range of the quadric's Bézier control net over a tetrahedron (corners relative to the centroid).
+std::pair<double, double> net_range(const std::array<Vector3d, 4>& y, const Eigen::Matrix4d& M) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector4d a = (Eigen::Vector4d() << y[i], 1.0).finished();
+    const Eigen::Vector4d Ma = M * a;
+    for (int j = i; j < 4; ++j) {
+      const double v = Ma.dot((Eigen::Vector4d() << y[j], 1.0).finished());
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  return {lo, hi};
+}
+
+// The net of each half of a tetrahedron split at its longest edge's midpoint is tighter: recurse
+// while a net straddles zero.
+bool net_can_cross(const std::array<Vector3d, 4>& y, const Eigen::Matrix4d& M, int depth) {
+  const auto [lo, hi] = net_range(y, M);
+  if (lo > 0 || hi < 0) return false;
+  if (depth == 0 || lo == 0 || hi == 0) return true;
+  int a = 0, b = 1;
+  double longest = -1;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j)
+      if (const double l = (y[i] - y[j]).squaredNorm(); l > longest) longest = l, a = i, b = j;
+  const Vector3d m = 0.5 * (y[a] + y[b]);
+  std::array<Vector3d, 4> half = y;
+  half[a] = m;
+  if (net_can_cross(half, M, depth - 1)) return true;
+  half = y;
+  half[b] = m;
+  return net_can_cross(half, M, depth - 1);
+}
+
+}  // namespace
+
+bool quadric_may_vanish(const std::array<Eigen::Vector3d, 4>& corners, const Quadric& q, const Eigen::Vector3d& origin,
+                        int depth) {
+  std::array<Eigen::Vector3d, 4> y;
+  for (int i = 0; i < 4; ++i) y[i] = corners[i] - origin;
+  return net_can_cross(y, q.matrix(), depth);
 }
 
 bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps) {

@@ -37,6 +37,14 @@ private:
   Eigen::Matrix3d inv_;  // maps x − p₀ to barycentric coordinates 1..3 (relative: keeps digits far from 0)
 };
 
+/// Can the quadric change sign inside the tetrahedron? q is relative to `origin` (f(y), y = x −
+/// origin; e.g. a TetPatch's centroid). Its quadratic Bézier control net over the tetrahedron,
+/// b_ij = ỹᵢᵀQ̃ỹⱼ, bounds it: a net of one strict sign means no zero inside. With depth > 0 a
+/// straddling net is refined by splitting the tetrahedron at its longest edge (up to 2^depth
+/// pieces), which converges to the exact answer from above (never false for a crossed one).
+bool quadric_may_vanish(const std::array<Eigen::Vector3d, 4>& corners, const Quadric& q, const Eigen::Vector3d& origin,
+                        int depth = 0);
+
 /// True when the tetrahedron is degenerate: |volume| ≤ rel_eps · diameter³.
 bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = 1e-12);
 

@@ -219,3 +219,46 @@ TEST(Bounds, ClippedTetrahedraTileThePartInsideTheBox) {
   }
   EXPECT_GT(partial, 100);  // most trials really cut the tetrahedron
 }
+
+TEST(Bounds, QuadricMayVanishIsConservativeAndRefinementTightens) {
+  // Random tetrahedra and quadrics: wherever a sampled point shows both signs the test must say
+  // "may vanish" at every depth, deeper never says yes where shallower said no, and on the unit
+  // sphere the refined test drops tetrahedra the plain net keeps.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), b(0.0, 1.0);
+  int refined_away = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::array<Vector3d, 4> t;
+    for (auto& c : t) c = Vector3d(u(rng), u(rng), u(rng));
+    if (is_degenerate_tetrahedron(t, 1e-3)) continue;
+    Quadric q;
+    const Eigen::Matrix3d M = Eigen::Matrix3d::NullaryExpr([&] { return u(rng); });
+    q.A = trial % 2 ? Eigen::Matrix3d(M + M.transpose()) : Eigen::Matrix3d::Identity();
+    q.b = trial % 2 ? Vector3d(u(rng), u(rng), u(rng)) : Vector3d::Zero();
+    q.c = trial % 2 ? u(rng) : -(0.3 + b(rng));  // odd: general; even: spheres about the origin
+    const Vector3d origin = 0.25 * (t[0] + t[1] + t[2] + t[3]);
+    const Quadric local = q.translated_to_origin(origin);  // the same function of y = x − origin
+    bool pos = false, neg = false;
+    for (int s = 0; s < 300; ++s) {
+      std::array<double, 5> k{0, b(rng), b(rng), b(rng), 1};
+      std::sort(k.begin() + 1, k.end() - 1);
+      const Vector3d x = (k[1] - k[0]) * t[0] + (k[2] - k[1]) * t[1] + (k[3] - k[2]) * t[2] + (k[4] - k[3]) * t[3];
+      const double f = local.eval(x - origin);
+      EXPECT_NEAR(f, q.eval(x), 1e-12);
+      pos = pos || f > 0, neg = neg || f < 0;
+    }
+    bool previous = true;
+    for (const int depth : {0, 2, 4, 6, 8}) {
+      const bool may = quadric_may_vanish(t, local, origin, depth);
+      if (pos && neg) {
+        EXPECT_TRUE(may) << "trial " << trial << " depth " << depth;
+      }
+      if (!previous) {
+        EXPECT_FALSE(may) << "trial " << trial << " depth " << depth;
+      }
+      refined_away += depth == 8 && !may && quadric_may_vanish(t, local, origin, 0);
+      previous = may;
+    }
+  }
+  EXPECT_GT(refined_away, 10);
+}

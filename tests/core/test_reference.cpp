@@ -100,7 +100,9 @@ TEST(Reference, HyperboloidTetsLieOnTheQuadricAndMatchAnalyticHits) {
         Hit h;
         const bool truth = intersect_quadric(q, r, 0, kInf, false, in_cube, h);
         ++total;
-        if (hit) EXPECT_LT(q.taubin_distance(hit->point), 1e-9);
+        if (hit) {
+          EXPECT_LT(q.taubin_distance(hit->point), 1e-9);
+        }
         if (truth == hit.has_value() && (!truth || std::abs(hit->t - h.t) < 1e-9 * h.t)) ++agree;
       }
     EXPECT_GE(agree, total * 995 / 1000) << kind;
