@@ -88,6 +88,7 @@ std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::
   std::vector<Ball> balls;
   std::map<std::string, int> unknown;
   int line_no = 0;
+  std::size_t waters = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -99,6 +100,13 @@ std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::
                                     line.size()));
     const char alt = line[16];
     if (alt != ' ' && alt != 'A') continue;
+    if (!o.water) {
+      const std::string residue = upper_trim(line.substr(17, 3));
+      if (residue == "HOH" || residue == "WAT" || residue == "DOD" || residue == "H2O") {
+        ++waters;
+        continue;
+      }
+    }
     Ball b;
     b.centre = {parse_field(line, 30, 8, where, "x"), parse_field(line, 38, 8, where, "y"),
                 parse_field(line, 46, 8, where, "z")};
@@ -111,6 +119,7 @@ std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::
   }
   for (const auto& [e, n] : unknown)
     log::warn("{}: {} atoms of unknown element '{}' get the default radius", path.string(), n, e);
+  if (waters > 0) log::info("{}: {} water atoms left out", path.string(), waters);
   return balls;
 }
 

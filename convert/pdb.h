@@ -33,6 +33,7 @@ RadiusTable parse_radius_table(std::string_view name);
 struct BallReadOptions {
   RadiusTable radii = RadiusTable::vdw;  ///< PDB only
   double radius_scale = 1.0;             ///< multiplies every radius (PDB, .cin, .xyzr)
+  bool water = true;                     ///< PDB: keep water molecules (residues HOH, WAT, DOD, H2O)
 };
 
 /// Radius and CPK colour of an element (upper-case symbol); unknown elements get the table's

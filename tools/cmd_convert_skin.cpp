@@ -17,6 +17,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   struct Args {
     std::string input, out, radii = "vdw", tetrahedra = "regular";
     double shrink = 0.5, radius_scale = 1.0;
+    bool no_water = false;
   };
   auto a = std::make_shared<Args>();
   app->add_option("INPUT", a->input, "Balls: PDB atoms (.pdb, .ent), weighted points (.cin: x y z r²) or .xyzr")
@@ -29,6 +30,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
       ->check(CLI::IsMember({"vdw", "covalent", "unit"}));
   app->add_option("--radius-scale", a->radius_scale, "Multiply every radius by this factor (default 1)")
       ->check(CLI::PositiveNumber);
+  app->add_flag("--no-water", a->no_water, "PDB: leave out water molecules (residues HOH, WAT, DOD, H2O)");
   app->add_option("--tetrahedra", a->tetrahedra,
                   "Mixed cells and their tetrahedra: regular (our mixed complex over CGAL's regular "
                   "triangulation, each cell split directly; default), cgal (CGAL Skin_surface_3's triangulated "
@@ -37,7 +39,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const double t0 = report.elapsed();
                         const auto balls = read_balls(
-                            a->input, {.radii = parse_radius_table(a->radii), .radius_scale = a->radius_scale});
+                            a->input, {.radii = parse_radius_table(a->radii), .radius_scale = a->radius_scale, .water = !a->no_water});
                         const double read_seconds = report.elapsed() - t0;
                         SkinOptions o;
                         o.shrink = a->shrink;
@@ -50,9 +52,9 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                         const double seconds = report.elapsed() - t1;
                         auto& meta = conv.model.metadata;
                         meta["producer"] = fmt::format("quadrix convert skin {} -o {} --shrink {:g} --radii {} "
-                                                       "--radius-scale {:g} --tetrahedra {}",
+                                                       "--radius-scale {:g} --tetrahedra {}{}",
                                                        a->input, a->out, a->shrink, a->radii, a->radius_scale,
-                                                       a->tetrahedra);
+                                                       a->tetrahedra, a->no_water ? " --no-water" : "");
                         meta["source"] = a->input;
                         meta["balls"] = fmt::format("{}", balls.size());
                         meta["shrink"] = fmt::format("{:g}", a->shrink);

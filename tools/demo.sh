@@ -55,7 +55,7 @@ if "$q" --help | grep -q "^  convert " && [ -n "$quads" ] && [ -f "$quads" ]; th
 fi
 
 if [ -n "$molecule" ] && [ -f "$molecule" ]; then
-  run convert skin "$molecule" -o "$out/molecule_skin.qxm" --report "$out/molecule_skin_convert.json"
+  run convert skin "$molecule" -o "$out/molecule_skin.qxm" --no-water --report "$out/molecule_skin_convert.json"
   run render "$out/molecule_skin.qxm" -o "$out/molecule_skin.png" --size 640x640 --azimuth 30 --elevation 20 \
     --report "$out/molecule_skin_render.json"
 fi

@@ -55,6 +55,15 @@ TEST_F(BallIo, SharedMoleculesAndBallFiles) {
   EXPECT_EQ(tii[0].centre, Vector3d(42.053, -9.336, 17.867));
   const auto cov = read_balls(kData / "molecules/1tii.pdb", {.radii = RadiusTable::covalent});
   EXPECT_DOUBLE_EQ(cov[0].radius, 0.71);
+  // --no-water: exactly the HOH atoms (residue name, columns 18-20) are left out.
+  std::ifstream in(kData / "molecules/1tii.pdb");
+  std::size_t waters = 0;
+  for (std::string line; std::getline(in, line);)
+    waters += (line.rfind("HETATM", 0) == 0 || line.rfind("ATOM  ", 0) == 0) && line.substr(17, 3) == "HOH";
+  ASSERT_GT(waters, 100u);
+  const auto dry = read_balls(kData / "molecules/1tii.pdb", {.water = false});
+  EXPECT_EQ(dry.size(), tii.size() - waters);
+  EXPECT_EQ(dry[0].centre, tii[0].centre);
 }
 
 TEST_F(BallIo, MalformedRecordsAreFormatErrorsWithLineNumbers) {
