@@ -309,8 +309,8 @@ void print_percentiles(const char* what, std::vector<double> d, double size) {
 
 // Our patch points lie on CGAL's subdivided, chord-limited mesh; CGAL's vertices lie on our
 // surface to its bisection tolerance, inside our tetrahedra.
-void expect_close_to_cgal_mesh(const TwoSided& d, double size) {
-  EXPECT_LT(d.ours_to_cgal, 2e-3 * size);
+void expect_close_to_cgal_mesh(const TwoSided& d, double size, double ours_to_cgal) {
+  EXPECT_LT(d.ours_to_cgal, ours_to_cgal * size);
   auto cd = d.cgal_distances;
   std::sort(cd.begin(), cd.end());
   ASSERT_FALSE(cd.empty());
@@ -320,7 +320,10 @@ void expect_close_to_cgal_mesh(const TwoSided& d, double size) {
 }
 
 struct MoleculeCheck {
-  int subdivisions = 2;   // of CGAL's reference mesh
+  int subdivisions = 3;   // of CGAL's reference mesh
+  // Bound on ours→CGAL (of the size): the issue's 1e-3 needs CGAL's mesh subdivided 3 times (its
+  // chords, not our surface, set this direction: CGAL→ours stays ~1e-5).
+  double ours_to_cgal = 1e-3;
   bool tetgen = true;     // TetGen mode too (one child process per crossed mixed cell: small molecules)
   bool cgal_mesh = true;  // CGAL's mesh_skin_surface_3 (well over 10 minutes for thousands of atoms)
 };
@@ -373,19 +376,19 @@ void check_molecule(const fs::path& file, MoleculeCheck check) {
               dr.cgal_vertices_outside, dc.ours_to_cgal / size, dc.cgal_to_ours / size, dc.cgal_vertices_outside);
   print_percentiles("regular", dr.cgal_distances, size);
   print_percentiles("CGAL tets", dc.cgal_distances, size);
-  expect_close_to_cgal_mesh(dr, size);
-  expect_close_to_cgal_mesh(dc, size);
+  expect_close_to_cgal_mesh(dr, size, check.ours_to_cgal);
+  expect_close_to_cgal_mesh(dc, size, check.ours_to_cgal);
   if (tg) {
     // TetGen mode (known issue, not asserted beyond this): flat TetGen tetrahedra are skipped and
     // leave a few CGAL vertices outside every kept tetrahedron.
     const TwoSided dt = compare_with_cgal(tg->model, mesh, size);
     std::printf("  TetGen tetrahedra: ours→CGAL %.3g, CGAL→ours %.3g of the size; %zu CGAL vertices outside\n",
                 dt.ours_to_cgal / size, dt.cgal_to_ours / size, dt.cgal_vertices_outside);
-    EXPECT_LT(dt.ours_to_cgal, 2e-3 * size);
+    EXPECT_LT(dt.ours_to_cgal, check.ours_to_cgal * size);
   }
 }
 
-TEST(ConvertSkin, CaffeineAgreesWithCgal) { check_molecule(kData / "balls/caffeine.cin", {.subdivisions = 3}); }
+TEST(ConvertSkin, CaffeineAgreesWithCgal) { check_molecule(kData / "balls/caffeine.cin", {}); }
 TEST(ConvertSkin, MoleculeTunnelAgreesWithCgal) { check_molecule(kData / "balls/molecule_tunnel.cin", {}); }
 TEST(ConvertSkin, Protein1tiiAgreesWithCgal) {
   // 5.7k atoms: our mixed complex against CGAL's triangulated one (~50 s and 5.8 GB). CGAL's own
@@ -395,7 +398,10 @@ TEST(ConvertSkin, Protein1tiiAgreesWithCgal) {
   if (!std::getenv("QUADRIX_SLOW_TESTS")) GTEST_SKIP() << "skipped under AddressSanitizer (set QUADRIX_SLOW_TESTS=1)";
 #endif
   check_molecule(kData / "molecules/1tii.pdb",
-                 {.subdivisions = 0, .tetgen = false, .cgal_mesh = std::getenv("QUADRIX_SLOW_TESTS") != nullptr});
+                 {.subdivisions = 0,
+                  .ours_to_cgal = 1e-2,  // CGAL's unsubdivided mesh: chords up to ~1% of the size
+                  .tetgen = false,
+                  .cgal_mesh = std::getenv("QUADRIX_SLOW_TESTS") != nullptr});
 }
 
 TEST(ConvertSkin, BadBallSetsAreInvalidInput) {
