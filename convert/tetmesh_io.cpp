@@ -28,15 +28,6 @@ std::string lower(std::string_view s) {
   return out;
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) throw IoError(fmt::format("cannot read '{}'", path.string()));
-  return std::move(s).str();
-}
-
 struct Token {
   std::string_view text;
   int line = 0;
@@ -137,7 +128,7 @@ std::optional<int> medit_skip_width(const std::string& kw) {
 
 TetMesh read_medit_mesh(const fs::path& path) {
   const std::string file = path.string();
-  const std::string text = read_text(path);
+  const std::string text = read_file(path);
   Tokens tok(text);
   TetMesh m;
   m.source = file;
@@ -285,7 +276,7 @@ TetMesh read_tetgen_mesh(const fs::path& path) {
     return *v;
   };
 
-  const std::string node_text = read_text(node), node_file = node.string();
+  const std::string node_text = read_file(node), node_file = node.string();
   const auto nodes = lines_of(node_text);
   if (nodes.empty()) throw FormatError(fmt::format("{}: empty file", node_file));
   const long long np = integer(node_file, nodes[0], 0, "point count");
@@ -328,7 +319,7 @@ TetMesh read_tetgen_mesh(const fs::path& path) {
     m.vertices.push_back(x);
   }
 
-  const std::string ele_text = read_text(ele), ele_file = ele.string();
+  const std::string ele_text = read_file(ele), ele_file = ele.string();
   const auto eles = lines_of(ele_text);
   if (eles.empty()) throw FormatError(fmt::format("{}: empty file", ele_file));
   const long long nt = integer(ele_file, eles[0], 0, "tetrahedron count");
@@ -383,7 +374,7 @@ void write_medit_mesh(const TetMesh& mesh, const fs::path& path) {
 
 std::vector<double> read_vertex_values(const fs::path& path, std::size_t vertex_count) {
   const std::string file = path.string();
-  const std::string text = read_text(path);
+  const std::string text = read_file(path);
   Tokens tok(text);
   std::vector<double> values;
   values.reserve(vertex_count);

@@ -55,15 +55,6 @@ bool ends_with(const fs::path& p, std::string_view suffix) {
   return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-std::string read_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) throw IoError(fmt::format("cannot read '{}'", path.string()));
-  return std::move(s).str();
-}
-
 // The whole decompressed content of a gzip file (or stream of gzip members).
 std::string read_gzip(const fs::path& path) {
   gzFile f = gzopen(path.string().c_str(), "rb");
@@ -237,7 +228,7 @@ VoxelType parse_voxel_type(std::string_view name) {
 }
 
 Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
-  std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_bytes(path);
+  std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_file(path);
   const std::string what = path.string();
   if (layout.header_bytes > bytes.size())
     throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what,
@@ -248,7 +239,7 @@ Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
 
 Volume read_nrrd(const fs::path& path) {
   const std::string what = path.string();
-  const std::string text = read_bytes(path);
+  const std::string text = read_file(path);
   if (text.rfind("NRRD000", 0) != 0)
     throw FormatError(fmt::format("{}: not a NRRD file (no NRRD000x magic on line 1)", what));
   std::optional<VoxelType> type;
@@ -351,7 +342,7 @@ Volume read_nrrd(const fs::path& path) {
     fs::path df = data_file;
     if (df.is_relative()) df = path.parent_path() / df;
     data_what = df.string();
-    data = read_bytes(df);
+    data = read_file(df);
   } else {
     if (data_start == std::string::npos)
       throw FormatError(fmt::format("{}: no 'data file' field and no attached data after a blank line", what));
@@ -389,7 +380,7 @@ Volume read_nrrd(const fs::path& path) {
 
 Volume read_inr(const fs::path& path) {
   const std::string what = path.string();
-  const std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_bytes(path);
+  const std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_file(path);
   if (bytes.rfind("#INRIMAGE-4#{", 0) != 0)
     throw FormatError(fmt::format("{}: not an INRIMAGE-4 file (no '#INRIMAGE-4#{{' magic)", what));
   const std::size_t end = bytes.find("##}");

@@ -1,9 +1,10 @@
 #pragma once
 /// Outputs are written to a temporary file beside the target and renamed at the end,
-/// so a crash or an error never leaves a half-written file behind.
+/// so a crash or an error never leaves a half-written file behind. Inputs read whole.
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <string>
 
 namespace quadrix {
 
@@ -12,5 +13,9 @@ namespace quadrix {
 /// \throws IoError naming the path when the file cannot be created, written or renamed;
 ///         rethrows whatever write throws.
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
+
+/// The whole file as bytes. \throws IoError naming the path when it is missing, a folder,
+/// unopenable or unreadable (with the system's reason).
+std::string read_file(const std::filesystem::path& path);
 
 }  // namespace quadrix

@@ -52,18 +52,6 @@ std::string lower_extension(const fs::path& path) {
   return ext;
 }
 
-std::string read_text(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw IoError(fmt::format("{}: no such file", path.string()));
-  if (fs::is_directory(path, ec)) throw IoError(fmt::format("{}: is a folder, not a mesh file", path.string()));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
-  return std::move(buffer).str();
-}
-
 /// Silences OpenMesh's omerr/omlog (they write to stderr/stdout on their own) for one scope.
 /// The streams are process-wide, so concurrent OpenMesh use elsewhere is muted meanwhile.
 class OpenMeshQuiet {
@@ -407,7 +395,7 @@ PolygonMesh read_mesh(const std::filesystem::path& path) {
   const std::string ext = lower_extension(path);
   if (ext != ".off" && ext != ".obj" && ext != ".ply")
     throw FormatError(fmt::format("{}: unsupported mesh format '{}' (expected .off, .obj or .ply)", path.string(), ext));
-  const std::string text = read_text(path);
+  const std::string text = read_file(path);
   if (text.empty()) throw FormatError(fmt::format("{}: empty file", path.string()));
 
   PolygonMesh mesh = ext == ".off" ? parse_off(text, path) : ext == ".obj" ? parse_obj(text, path) : read_ply(text, path);
