@@ -149,7 +149,8 @@ const Model& ReferenceScene::model() const { return *impl_->model; }
 std::size_t ReferenceScene::bvh_node_count() const { return impl_->bvh.nodes().size(); }
 
 std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, double tmax,
-                                                const TraceOptions& options) const {
+                                                const TraceOptions& options, std::vector<SlimSample>* blended) const {
+  if (blended) blended->clear();
   const Model& m = *impl_->model;
   double best_t = tmax;  // nearest opaque (tet, glyph) hit so far
   Hit best;
@@ -193,6 +194,15 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
       out.normal = b->normal;
       out.kind = PrimitiveKind::slim;
       out.index = b->first_index;
+      if (blended) {
+        const double t_cut = [&] {
+          double c = kInf;
+          for (const auto& s : samples) c = std::min(c, s.hit.t + options.slim.offset * s.radius);
+          return c;
+        }();
+        for (const auto& s : samples)
+          if (s.hit.t <= t_cut && s.weight > 0.0) blended->push_back(s);
+      }
       const auto& colour = m.slims[b->first_index].colour;
       if (colour) out.colour = *colour;
       return out;

@@ -40,7 +40,9 @@ public:
   ReferenceScene& operator=(ReferenceScene&&) noexcept;
 
   /// Nearest surface along the ray within (tmin, tmax). The model must outlive the scene.
-  std::optional<SurfaceHit> trace(const Ray& ray, double tmin, double tmax, const TraceOptions& options) const;
+  /// With `blended`, the SLIM samples that made a blended hit are stored there (cleared first).
+  std::optional<SurfaceHit> trace(const Ray& ray, double tmin, double tmax, const TraceOptions& options,
+                                  std::vector<SlimSample>* blended = nullptr) const;
   const Model& model() const;
   std::size_t bvh_node_count() const;
 

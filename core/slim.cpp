@@ -1,6 +1,7 @@
 #include "core/slim.h"
 
 #include <cmath>
+#include <cstdlib>
 
 namespace quadrix {
 
@@ -33,6 +34,46 @@ bool intersect_slim_patch(const SlimPatch& patch, const Ray& ray, double tmin, d
   hit.gradient = h.gradient * inv_r;
   hit.front_facing = true;
   return true;
+}
+
+double slim_offset_of(const Model& model) {
+  if (const auto it = model.metadata.find("slim_offset"); it != model.metadata.end()) {
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end != it->second.c_str() && std::isfinite(v) && v >= 0.0) return v;
+  }
+  return SlimBlendOptions{}.offset;
+}
+
+void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurfaceSample>& out) {
+  constexpr int kRimRefine = 3;
+  constexpr double kRim2 = 0.8 * 0.8;
+  const int fine = grid * kRimRefine;
+  const double step = 2.0 / fine;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    for (int i = 0; i < fine; ++i)
+      for (int j = 0; j < fine; ++j) {
+        // Lines of the coarse lattice keep every root; the others only roots in the rim.
+        const bool coarse = i % kRimRefine == kRimRefine / 2 && j % kRimRefine == kRimRefine / 2;
+        Ray line;
+        line.origin = Eigen::Vector3d::Zero();
+        line.origin[a1] = -1.0 + (i + 0.5) * step;
+        line.origin[a2] = -1.0 + (j + 0.5) * step;
+        if (line.origin.squaredNorm() >= 1.0) continue;
+        line.dir = Eigen::Vector3d::Unit(axis);
+        const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
+        for (int k = 0; k < roots.count; ++k) {
+          const Eigen::Vector3d u = line.at(roots.t[k]);
+          const double r2 = u.squaredNorm();
+          if (!(r2 < 1.0) || (!coarse && r2 <= kRim2) || (patch.clip && !patch.clip->keeps(u))) continue;
+          const Eigen::Vector3d g = patch.local.gradient(u);
+          const double gn = g.norm();
+          if (!(gn > 0.0)) continue;
+          out.push_back({patch.centre + patch.radius * u, g / gn, std::sqrt(r2)});
+        }
+      }
+  }
 }
 
 std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options) {

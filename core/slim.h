@@ -3,6 +3,7 @@
 /// sphere-bounded quadric patches, as the GPU's three passes compute it (DESIGN §2, §6).
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "core/model.h"
 #include "core/ray.h"
@@ -21,6 +22,23 @@ struct SlimBlendOptions {
   /// blends every patch hit in front of the nearest pushed-back depth.
   double offset = 0.5;
 };
+
+/// The blend offset a model's error bound was certified with: its `slim_offset` metadata (written
+/// by the fitter), else SlimBlendOptions{}.offset. Renderers use it unless told otherwise.
+double slim_offset_of(const Model& model);
+
+/// A point of a patch's zero set inside its ball (and clip plane).
+struct SlimSurfaceSample {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< world units
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit ∇g (outward)
+  double r = 0;                                      ///< ‖point − centre‖ / R
+};
+
+/// Samples a patch's zero set: lines parallel to the three local axes through a grid × grid
+/// lattice over the ball's cross-section, every root (either facing) inside the ball and clip
+/// plane, appended to out; pieces wider than 2R/grid are always hit. The rim (r > 0.8), where a
+/// sheet leaves the ball and extrapolates farthest, is sampled on a 3× finer lattice.
+void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurfaceSample>& out);
 
 /// One patch's contribution to a ray: its hit and its weight.
 struct SlimSample {

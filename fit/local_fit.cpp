@@ -6,6 +6,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "core/ray.h"
+
 namespace quadrix {
 namespace {
 
@@ -144,50 +146,19 @@ std::optional<Quadric> fit_height_quadric(const LocalSample& s, double mu) {
   return g;
 }
 
-std::optional<double> first_front_hit(const Quadric& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                                      double tmin, double tmax) {
-  const Eigen::Vector3d Ad = g.A * d;
-  const double alpha = d.dot(Ad);
-  const double beta = Ad.dot(o) + g.b.dot(d);
-  const double gamma = g.eval(o);
-  double t[2];
-  int count = 0;
-  if (alpha == 0.0) {
-    if (beta == 0.0) return std::nullopt;
-    t[count++] = -gamma / (2.0 * beta);
-  } else {
-    const double disc = beta * beta - alpha * gamma;
-    if (disc < 0.0) return std::nullopt;
-    const double q = -(beta + std::copysign(std::sqrt(disc), beta));
-    if (q == 0.0) {
-      t[count++] = 0.0;  // β = γ = 0: double root at the origin
-    } else {
-      t[0] = q / alpha;
-      t[1] = gamma / q;
-      if (t[0] > t[1]) std::swap(t[0], t[1]);
-      count = 2;
-    }
-  }
-  for (int i = 0; i < count; ++i) {
-    if (!(t[i] > tmin && t[i] < tmax)) continue;
-    if (alpha * t[i] + beta >= 0.0) continue;  // back-facing ([Stoll06] eq. 14)
-    if ((o + t[i] * d).squaredNorm() > 1.0) continue;
-    return t[i];
-  }
-  return std::nullopt;
-}
-
 LocalError local_error(const Quadric& g, std::span<const Eigen::Vector3d> u, std::span<const Eigen::Vector3d> n,
                        double probe, double bound, double rim) {
   LocalError e;
   const double inf = std::numeric_limits<double>::infinity();
+  const auto in_ball = [](const Eigen::Vector3d& x) { return x.squaredNorm() <= 1.0; };
   for (std::size_t i = 0; i < u.size(); ++i) {
     const double tau = g.taubin_distance(u[i]);
     e.max_taubin = std::max(e.max_taubin, tau);
     e.sum_sq_taubin += tau * tau;
     double err = 0;
-    if (const auto t = first_front_hit(g, u[i] + probe * n[i], -n[i], 0.0, inf))
-      err = std::abs(*t - probe);
+    Hit hit;
+    if (intersect_quadric(g, Ray{u[i] + probe * n[i], -n[i]}, 0.0, inf, /*cull_backfaces=*/true, in_ball, hit))
+      err = std::abs(hit.t - probe);
     else if (u[i].squaredNorm() <= rim * rim)
       err = inf;
     e.max_probe = std::max(e.max_probe, err);

@@ -36,14 +36,9 @@ struct LocalError {
 };
 
 /// Checks g against every point: Taubin distance and the probe ray the blended-surface
-/// evaluation uses (fit/evaluate.h). probe: h in local units; bound: E in local units. A point
+/// evaluation uses (fit/evaluate.h), solved by core/ray.h. probe: h in local units; bound: E in local units. A point
 /// whose probe finds no in-ball hit fails unless it lies in the outer rim (‖u‖ > rim).
 LocalError local_error(const Quadric& g, std::span<const Eigen::Vector3d> u, std::span<const Eigen::Vector3d> n,
                        double probe, double bound, double rim = 0.97);
-
-/// First front-facing root t ∈ (tmin, tmax) of g(o + t·d) with ‖o + t·d‖ ≤ 1 (the ball), or
-/// nothing. Stable q-form roots ([Stoll06] eq. 7, DESIGN §5).
-std::optional<double> first_front_hit(const Quadric& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                                      double tmin, double tmax);
 
 }  // namespace quadrix

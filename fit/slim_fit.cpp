@@ -18,7 +18,9 @@
 
 #include "core/error.h"
 #include "core/log.h"
-#include "fit/blend_probe.h"
+#include "core/reference.h"
+#include "core/slim.h"
+#include "fit/data_surface.h"
 #include "fit/local_fit.h"
 #include "fit/normals.h"
 #include "fit/point_index.h"
@@ -109,7 +111,7 @@ struct Subsamples {
   }
 };
 
-struct Fitter {
+struct BallFitter {
   const std::vector<Eigen::Vector3d>& P;
   const std::vector<Eigen::Vector3d>& N;
   const PointIndex& index;
@@ -121,8 +123,50 @@ struct Fitter {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> u, n, fu, fn;
     std::vector<double> fw, fe;
+    std::vector<SlimSurfaceSample> zero;
   };
   const Subsamples* subsamples = nullptr;
+  const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
+
+  // The local form of the surface side: the patch's zero set inside its ball stays within
+  // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
+  // open boundary).
+  bool surface_ok(const Ball& b, Scratch& s) const {
+    s.zero.clear();
+    sample_slim_patch(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, opt.local_surface_grid, s.zero);
+    const double bound = opt.local_surface_factor * E;
+    for (const auto& z : s.zero)
+      if (!(data->distance(z.point) <= bound)) return false;
+    return true;
+  }
+
+  // A ball at (ci, R) whose points are within E and whose zero set passes surface_ok: the
+  // plain fit, else its centre's sheet alone, clipped (two sheets in one ball: a thin part, a
+  // gap, a crease).
+  std::optional<Ball> try_both_sides(std::uint32_t ci, double R, Scratch& s) const {
+    auto b = try_ball(ci, R, s);
+    if (!b) return std::nullopt;
+    if (surface_ok(*b, s)) return b;
+    if (b->clip) return std::nullopt;  // try_ball already tried the clipped sheet (--sharp)
+    auto c = try_sharp(ci, R, s);      // uses the check points try_ball left in s
+    if (c && surface_ok(*c, s)) return c;
+    return std::nullopt;
+  }
+
+  // grow, then shrink (×shrink_step) until the zero set passes surface_ok too; when nothing
+  // does, the smallest ball within E on the points side (verification reports the rest).
+  Ball grow_checked(std::uint32_t ci, Scratch& s, double limit, double guess) const {
+    Ball b = grow(ci, s, limit, guess);
+    if (!b.is_bounded || surface_ok(b, s)) return b;
+    if (auto c = try_both_sides(ci, b.R, s)) return *c;
+    double R = b.R;
+    for (int k = 0; k < opt.shrink_steps; ++k) {
+      R *= opt.shrink_step;
+      if (auto c = try_both_sides(ci, R, s)) return *c;
+      if (auto c = try_ball(ci, R, s)) b = *c;
+    }
+    return b;
+  }
 
   // The points of ball (c, R) into s.nb (full-cloud ids): from the coarsest subsample that holds
   // at least max_check_points of them, else from the whole cloud. Returns the estimated number of
@@ -385,312 +429,413 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
                                    n, off, diag));
 }
 
-}  // namespace
 
-SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& opt) {
-  const auto t_start = Clock::now();
-  validate(cloud, opt);
-  SlimFitResult result;
-  SlimFitStats& st = result.stats;
-  const auto& P = cloud.points;
-  const std::size_t n = P.size();
-  st.points = n;
-  Box3 box;
-  for (const auto& p : P) box.extend(p);
-  st.diagonal = box.diagonal();
-  const double E = opt.max_error_is_absolute ? opt.max_error : opt.max_error * st.diagonal;
-  st.max_error_abs = E;
+// The fit as named steps (PMP's decimation shape): candidates, covering, pruning, then rounds of
+// verification on both sides of the contract and repair of the patches at fault.
+class SlimFitter {
+public:
+  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options) : cloud_(cloud), opt_(options), P_(cloud.points) {}
 
-  // Normals: given (normalised) or estimated.
-  auto t0 = Clock::now();
-  std::vector<Eigen::Vector3d> N;
-  if (cloud.has_normals()) {
-    N.resize(n);
-    for (std::size_t i = 0; i < n; ++i) N[i] = cloud.normals[i].normalized();
-  } else {
-    N = estimate_normals(P, {.neighbours = opt.normal_neighbours}).normals;
-    st.normals_estimated = true;
-    log::info("fit_slim: the cloud has no normals; estimated them (PCA over {} neighbours, MST orientation)",
-              opt.normal_neighbours);
+  SlimFitResult run() {
+    const auto t_start = Clock::now();
+    validate(cloud_, opt_);
+    setup();
+    auto t0 = Clock::now();
+    initial_candidates();
+    st_.time_candidates = seconds_since(t0);
+    t0 = Clock::now();
+    cover(nullptr);
+    st_.patches_before_pruning = chosen_.size();
+    prune();
+    st_.time_cover = seconds_since(t0);
+    build_model();
+    t0 = Clock::now();
+    verify_and_repair();
+    st_.time_verify = seconds_since(t0);
+    st_.time_total = seconds_since(t_start);
+    finish();
+    return std::move(result_);
   }
-  st.time_normals = seconds_since(t0);
 
-  t0 = Clock::now();
-  const PointIndex index(P);
-  const Subsamples subsamples(P, 4 * opt.max_check_points, opt.seed);
-  Fitter fitter{P, N, index, opt, E, opt.probe_factor * E};
-  fitter.subsamples = &subsamples;
-  st.subsample_levels = subsamples.levels.size();
-  fitter.diagonal = st.diagonal;
-  std::mt19937_64 rng(opt.seed);
+private:
+  void setup() {
+    const std::size_t n = P_.size();
+    st_.points = n;
+    Box3 box;
+    for (const auto& p : P_) box.extend(p);
+    st_.diagonal = box.diagonal();
+    E_ = opt_.max_error_is_absolute ? opt_.max_error : opt_.max_error * st_.diagonal;
+    st_.max_error_abs = E_;
+    const auto t0 = Clock::now();
+    if (cloud_.has_normals()) {
+      N_.resize(n);
+      for (std::size_t i = 0; i < n; ++i) N_[i] = cloud_.normals[i].normalized();
+    } else {
+      N_ = estimate_normals(P_, {.neighbours = opt_.normal_neighbours}).normals;
+      st_.normals_estimated = true;
+      log::info("fit_slim: the cloud has no normals; estimated them (PCA over {} neighbours, MST orientation)",
+                opt_.normal_neighbours);
+    }
+    st_.time_normals = seconds_since(t0);
+    index_ = std::make_unique<PointIndex>(P_);
+    subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
+    data_ = std::make_unique<DataSurface>(DataSurface::from_points(P_, N_));
+    fitter_ = std::make_unique<BallFitter>(BallFitter{P_, N_, *index_, opt_, E_, opt_.probe_factor * E_});
+    fitter_->subsamples = subsamples_.get();
+    fitter_->data = data_.get();
+    fitter_->diagonal = st_.diagonal;
+    st_.subsample_levels = subsamples_->levels.size();
+    order_.resize(n);
+    std::iota(order_.begin(), order_.end(), 0u);
+    std::mt19937_64 rng(opt_.seed);
+    std::shuffle(order_.begin(), order_.end(), rng);
+    covered_.assign(n, 0);
+    uncovered_ = n;
+    cap_.assign(n, std::numeric_limits<double>::infinity());
+  }
 
-  std::vector<Ball> balls;                  // evaluated candidates
-  std::vector<std::vector<std::uint32_t>> covers;  // points within cover_fraction·R of each candidate
-  std::vector<std::uint8_t> is_candidate(n, 0);
-  std::vector<Eigen::Vector3d> pilot_centres;
-  std::vector<double> pilot_R;
-  std::unique_ptr<PointIndex> pilot_index;
-  // Radius search warm starts: the nearest pilot candidate's radius (none while the pilots run).
-  auto evaluate = [&](const std::vector<std::uint32_t>& centres, const std::vector<double>* caps) {
-    const std::size_t first = balls.size();
-    balls.resize(first + centres.size());
-    covers.resize(first + centres.size());
+  // Fits a ball around each centre (TBB-parallel) and records the points it covers. Radius
+  // search warm-starts from the nearest pilot candidate; caps bound the radius (repair).
+  void evaluate(const std::vector<std::uint32_t>& centres, const std::vector<double>* caps) {
+    const std::size_t first = balls_.size();
+    balls_.resize(first + centres.size());
+    covers_.resize(first + centres.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, centres.size(), 4), [&](const tbb::blocked_range<std::size_t>& r) {
-      Fitter::Scratch s;
+      BallFitter::Scratch s;
       std::vector<Neighbour> pn;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
         double guess = 0;
-        if (pilot_index) {
-          pilot_index->nearest(P[centres[k]], 1, pn);
-          guess = pilot_R[pn[0].first];
+        if (pilot_index_) {
+          pilot_index_->nearest(P_[centres[k]], 1, pn);
+          guess = pilot_R_[pn[0].first];
         }
-        // Repair rounds: no larger than the cap of this centre.
-        Ball b = fitter.grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity(), guess);
+        Ball b = fitter_->grow_checked(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity(), guess);
         // A ball that never reached E covers within ½R only.
-        index.radius(P[centres[k]], (b.is_bounded ? opt.cover_fraction : 0.5) * b.R, s.nb);
-        auto& cov = covers[first + k];
+        index_->radius(P_[centres[k]], (b.is_bounded ? opt_.cover_fraction : 0.5) * b.R, s.nb);
+        auto& cov = covers_[first + k];
         cov.clear();
         for (const auto& [p, d2] : s.nb)
-          if (b.owns((P[p] - P[centres[k]]) / b.R, N[p])) cov.push_back(p);
-        balls[first + k] = std::move(b);
+          if (b.owns((P_[p] - P_[centres[k]]) / b.R, N_[p])) cov.push_back(p);
+        balls_[first + k] = std::move(b);
       }
     });
-  };
-
-  // Initial candidates: a random fraction of the points.
-  std::vector<std::uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::shuffle(order.begin(), order.end(), rng);
-  const std::size_t m0 =
-      std::min({n, opt.max_candidates, std::max(opt.min_candidates, std::size_t(opt.candidate_fraction * double(n)))});
-  std::vector<std::uint32_t> centres(order.begin(), order.begin() + m0);
-  for (auto c : centres) is_candidate[c] = 1;
-  if (const std::size_t pilot = opt.pilot_candidates; pilot > 0 && pilot < centres.size()) {
-    std::vector<std::uint32_t> first(centres.begin(), centres.begin() + pilot), rest(centres.begin() + pilot, centres.end());
-    evaluate(first, nullptr);
-    for (const auto& b : balls)
-      if (b.is_bounded) pilot_centres.push_back(P[b.centre]), pilot_R.push_back(b.R);
-    if (!pilot_centres.empty()) pilot_index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(pilot_centres));
-    evaluate(rest, nullptr);
-  } else {
-    evaluate(centres, nullptr);
   }
-  st.time_candidates = seconds_since(t0);
 
-  // Greedy covering (lazy: a candidate's gain only decreases), adding uncovered points as new
-  // candidates until every point is covered.
-  t0 = Clock::now();
-  std::vector<std::uint8_t> covered(n, 0);
-  std::vector<std::uint8_t> chosen_flag;
-  std::vector<std::uint32_t> chosen;
-  std::size_t uncovered = n;
-  using Item = std::pair<std::size_t, std::uint32_t>;  // gain, candidate
-  std::priority_queue<Item> heap;
-  auto gain = [&](std::uint32_t b) {
+  // A random fraction of the points; the first pilot_candidates search their radius from scratch.
+  void initial_candidates() {
+    const std::size_t n = P_.size();
+    const std::size_t m0 = std::min(
+        {n, opt_.max_candidates, std::max(opt_.min_candidates, std::size_t(opt_.candidate_fraction * double(n)))});
+    std::vector<std::uint32_t> centres(order_.begin(), order_.begin() + static_cast<std::ptrdiff_t>(m0));
+    if (const std::size_t pilot = opt_.pilot_candidates; pilot > 0 && pilot < centres.size()) {
+      std::vector<std::uint32_t> first(centres.begin(), centres.begin() + static_cast<std::ptrdiff_t>(pilot)),
+          rest(centres.begin() + static_cast<std::ptrdiff_t>(pilot), centres.end());
+      evaluate(first, nullptr);
+      for (const auto& b : balls_)
+        if (b.is_bounded) pilot_centres_.push_back(P_[b.centre]), pilot_R_.push_back(b.R);
+      if (!pilot_centres_.empty())
+        pilot_index_ = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(pilot_centres_));
+      evaluate(rest, nullptr);
+    } else {
+      evaluate(centres, nullptr);
+    }
+  }
+
+  std::size_t gain(std::uint32_t b) const {
     std::size_t g = 0;
-    for (auto p : covers[b]) g += !covered[p];
+    for (auto p : covers_[b]) g += !covered_[p];
     return g;
-  };
-  auto run_greedy = [&](std::size_t from) {
-    chosen_flag.resize(balls.size(), 0);
-    for (std::size_t b = from; b < balls.size(); ++b) heap.push({gain(std::uint32_t(b)), std::uint32_t(b)});
-    while (uncovered > 0 && !heap.empty()) {
-      auto [g, b] = heap.top();
-      heap.pop();
+  }
+
+  void take(std::uint32_t b) {
+    chosen_.push_back(b);
+    chosen_flag_[b] = 1;
+    for (auto p : covers_[b])
+      if (!covered_[p]) covered_[p] = 1, --uncovered_;
+  }
+
+  // Greedy covering over candidates [from, end) (lazy: a candidate's gain only decreases).
+  void run_greedy(std::size_t from) {
+    chosen_flag_.resize(balls_.size(), 0);
+    for (std::size_t b = from; b < balls_.size(); ++b) heap_.push({gain(std::uint32_t(b)), std::uint32_t(b)});
+    while (uncovered_ > 0 && !heap_.empty()) {
+      auto [g, b] = heap_.top();
+      heap_.pop();
       if (g == 0) break;
       const std::size_t now = gain(b);
       if (now < g) {
-        if (now > 0) heap.push({now, b});
+        if (now > 0) heap_.push({now, b});
         continue;
       }
-      chosen.push_back(b);
-      chosen_flag[b] = 1;
-      for (auto p : covers[b])
-        if (!covered[p]) {
-          covered[p] = 1;
-          --uncovered;
-        }
+      take(b);
     }
-  };
-  auto add_uncovered_candidates = [&](std::size_t limit, const std::vector<double>* cap_of_point) {
-    std::vector<std::uint32_t> fresh;
-    std::vector<double> caps;
-    for (auto p : order)
-      if (!covered[p]) {
-        fresh.push_back(p);
-        if (cap_of_point) caps.push_back((*cap_of_point)[p]);
-        if (fresh.size() >= limit) break;
-      }
-    for (auto c : fresh) is_candidate[c] = 1;
-    const std::size_t from = balls.size();
-    evaluate(fresh, cap_of_point ? &caps : nullptr);
-    return from;
-  };
-  run_greedy(0);
-  while (uncovered > 0) {
-    const std::size_t limit = std::max<std::size_t>(64, uncovered / 16);
-    run_greedy(add_uncovered_candidates(limit, nullptr));
   }
 
-  // Drop balls whose ½R points are all covered by other chosen balls (smallest first).
-  std::vector<std::uint16_t> multiplicity(n, 0);
-  auto prune = [&]() {
-    std::fill(multiplicity.begin(), multiplicity.end(), 0);
-    for (auto b : chosen)
-      for (auto p : covers[b]) multiplicity[p] = std::uint16_t(std::min<int>(multiplicity[p] + 1, 60000));
-    std::sort(chosen.begin(), chosen.end(), [&](auto a, auto b) { return covers[a].size() < covers[b].size(); });
+  // Greedy covering, adding uncovered points as new candidates until every point is covered.
+  void cover(const std::vector<double>* cap_of_point) {
+    run_greedy(0);
+    while (uncovered_ > 0) {
+      const std::size_t limit = std::max<std::size_t>(64, uncovered_ / 16);
+      std::vector<std::uint32_t> fresh;
+      std::vector<double> caps;
+      for (auto p : order_)
+        if (!covered_[p]) {
+          fresh.push_back(p);
+          if (cap_of_point) caps.push_back((*cap_of_point)[p]);
+          if (fresh.size() >= limit) break;
+        }
+      const std::size_t from = balls_.size();
+      evaluate(fresh, cap_of_point ? &caps : nullptr);
+      run_greedy(from);
+    }
+  }
+
+  // Drops balls whose covered points are all covered by other chosen balls (smallest first).
+  void prune() {
+    std::vector<std::uint16_t> multiplicity(P_.size(), 0);
+    for (auto b : chosen_)
+      for (auto p : covers_[b]) multiplicity[p] = std::uint16_t(std::min<int>(multiplicity[p] + 1, 60000));
+    std::sort(chosen_.begin(), chosen_.end(), [&](auto a, auto b) { return covers_[a].size() < covers_[b].size(); });
     std::vector<std::uint32_t> kept;
-    for (auto b : chosen) {
-      const bool redundant = std::all_of(covers[b].begin(), covers[b].end(), [&](auto p) { return multiplicity[p] >= 2; });
+    for (auto b : chosen_) {
+      const bool redundant = std::all_of(covers_[b].begin(), covers_[b].end(), [&](auto p) { return multiplicity[p] >= 2; });
       if (redundant) {
-        for (auto p : covers[b]) --multiplicity[p];
-        chosen_flag[b] = 0;
+        for (auto p : covers_[b]) --multiplicity[p];
+        chosen_flag_[b] = 0;
       } else {
         kept.push_back(b);
       }
     }
-    chosen.swap(kept);
-  };
-  st.patches_before_pruning = chosen.size();
-  prune();
-  st.time_cover = seconds_since(t0);
+    chosen_.swap(kept);
+  }
 
-  auto build_model = [&]() {
-    result.model.slims.clear();
-    for (auto b : chosen) {
-      SlimPatch s;
-      s.centre = P[balls[b].centre];
-      s.radius = balls[b].R;
-      s.local = balls[b].g;
-      s.clip = balls[b].clip;
-      result.model.slims.push_back(std::move(s));
-    }
-  };
-  build_model();
+  void build_model() {
+    auto& slims = result_.model.slims;
+    slims.clear();
+    for (auto b : chosen_) slims.push_back(SlimPatch{P_[balls_[b].centre], balls_[b].R, balls_[b].g, balls_[b].clip, std::nullopt});
+    result_.model.metadata["slim_offset"] = fmt::format("{:.6g}", opt_.blend_offset);
+  }
 
-  // Verify against the blended surface; shrink the patches at fault and cover again.
-  t0 = Clock::now();
-  std::vector<double> err(n, 0.0);
-  const double h = opt.probe_factor * E;
-  std::vector<double> cap(n, std::numeric_limits<double>::infinity());  // radius cap per centre point
-  for (int round = 0;; ++round) {
-    const BlendProbe probe(result.model);
-    std::vector<std::uint8_t> at_fault(result.model.slims.size(), 0);
-    std::vector<std::uint32_t> failing;
+  // Points side: every point's probe against the blended surface (core/reference.h).
+  // Culprits: patches whose own hit in the blend is farther than E, or whose ball holds a
+  // point the blend misses.
+  std::size_t verify_points(const ReferenceScene& scene, const PointIndex& centres, std::vector<std::uint8_t>& at_fault) {
+    const std::size_t n = P_.size();
+    point_error_.assign(n, 0.0);
+    const double h = opt_.probe_factor * E_;
+    const auto& slims = result_.model.slims;
+    double max_radius = 0;
+    for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
+    TraceOptions trace;
+    trace.slim.offset = opt_.blend_offset;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-      std::vector<int> culprits;
+      std::vector<SlimSample> blended;
+      std::vector<Neighbour> near;
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        culprits.clear();
-        err[i] = probe.probe(P[i], N[i], h, E, &culprits);
-        for (int c : culprits) at_fault[c] = 1;  // benign race: every writer stores 1
+        const auto hit = scene.trace(Ray{P_[i] + h * N_[i], -N_[i]}, 0.0, kInf, trace, &blended);
+        if (!hit) {
+          point_error_[i] = kInf;
+          centres.radius(P_[i], max_radius, near);
+          for (const auto& [k, d2] : near)
+            if (d2 <= slims[k].radius * slims[k].radius) at_fault[k] = 1;  // benign race: all store 1
+          continue;
+        }
+        point_error_[i] = std::abs(hit->t - h);
+        if (point_error_[i] > E_)
+          for (const auto& s : blended)
+            if (std::abs(s.hit.t - h) > E_) at_fault[static_cast<std::size_t>(s.index)] = 1;
       }
     });
-    for (std::size_t i = 0; i < n; ++i)
-      if (!(err[i] <= E)) failing.push_back(std::uint32_t(i));
-    st.blend_failures = failing.size();
-    if (failing.empty() || round >= opt.repair_rounds) break;
-    ++st.repair_rounds;
-    log::debug("fit_slim: repair round {}: {} points beyond E", round + 1, failing.size());
-    // Remove the culprit patches; their centres may come back no larger than 0.7 R.
+    std::size_t failing = 0;
+    for (const double e : point_error_) failing += !(e <= E_);
+    return failing;
+  }
+
+  // Surface side: samples of every patch's zero set, each seen along its normal through the
+  // blend; the blended point must lie within surface_factor·E of the data. Culprits: the
+  // blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
+  std::size_t verify_surface(const ReferenceScene& scene, std::vector<std::uint8_t>& at_fault) {
+    const auto& slims = result_.model.slims;
+    const double bound = opt_.surface_factor * E_, local = opt_.local_surface_factor * E_;
+    const double h = opt_.surface_probe_factor * E_;
+    TraceOptions trace;
+    trace.slim.offset = opt_.blend_offset;
+    std::vector<std::vector<double>> errors(slims.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::vector<SlimSurfaceSample> zero;
+      std::vector<SlimSample> blended;
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        zero.clear();
+        sample_slim_patch(slims[k], opt_.verify_surface_grid, zero);
+        for (const auto& z : zero) {
+          const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
+          if (!hit) continue;
+          const double d = data_->distance(hit->point);
+          errors[k].push_back(d);
+          if (d <= bound) continue;
+          bool blamed = false;
+          for (const auto& s : blended)
+            if (data_->distance(s.hit.point) > local) at_fault[static_cast<std::size_t>(s.index)] = 1, blamed = true;
+          if (!blamed)
+            for (const auto& s : blended) at_fault[static_cast<std::size_t>(s.index)] = 1;
+        }
+      }
+    });
+    surface_error_.clear();
+    for (const auto& e : errors) surface_error_.insert(surface_error_.end(), e.begin(), e.end());
+    std::size_t failing = 0;
+    for (const double e : surface_error_) failing += e > bound;
+    return failing;
+  }
+
+  // Rounds of verification (both sides); the patches at fault are removed, their centres come
+  // back no larger than shrink_step·R, and the points they covered are covered again.
+  void verify_and_repair() {
+    for (int round = 0;; ++round) {
+      const ReferenceScene scene(result_.model);
+      std::vector<Eigen::Vector3d> centres;
+      for (const auto& s : result_.model.slims) centres.push_back(s.centre);
+      const PointIndex centre_index{std::span<const Eigen::Vector3d>(centres)};
+      std::vector<std::uint8_t> at_fault(result_.model.slims.size(), 0);
+      st_.blend_failures = verify_points(scene, centre_index, at_fault);
+      st_.surface_failures = opt_.check_surface ? verify_surface(scene, at_fault) : 0;
+      if ((st_.blend_failures == 0 && st_.surface_failures == 0) || round >= opt_.repair_rounds) break;
+      ++st_.repair_rounds;
+      log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E", round + 1,
+                 st_.blend_failures, st_.surface_failures, opt_.surface_factor);
+      repair(at_fault);
+      prune();
+      build_model();
+    }
+  }
+
+  void repair(const std::vector<std::uint8_t>& at_fault) {
     std::vector<std::uint32_t> keep;
-    for (std::size_t k = 0; k < chosen.size(); ++k) {
-      const auto b = chosen[k];
-      if (!at_fault[k] || balls[b].R <= 0) {
+    for (std::size_t k = 0; k < chosen_.size(); ++k) {
+      const auto b = chosen_[k];
+      if (!at_fault[k] || balls_[b].R <= 0) {
         keep.push_back(b);
         continue;
       }
-      chosen_flag[b] = 0;
-      cap[balls[b].centre] = std::min(cap[balls[b].centre], 0.7 * balls[b].R);
+      chosen_flag_[b] = 0;
+      cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], opt_.shrink_step * balls_[b].R);
     }
-    chosen.swap(keep);
-    std::fill(covered.begin(), covered.end(), 0);
-    uncovered = n;
-    for (auto b : chosen)
-      for (auto p : covers[b])
-        if (!covered[p]) {
-          covered[p] = 1;
-          --uncovered;
-        }
-    // Other points near failures that are centres of culprits get capped candidates first.
+    chosen_.swap(keep);
+    std::fill(covered_.begin(), covered_.end(), 0);
+    uncovered_ = P_.size();
+    for (auto b : chosen_)
+      for (auto p : covers_[b])
+        if (!covered_[p]) covered_[p] = 1, --uncovered_;
+    // Centres of culprits whose points are now uncovered come back first, capped.
     std::vector<std::uint32_t> again;
     std::vector<double> caps;
-    for (std::size_t i = 0; i < n; ++i)
-      if (std::isfinite(cap[i]) && !covered[i]) {
-        again.push_back(std::uint32_t(i));
-        caps.push_back(cap[i]);
-      }
-    const std::size_t from = balls.size();
+    for (std::size_t i = 0; i < P_.size(); ++i)
+      if (std::isfinite(cap_[i]) && !covered_[i]) again.push_back(std::uint32_t(i)), caps.push_back(cap_[i]);
+    const std::size_t from = balls_.size();
     evaluate(again, &caps);
-    for (std::size_t b = from; b < balls.size(); ++b) cap[balls[b].centre] = std::min(cap[balls[b].centre], balls[b].R);
-    // Re-covering must not regrow balls beyond their caps: candidates at capped points are
-    // evaluated with the cap.
-    chosen_flag.resize(balls.size(), 0);
+    for (std::size_t b = from; b < balls_.size(); ++b) cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
+    // Candidates larger than their centre's cap retire, so re-covering cannot regrow them.
+    chosen_flag_.resize(balls_.size(), 0);
     for (std::size_t b = 0; b < from; ++b)
-      if (!chosen_flag[b] && balls[b].R > cap[balls[b].centre]) covers[b].clear();  // retire
-    while (!heap.empty()) heap.pop();
-    run_greedy(0);
-    while (uncovered > 0) {
-      const std::size_t limit = std::max<std::size_t>(64, uncovered / 16);
-      run_greedy(add_uncovered_candidates(limit, &cap));
-    }
-    prune();
-    build_model();
+      if (!chosen_flag_[b] && balls_[b].R > cap_[balls_[b].centre]) covers_[b].clear();
+    while (!heap_.empty()) heap_.pop();
+    cover(&cap_);
   }
-  st.time_verify = seconds_since(t0);
 
-  // Statistics and metadata.
-  double sum_sq_blend = 0;
-  std::size_t finite = 0;
-  st.max_blend = 0;
-  for (double e : err) {
-    st.max_blend = std::max(st.max_blend, e);
-    if (std::isfinite(e)) {
-      sum_sq_blend += e * e;
-      ++finite;
+  void finish() {
+    double sum_sq = 0;
+    std::size_t finite = 0;
+    st_.max_blend = 0;
+    for (const double e : point_error_) {
+      st_.max_blend = std::max(st_.max_blend, e);
+      if (std::isfinite(e)) sum_sq += e * e, ++finite;
     }
-  }
-  st.rms_blend = finite ? std::sqrt(sum_sq_blend / double(finite)) : 0;
-  double sum_sq_taubin = 0;
-  std::size_t in_balls = 0;
-  for (auto b : chosen) {
-    st.max_taubin = std::max(st.max_taubin, balls[b].max_taubin);
-    sum_sq_taubin += balls[b].sum_sq_taubin;
-    in_balls += balls[b].count;
-    st.height_patches += balls[b].is_height;
-    st.unbounded_patches += !balls[b].is_bounded;
-    st.clipped_patches += balls[b].clip.has_value();
-  }
-  st.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
-  st.candidates = balls.size();
-  st.patches = chosen.size();
-  st.time_total = seconds_since(t_start);
+    st_.rms_blend = finite ? std::sqrt(sum_sq / double(finite)) : 0;
+    st_.surface_samples = surface_error_.size();
+    if (!surface_error_.empty()) {
+      std::vector<double> e = surface_error_;
+      const std::size_t k = std::min(e.size() - 1, static_cast<std::size_t>(0.999 * double(e.size() - 1)));
+      std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(k), e.end());
+      st_.surface_p999 = e[k];
+      st_.surface_max = *std::max_element(e.begin(), e.end());
+    }
+    double sum_sq_taubin = 0;
+    std::size_t in_balls = 0;
+    for (auto b : chosen_) {
+      st_.max_taubin = std::max(st_.max_taubin, balls_[b].max_taubin);
+      sum_sq_taubin += balls_[b].sum_sq_taubin;
+      in_balls += balls_[b].count;
+      st_.height_patches += balls_[b].is_height;
+      st_.unbounded_patches += !balls_[b].is_bounded;
+      st_.clipped_patches += balls_[b].clip.has_value();
+    }
+    st_.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
+    st_.candidates = balls_.size();
+    st_.patches = chosen_.size();
 
-  auto& md = result.model.metadata;
-  auto num = [](double v) { return fmt::format("{:.6g}", v); };
-  md["producer"] = "quadrix fit";
-  md["max_error"] = num(E / st.diagonal);
-  md["max_error_abs"] = num(E);
-  md["diagonal"] = num(st.diagonal);
-  md["normals"] = st.normals_estimated ? "estimated" : "given";
-  md["points"] = std::to_string(n);
-  md["patches"] = std::to_string(st.patches);
-  md["candidates"] = std::to_string(st.candidates);
-  md["subsample_levels"] = std::to_string(st.subsample_levels);
-  md["height_patches"] = std::to_string(st.height_patches);
-  if (opt.sharp) md["clipped_patches"] = std::to_string(st.clipped_patches);
-  md["measured_max_error"] = num(st.max_blend);
-  md["measured_rms_error"] = num(st.rms_blend);
-  md["measured_failures"] = std::to_string(st.blend_failures);
-  md["taubin_max_error"] = num(st.max_taubin);
-  md["taubin_rms_error"] = num(st.rms_taubin);
-  md["time_normals_s"] = num(st.time_normals);
-  md["time_candidates_s"] = num(st.time_candidates);
-  md["time_cover_s"] = num(st.time_cover);
-  md["time_verify_s"] = num(st.time_verify);
-  md["time_total_s"] = num(st.time_total);
-  log::info("fit_slim: {} points, {} patches ({} candidates), E = {:.3g}, blended max {:.3g} rms {:.3g}, {:.2f} s", n,
-            st.patches, st.candidates, E, st.max_blend, st.rms_blend, st.time_total);
-  return result;
+    auto& md = result_.model.metadata;
+    auto num = [](double v) { return fmt::format("{:.6g}", v); };
+    md["producer"] = "quadrix fit";
+    md["max_error"] = num(E_ / st_.diagonal);
+    md["max_error_abs"] = num(E_);
+    md["surface_bound_abs"] = num(opt_.surface_factor * E_);
+    md["diagonal"] = num(st_.diagonal);
+    md["normals"] = st_.normals_estimated ? "estimated" : "given";
+    md["points"] = std::to_string(st_.points);
+    md["patches"] = std::to_string(st_.patches);
+    md["candidates"] = std::to_string(st_.candidates);
+    md["subsample_levels"] = std::to_string(st_.subsample_levels);
+    md["height_patches"] = std::to_string(st_.height_patches);
+    if (opt_.sharp) md["clipped_patches"] = std::to_string(st_.clipped_patches);
+    md["measured_max_error"] = num(st_.max_blend);
+    md["measured_rms_error"] = num(st_.rms_blend);
+    md["measured_failures"] = std::to_string(st_.blend_failures);
+    md["measured_surface_max"] = num(st_.surface_max);
+    md["measured_surface_p999"] = num(st_.surface_p999);
+    md["measured_surface_failures"] = std::to_string(st_.surface_failures);
+    md["taubin_max_error"] = num(st_.max_taubin);
+    md["taubin_rms_error"] = num(st_.rms_taubin);
+    md["time_normals_s"] = num(st_.time_normals);
+    md["time_candidates_s"] = num(st_.time_candidates);
+    md["time_cover_s"] = num(st_.time_cover);
+    md["time_verify_s"] = num(st_.time_verify);
+    md["time_total_s"] = num(st_.time_total);
+    log::info("fit_slim: {} points, {} patches ({} candidates), E = {:.3g}: points max {:.3g} ({} beyond E), "
+              "surface max {:.3g} p99.9 {:.3g} ({} samples beyond {}E), {:.2f} s",
+              st_.points, st_.patches, st_.candidates, E_, st_.max_blend, st_.blend_failures, st_.surface_max,
+              st_.surface_p999, st_.surface_failures, opt_.surface_factor, st_.time_total);
+  }
+
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  const PointCloud& cloud_;
+  const SlimFitOptions& opt_;
+  const std::vector<Eigen::Vector3d>& P_;
+  std::vector<Eigen::Vector3d> N_;
+  double E_ = 0;
+  SlimFitResult result_;
+  SlimFitStats& st_ = result_.stats;
+  std::unique_ptr<PointIndex> index_;
+  std::unique_ptr<Subsamples> subsamples_;
+  std::unique_ptr<DataSurface> data_;
+  std::unique_ptr<BallFitter> fitter_;
+  std::vector<std::uint32_t> order_;                 // the points in random order
+  std::vector<Ball> balls_;                          // evaluated candidates
+  std::vector<std::vector<std::uint32_t>> covers_;   // points each candidate covers
+  std::vector<Eigen::Vector3d> pilot_centres_;
+  std::vector<double> pilot_R_;
+  std::unique_ptr<PointIndex> pilot_index_;
+  std::vector<std::uint8_t> covered_, chosen_flag_;
+  std::size_t uncovered_ = 0;
+  std::vector<std::uint32_t> chosen_;
+  std::priority_queue<std::pair<std::size_t, std::uint32_t>> heap_;  // gain, candidate
+  std::vector<double> cap_;                           // radius cap per centre point (repair)
+  std::vector<double> point_error_, surface_error_;
+};
+
+}  // namespace
+
+SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
+  return SlimFitter(cloud, options).run();
 }
 
 }  // namespace quadrix

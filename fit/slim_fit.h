@@ -73,6 +73,24 @@ struct SlimFitOptions {
   double probe_factor = 4.0;
   /// Rounds of verification against the blended surface and repair of the patches at fault.
   int repair_rounds = 6;
+  /// The surface side of the contract: every point of the blended surface within
+  /// surface_factor·E of the data (the points' tangent discs, fit/data_surface.h).
+  bool check_surface = true;
+  double surface_factor = 2.0;
+  /// While fitting, each patch's own zero set inside its ball must stay within
+  /// local_surface_factor·E of the data (sampled on a local_surface_grid² lattice per axis,
+  /// core/slim.h sample_slim_patch); else its radius shrinks by shrink_step, up to shrink_steps times.
+  double local_surface_factor = 1.5;
+  int local_surface_grid = 6;
+  double shrink_step = 0.75;
+  int shrink_steps = 10;
+  /// Verification: zero-set samples on a verify_surface_grid² lattice per axis and patch, each
+  /// seen through the blend along its normal from surface_probe_factor·E above it.
+  int verify_surface_grid = 8;
+  double surface_probe_factor = 2.0;
+  /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
+  /// the model as `slim_offset`, and renderers use it.
+  double blend_offset = 0.5;
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
   /// only and gets a clip plane (SlimPatch::clip) between the two sheets.
@@ -97,6 +115,9 @@ struct SlimFitStats {
   double max_taubin = 0, rms_taubin = 0;  ///< per-patch Taubin error over each ball's points, world units
   double max_blend = 0, rms_blend = 0;    ///< blended surface vs every point (fit/evaluate.h), world units
   std::size_t blend_failures = 0;    ///< points still farther than E from the blended surface
+  std::size_t surface_samples = 0;   ///< zero-set samples seen through the blend (surface side)
+  std::size_t surface_failures = 0;  ///< of those, farther than surface_factor·E from the data
+  double surface_max = 0, surface_p999 = 0;  ///< their distances to the data, world units
   int repair_rounds = 0;
   std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries
   // Wall-clock seconds per stage.
@@ -114,7 +135,10 @@ struct SlimFitResult {
 /// covering (a point is covered within cover_fraction·R of a chosen centre), pruning of redundant
 /// balls, then verification against the blended surface and repair (TBB-parallel throughout).
 /// A point that no ball around it fits within E (noise) gets its tangent plane in a ball holding
-/// no other point.
+/// no other point. Both sides of the contract are verified on the blended surface with core's
+/// blend (core/reference.h): points → surface ≤ E, and samples of every patch's zero set seen
+/// through the blend → data ≤ surface_factor·E; patches at fault shrink and the points are
+/// covered again, for up to repair_rounds rounds. The stats say what was reached.
 /// \throws InvalidInput for fewer than 10 points, non-finite coordinates or normals, a normal
 ///         count that differs from the point count, zero normals, coincident or coplanar points,
 ///         or bad options.

@@ -25,6 +25,7 @@ enum ExitCode : int {
   kComputation = 4,  ///< a solver or computation failed (SolverError)
   kIo = 5,           ///< a file could not be read or written (IoError)
   kGl = 6,           ///< no usable OpenGL context or GL failure (GlError)
+  kExceeded = 7,     ///< finished, output written, but outside the requested bound
 };
 
 /// Options every subcommand has.

@@ -1,4 +1,5 @@
 // quadrix fit POINTS -o model.qxm: SLIM surfaces from point clouds (issue 4, DESIGN §2).
+#include <iostream>
 #include <random>
 
 #include <fmt/format.h>
@@ -20,6 +21,7 @@ void add_fit(CLI::App& root, Commands& commands) {
     double max_error = 1e-3;
     double max_error_abs = 0;
     double holdout = 0;
+    bool allow_exceed = false;
     SlimFitOptions options;
   };
   auto a = std::make_shared<Args>();
@@ -33,6 +35,10 @@ void add_fit(CLI::App& root, Commands& commands) {
       ->check(CLI::Range(1e-6, 10.0));
   app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")
       ->check(CLI::Range(0.0, 0.9));
+  app->add_flag("--allow-exceed", a->allow_exceed,
+                "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
+  app->add_flag("!--no-surface-check", a->options.check_surface,
+                "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
   app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)");
   app->add_flag("--sharp", a->options.sharp,
                 "Sharp features: a clip plane per patch whose normals split into two clusters");
@@ -73,6 +79,15 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"measured_max_rel", s.max_blend / s.diagonal},
                                             {"measured_rms_rel", s.rms_blend / s.diagonal},
                                             {"points_beyond_bound", s.blend_failures},
+                                            {"surface", {{"checked", a->options.check_surface},
+                                                         {"bound_abs", a->options.surface_factor * s.max_error_abs},
+                                                         {"samples", s.surface_samples},
+                                                         {"max_abs", s.surface_max},
+                                                         {"p999_abs", s.surface_p999},
+                                                         {"max_rel", s.surface_max / s.diagonal},
+                                                         {"p999_rel", s.surface_p999 / s.diagonal},
+                                                         {"samples_beyond_bound", s.surface_failures}}},
+                                            {"within_bound", s.blend_failures == 0 && s.surface_failures == 0},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},
@@ -89,12 +104,21 @@ void add_fit(CLI::App& root, Commands& commands) {
                         }
                         write_model(r.model, a->out);
                         report.json["fit"] = j;
-                        if (s.blend_failures > 0)
-                          log::warn("{} of {} points remain farther than E = {:.3g} from the blended surface (max {:.3g})",
-                                    s.blend_failures, s.points, s.max_error_abs, s.max_blend);
-                        log::info("{} patches for {} points in {:.2f} s; max error {:.3g} (E = {:.3g})", s.patches,
-                                  s.points, s.time_total, s.max_blend, s.max_error_abs);
-                        return kOk;
+                        log::info("{} patches for {} points in {:.2f} s; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
+                                  "(E = {:.3g})", s.patches, s.points, s.time_total, s.max_blend, s.surface_max,
+                                  s.surface_p999, s.max_error_abs);
+                        if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;
+                        const auto what = fmt::format(
+                            "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "
+                            "surface samples beyond {:g}E (max {:.3g}); the model was written to {}",
+                            a->points, s.blend_failures, s.points, s.max_error_abs, s.max_blend, s.surface_failures,
+                            s.surface_samples, a->options.surface_factor, s.surface_max, a->out);
+                        if (a->allow_exceed) {
+                          log::warn("{}", what);
+                          return kOk;
+                        }
+                        std::cerr << "quadrix: " << what << " (--allow-exceed accepts it)\n";
+                        return kExceeded;
                       }});
 }
 

@@ -11,7 +11,6 @@
 
 #include "core/error.h"
 #include "core/mesh_io.h"
-#include "fit/blend_probe.h"
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/slim_fit.h"
@@ -366,14 +365,17 @@ TEST(EvaluateSlim, ExactSphereModelHasZeroError) {
   EXPECT_NEAR(f.rms, 1e-3, 1e-9);
 }
 
-TEST(EvaluateSlim, FitterProbeAgreesWithReferenceScene) {
-  // The fitter verifies with its own kd-tree probe; the measure uses core/reference.h.
+TEST(EvaluateSlim, FitterVerifiesWithTheMeasureItReports) {
+  // The fitter verifies through core/reference.h, the code the measure and the renderers' tests
+  // use, with the blend offset it stores in the model.
   const PointCloud c = rounded_cube(6000, 0.8, 0.2, 18);
-  const auto r = fit_slim(c, {.max_error = 3e-3});
-  const SlimError e = evaluate_slim(r.model, c, {.keep_per_point = true});
-  const BlendProbe probe(r.model);
-  for (std::size_t i = 0; i < c.points.size(); ++i)
-    ASSERT_NEAR(probe.probe(c.points[i], c.normals[i], e.probe_height), e.per_point[i], 1e-9) << "point " << i;
+  const auto r = fit_slim(c, {.max_error = 3e-3, .blend_offset = 0.3});
+  EXPECT_EQ(r.model.metadata.at("slim_offset"), "0.3");
+  const SlimError e = evaluate_slim(r.model, c);
+  EXPECT_NEAR(e.max, r.stats.max_blend, 1e-12);
+  EXPECT_NEAR(e.rms, r.stats.rms_blend, 1e-12);
+  EXPECT_GT(r.stats.surface_samples, 10 * r.stats.patches);
+  EXPECT_LE(r.stats.surface_max, 2 * r.stats.max_error_abs);
 }
 
 }  // namespace

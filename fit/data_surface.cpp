@@ -1,0 +1,188 @@
+#include "fit/data_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/bvh.h"
+#include "core/error.h"
+#include "fit/point_index.h"
+
+namespace quadrix {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double point_segment_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((x - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (x - (a + t * ab)).norm();
+}
+
+}  // namespace
+
+double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double n2 = n.squaredNorm();
+  if (n2 > 0) {
+    // Inside the prism over the triangle: the distance to its plane.
+    const Eigen::Vector3d p = x - n * ((x - a).dot(n) / n2);
+    const double u = (b - p).cross(c - p).dot(n), v = (c - p).cross(a - p).dot(n), w = (a - p).cross(b - p).dot(n);
+    if (u >= 0 && v >= 0 && w >= 0) return std::abs((x - a).dot(n)) / std::sqrt(n2);
+  }
+  return std::min({point_segment_distance(x, a, b), point_segment_distance(x, b, c), point_segment_distance(x, c, a)});
+}
+
+struct DataSurface::Impl {
+  // Points: positions, normals, disc radii. Mesh: triangle corners and centroids.
+  std::vector<Eigen::Vector3d> points, normals;
+  std::vector<double> disc;
+  std::vector<Eigen::Vector3d> inward;  // boundary points: unit tangent towards the data; else 0
+  std::vector<std::array<Eigen::Vector3d, 3>> triangles;
+  double max_reach = 0;  // largest centroid–corner distance
+  std::unique_ptr<PointIndex> index;
+  Bvh bvh;
+  DataSurfaceOptions options;
+};
+
+DataSurface::DataSurface() : impl_(std::make_unique<Impl>()) {}
+DataSurface::DataSurface(DataSurface&&) noexcept = default;
+DataSurface& DataSurface::operator=(DataSurface&&) noexcept = default;
+DataSurface::~DataSurface() = default;
+
+DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                                     const DataSurfaceOptions& options) {
+  if (points.empty()) throw InvalidInput("DataSurface: no points");
+  if (normals.size() != points.size()) throw InvalidInput("DataSurface: one normal per point is needed");
+  DataSurface s;
+  auto& m = *s.impl_;
+  m.options = options;
+  m.points.assign(points.begin(), points.end());
+  m.normals.assign(normals.begin(), normals.end());
+  m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
+  m.disc.assign(m.points.size(), 0.0);
+  m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.points.size(), 1024), [&](const auto& r) {
+    std::vector<Neighbour> nb;
+    std::vector<Eigen::Vector3d> same;  // tangential offsets of same-sheet neighbours
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      // Neighbours on the same sheet only (normals within 60°): across a thin part or a gap the
+      // other sheet's points are no evidence of this sheet's spacing or boundary.
+      const std::size_t k = 2 * std::max(options.spacing_neighbour, options.boundary_neighbours) + 1;
+      m.index->nearest(m.points[i], k, nb);
+      const Eigen::Vector3d& n = m.normals[i];
+      same.clear();
+      std::vector<double> dist;
+      for (std::size_t j = 1; j < nb.size(); ++j) {
+        if (m.normals[nb[j].first].dot(n) < 0.5) continue;
+        const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
+        same.push_back(v - n.dot(v) * n);
+        dist.push_back(std::sqrt(nb[j].second));
+      }
+      if (same.empty()) continue;
+      m.disc[i] = options.disc_factor * dist[std::min(options.spacing_neighbour, dist.size()) - 1];
+      const std::size_t kb = std::min(options.boundary_neighbours, same.size());
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      double mean = 0;
+      for (std::size_t j = 0; j < kb; ++j) centroid += same[j], mean += dist[j];
+      centroid /= double(kb);
+      mean /= double(kb);
+      if (centroid.norm() > options.boundary_offset * mean) m.inward[i] = centroid.normalized();
+    }
+  });
+  return s;
+}
+
+DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
+  DataSurface s;
+  auto& m = *s.impl_;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k)
+      m.triangles.push_back({mesh.vertices[vs[0]], mesh.vertices[vs[k]], mesh.vertices[vs[k + 1]]});
+  }
+  if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
+  std::vector<Box3> boxes;
+  boxes.reserve(m.triangles.size());
+  m.points.reserve(m.triangles.size());
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d c = (t[0] + t[1] + t[2]) / 3.0;
+    m.points.push_back(c);
+    for (const auto& v : t) m.max_reach = std::max(m.max_reach, (v - c).norm());
+    Box3 b;
+    for (const auto& v : t) b.extend(v);
+    boxes.push_back(b);
+  }
+  m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
+  m.bvh = Bvh(boxes);
+  return s;
+}
+
+bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
+double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
+
+double DataSurface::distance(const Eigen::Vector3d& x) const {
+  const auto& m = *impl_;
+  thread_local std::vector<Neighbour> nb;
+  if (!m.triangles.empty()) {
+    m.index->nearest(x, 1, nb);
+    const auto& t0 = m.triangles[nb[0].first];
+    double best = point_triangle_distance(x, t0[0], t0[1], t0[2]);
+    // Any closer triangle has its centroid within best + max_reach of x.
+    m.index->radius(x, best + m.max_reach, nb);
+    for (const auto& [i, d2] : nb) {
+      const double lower = std::sqrt(d2) - m.max_reach;
+      if (lower >= best) continue;
+      const auto& t = m.triangles[i];
+      best = std::min(best, point_triangle_distance(x, t[0], t[1], t[2]));
+    }
+    return best;
+  }
+  m.index->nearest(x, m.options.candidates, nb);
+  double best = kInf;
+  for (const auto& [i, d2] : nb) {
+    const Eigen::Vector3d v = x - m.points[i];
+    const double h = m.normals[i].dot(v);
+    Eigen::Vector3d t = v - h * m.normals[i];
+    if (const double o = -t.dot(m.inward[i]); o > 0)  // beyond a boundary: the disc is short there
+      t += (o / m.options.boundary_reach - o) * -m.inward[i];
+    const double along = t.norm();
+    const double out = std::max(0.0, along - m.disc[i]);
+    best = std::min(best, std::sqrt(h * h + out * out));
+  }
+  return best;
+}
+
+std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* front) const {
+  const auto& m = *impl_;
+  if (m.triangles.empty()) return std::nullopt;
+  double best = kInf;
+  bool best_front = false;
+  m.bvh.traverse(ray, tmin, [&] { return best; }, [&](std::uint32_t i) {
+    // Möller–Trumbore in double, both sides.
+    const auto& t = m.triangles[i];
+    const Eigen::Vector3d e1 = t[1] - t[0], e2 = t[2] - t[0];
+    const Eigen::Vector3d p = ray.dir.cross(e2);
+    const double det = e1.dot(p);
+    if (det == 0.0) return;
+    const double inv = 1.0 / det;
+    const Eigen::Vector3d s = ray.origin - t[0];
+    const double u = s.dot(p) * inv;
+    if (u < 0.0 || u > 1.0) return;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = ray.dir.dot(q) * inv;
+    if (v < 0.0 || u + v > 1.0) return;
+    const double d = e2.dot(q) * inv;
+    if (d > tmin && d < best) best = d, best_front = det > 0.0;
+  });
+  if (best == kInf) return std::nullopt;
+  if (front) *front = best_front;
+  return best;
+}
+
+}  // namespace quadrix

@@ -1,0 +1,50 @@
+#pragma once
+/// What a viewer sees, measured against the data (DESIGN §2, the surface side of a fit's
+/// contract): a surface is ray-cast from several views, every covered pixel is back-projected
+/// and its distance to the data's surface measured; with a mesh as the data, pixels the data
+/// shows from the front away from its silhouette but the surface leaves empty are holes. Models (per-ray
+/// SLIM blend of core/reference.h) and triangle meshes are measured the same way.
+#include <cstddef>
+#include <functional>
+#include <optional>
+
+#include "core/mesh_io.h"
+#include "core/model.h"
+#include "core/ray.h"
+#include "fit/data_surface.h"
+
+namespace quadrix {
+
+struct SurfaceErrorOptions {
+  /// Views from the 8 corners of a cube around the data (and a 9th+ from the axes when more).
+  int views = 8;
+  int resolution = 256;  ///< pixels per side of each view
+  /// Distances above this count as "beyond" (world units; typically 2E). 0: not counted.
+  double bound = 0;
+  /// Hole band: a data pixel counts only when every pixel within max(band_px, bound in pixels)
+  /// of it is covered by the data too (away from the silhouette).
+  double band_px = 1.0;
+};
+
+struct SurfaceError {
+  std::size_t pixels = 0;          ///< covered pixels measured (all views)
+  double max = 0, p999 = 0, p99 = 0, rms = 0;  ///< world units
+  std::size_t beyond = 0;          ///< pixels farther than bound
+  double share_beyond = 0;         ///< beyond / pixels
+  std::size_t data_pixels = 0;     ///< data pixels away from the silhouette (mesh data only)
+  std::size_t holes = 0;           ///< of those, pixels the surface left empty
+  double hole_share = 0;           ///< holes / data_pixels
+  bool has_holes_measure = false;  ///< data had faces
+};
+
+/// A ray caster: the distance t along the ray (unit dir) to the first visible surface.
+using TraceFn = std::function<std::optional<double>(const Ray&)>;
+
+/// Measures what trace shows against data, from views framing data_box.
+SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data, const Box3& data_box,
+                                   const SurfaceErrorOptions& options = {});
+/// The same for a model (CPU reference, the model's own SLIM blend offset).
+SurfaceError measure_surface_error(const Model& model, const DataSurface& data, const Box3& data_box,
+                                   const SurfaceErrorOptions& options = {});
+
+}  // namespace quadrix
