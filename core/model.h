@@ -81,9 +81,23 @@ struct Box3 {
   double diagonal() const { return empty() ? 0.0 : (max - min).norm(); }
 };
 
+/// A SLIM hierarchy beside the drawn patches (Ohtake et al. 2005 §4, Kanai's .slim2t): a forest
+/// of balls, each merged ball a fit over the balls below it, with its fitting error.
+/// Ball ids: id < Model::slims.size() is Model::slims[id], the rest are others[id − slims.size()];
+/// every ball appears once. By default the drawn patches are the leaves and `others` the
+/// interior (merged) balls.
+struct SlimHierarchy {
+  std::vector<SlimPatch> others;      ///< balls not in Model::slims (interior balls by default)
+  std::vector<std::int32_t> parent;   ///< per ball id: the parent's id, −1 for a root; a forest
+  std::vector<double> error;          ///< per ball id: fitting error, finite, ≥ 0 (producer's unit)
+  std::size_t size() const { return parent.size(); }
+  bool empty() const { return parent.empty(); }
+};
+
 /// Everything a .qxm file holds.
 struct Model {
-  std::vector<SlimPatch> slims;
+  std::vector<SlimPatch> slims;  ///< the SLIM patches drawn (the hierarchy's leaves by default)
+  SlimHierarchy slim_hierarchy;  ///< empty, or parent links and errors for slims + others
   std::vector<TetPatch> tets;
   std::vector<Glyph> glyphs;
   /// Header metadata (`comment key value` lines): producer, units, max_error, …
@@ -92,6 +106,32 @@ struct Model {
   std::size_t size() const { return slims.size() + tets.size() + glyphs.size(); }
   bool empty() const { return size() == 0; }
 };
+
+/// The hierarchy's ball by id (see SlimHierarchy).
+inline const SlimPatch& slim_ball(const Model& m, std::size_t id) {
+  return id < m.slims.size() ? m.slims[id] : m.slim_hierarchy.others[id - m.slims.size()];
+}
+
+/// Shape of a SLIM hierarchy: levels = balls on the longest root-to-leaf path.
+struct SlimHierarchyStats {
+  std::size_t levels = 0, leaves = 0, interior = 0, roots = 0;
+  double min_error = 0, max_error = 0;  ///< over all balls
+};
+/// \throws InvalidInput when the hierarchy is not a forest over slims + others (see check below).
+SlimHierarchyStats slim_hierarchy_stats(const Model& m);
+
+/// Checks sizes, parent ids in {−1} ∪ [0, n), no self-parent, no cycle, errors finite and ≥ 0.
+/// Returns an empty string when valid, else what is wrong ("ball 12: parent 12 is itself").
+std::string validate_slim_hierarchy(const Model& m);
+
+/// A cut of the hierarchy by error, as ball ids in increasing order: walking down from each
+/// root, a ball is taken when its error ≤ max_error or it is a leaf, else its children are
+/// visited. Where errors grow towards the roots (as a fitter writes them) this is the set of
+/// balls with error ≤ max_error whose parent's error > max_error, plus the leaves above no such
+/// ball; every leaf lies under exactly one chosen ball. max_error < 0 gives the leaves.
+/// An empty hierarchy gives the ids of all Model::slims.
+/// \throws InvalidInput when the hierarchy is not valid (validate_slim_hierarchy).
+std::vector<std::int32_t> select_slim_cut(const Model& m, double max_error);
 
 /// Bounds of one primitive's bounding volume (ball, tetrahedron, glyph extent).
 Box3 bounds(const SlimPatch& s);

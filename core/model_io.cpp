@@ -21,6 +21,8 @@ namespace {
 
 constexpr std::array<const char*, 10> kCoefficientNames = {"k_xx", "k_yy", "k_zz", "k_xy", "k_yz",
                                                            "k_zx", "k_x",  "k_y",  "k_z",  "k_1"};
+constexpr std::array<const char*, 4> kSlimNames = {"x", "y", "z", "radius"};
+constexpr std::array<const char*, 2> kHierarchyNames = {"parent", "error"};
 constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_nz", "clip_d"};
 constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
 constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
@@ -137,6 +139,62 @@ std::vector<std::string> required(const ply::File& f, const ply::Element& e, std
   return props;
 }
 
+/// Column layout of a `slim` or `slim_node` request: x y z radius k_* [clip] [colour] [parent error].
+struct SlimColumns {
+  bool clip = false, colour = false, hierarchy = false;
+  std::size_t parent = 0;  ///< column of `parent` (`error` follows) when hierarchy
+};
+
+SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarchy_required,
+                         std::vector<ply::Request>& requests) {
+  SlimColumns c;
+  c.clip = optional_group(f, e, kClipNames);
+  c.colour = optional_group(f, e, kColourNames);
+  auto props =
+      required(f, e, names({std::span<const char* const>(kSlimNames), kCoefficientNames}));
+  if (hierarchy_required) required(f, e, names({kHierarchyNames}));
+  c.hierarchy = optional_group(f, e, kHierarchyNames);
+  if (c.clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+  if (c.colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+  c.parent = props.size();
+  if (c.hierarchy) props.insert(props.end(), kHierarchyNames.begin(), kHierarchyNames.end());
+  requests.push_back({e.name, std::move(props)});
+  return c;
+}
+
+/// Appends the rows' patches to out and, with a hierarchy, their parent ids (< total) and errors.
+void read_slim_rows(const Rows& r, const SlimColumns& cols, std::size_t total, std::vector<SlimPatch>& out,
+                    SlimHierarchy& hierarchy) {
+  out.reserve(out.size() + r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    SlimPatch& s = out.emplace_back();
+    s.centre = r.vec3(i, 0);
+    s.radius = r.finite(i, 3);
+    if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
+    s.local = Quadric::from_coefficients(r.coefficients(i, 4));
+    std::size_t c = 14;
+    if (cols.clip) {
+      ClipPlane p;
+      p.n = r.vec3(i, c);
+      p.d = r.finite(i, c + 3);
+      if (p.n != Eigen::Vector3d::Zero()) s.clip = p;
+      c += 4;
+    }
+    if (cols.colour) s.colour = r.colour(i, c);
+    if (cols.hierarchy) {
+      const std::size_t self = hierarchy.parent.size();
+      const double p = r.finite(i, cols.parent);
+      if (p != std::floor(p) || p < -1 || p >= static_cast<double>(total))
+        r.fail(i, cols.parent, fmt::format("parent {} is not an integer in [-1, {})", p, total));
+      if (p == static_cast<double>(self)) r.fail(i, cols.parent, fmt::format("parent {} is the ball itself", p));
+      const double e = r.finite(i, cols.parent + 1);
+      if (e < 0) r.fail(i, cols.parent + 1, fmt::format("error {} is negative", e));
+      hierarchy.parent.push_back(static_cast<std::int32_t>(p));
+      hierarchy.error.push_back(e);
+    }
+  }
+}
+
 Model read_qxm(const ply::File& f) {
   const ply::Header& h = f.header();
   Model model;
@@ -167,23 +225,25 @@ Model read_qxm(const ply::File& f) {
 
   // Which elements and optional groups are present.
   const ply::Element* es = h.find("slim");
+  const ply::Element* en = h.find("slim_node");
   const ply::Element* et = h.find("tet");
   const ply::Element* eg = h.find("glyph");
   if (!es && !et && !eg) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "no element 'slim', 'tet' or 'glyph'"));
 
   std::vector<ply::Request> requests;
-  bool slim_clip = false, slim_colour = false, tet_colour = false, glyph_colour = false;
-  int is = -1, it = -1, ig = -1;
+  SlimColumns slim_columns, node_columns;
+  bool tet_colour = false, glyph_colour = false;
+  int is = -1, in = -1, it = -1, ig = -1;
   if (es) {
-    slim_clip = optional_group(f, *es, kClipNames);
-    slim_colour = optional_group(f, *es, kColourNames);
-    auto props = required(
-        f, *es,
-        names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames}));
-    if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
-    if (slim_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
-    is = static_cast<int>(requests.size());
-    requests.push_back({"slim", std::move(props)});
+    slim_columns = slim_request(f, *es, false, requests);
+    is = static_cast<int>(requests.size()) - 1;
+  }
+  if (en) {
+    if (!es || !slim_columns.hierarchy)
+      throw FormatError(f.message("slim_node", -1, {}, ply::kNoByte,
+                                  "element 'slim_node' needs element 'slim' with properties 'parent' and 'error'"));
+    node_columns = slim_request(f, *en, true, requests);
+    in = static_cast<int>(requests.size()) - 1;
   }
   if (et) {
     tet_colour = optional_group(f, *et, kColourNames);
@@ -206,22 +266,32 @@ Model read_qxm(const ply::File& f) {
 
   if (is >= 0) {
     const Rows r(f, tables[is]);
-    model.slims.resize(r.size());
-    for (std::size_t i = 0; i < r.size(); ++i) {
-      SlimPatch& s = model.slims[i];
-      s.centre = r.vec3(i, 0);
-      s.radius = r.finite(i, 3);
-      if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
-      s.local = Quadric::from_coefficients(r.coefficients(i, 4));
-      std::size_t c = 14;
-      if (slim_clip) {
-        ClipPlane p;
-        p.n = r.vec3(i, c);
-        p.d = r.finite(i, c + 3);
-        if (p.n != Eigen::Vector3d::Zero()) s.clip = p;
-        c += 4;
+    const std::size_t total = r.size() + (in >= 0 ? tables[in].rows : 0);
+    read_slim_rows(r, slim_columns, total, model.slims, model.slim_hierarchy);
+    if (in >= 0) read_slim_rows(Rows(f, tables[in]), node_columns, total, model.slim_hierarchy.others,
+                                model.slim_hierarchy);
+    if (slim_columns.hierarchy) {
+      // A forest: following parents from any ball reaches a root.
+      const SlimHierarchy& hy = model.slim_hierarchy;
+      std::vector<char> state(total, 0);  // 0 unseen, 1 on the current walk, 2 reaches a root
+      for (std::size_t i = 0; i < total; ++i) {
+        std::size_t j = i;
+        while (state[j] == 0) {
+          state[j] = 1;
+          if (hy.parent[j] < 0) break;
+          j = static_cast<std::size_t>(hy.parent[j]);
+        }
+        if (state[j] == 1 && hy.parent[j] >= 0) {
+          const bool drawn = j < r.size();
+          const Rows rj(f, tables[drawn ? is : in]);
+          const std::size_t row = drawn ? j : j - r.size();
+          rj.fail(row, (drawn ? slim_columns : node_columns).parent, "parent links form a cycle through this ball");
+        }
+        for (std::size_t k = i; state[k] == 1; k = static_cast<std::size_t>(hy.parent[k])) {
+          state[k] = 2;
+          if (hy.parent[k] < 0) break;
+        }
       }
-      if (slim_colour) s.colour = r.colour(i, c);
     }
   }
   if (it >= 0) {
@@ -286,6 +356,70 @@ bool looks_like_slim2t(const std::string& b) {
   return d == 1 || d == 2 || d == -1 || d == -2;
 }
 
+/// Gradient direction of a ball's quadric at a world point (unscaled: only its sign is used).
+Eigen::Vector3d direction_at(const SlimPatch& s, const Eigen::Vector3d& x) {
+  return s.local.gradient((x - s.centre) / s.radius);
+}
+
+/// Orients an unoriented (.slim2t degree < 0) hierarchy; returns a one-line account.
+/// Leaves are the data: they keep their relative signs. (1) Outward: when most leaves' gradients
+/// point towards the centroid of the leaf centres rather than away, every ball is flipped.
+/// (2) Every interior ball is made to agree with the majority of the leaves below it that lie in
+/// its support (its gradient at each leaf's centre against the leaf's gradient there); gradients
+/// at a merged ball's own centre say little, since a coarse ball's centre can lie far from its
+/// zero set. Leaves that disagree with their parent at their centre are counted, not flipped.
+std::string orient_slim2t(std::vector<SlimPatch>& balls, const std::vector<std::int32_t>& parent,
+                          const std::vector<char>& has_child) {
+  const std::size_t n = balls.size();
+  auto flip = [](SlimPatch& s) { s.local = s.local * -1.0; };
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::size_t leaves = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!has_child[i]) centroid += balls[i].centre, ++leaves;
+  if (leaves == 0) return "no leaves";
+  centroid /= static_cast<double>(leaves);
+  std::size_t away = 0, towards = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (has_child[i]) continue;
+    const double d = direction_at(balls[i], balls[i].centre).dot(balls[i].centre - centroid);
+    away += d > 0;
+    towards += d < 0;
+  }
+  const bool flip_all = towards > away;
+  if (flip_all)
+    for (SlimPatch& s : balls) flip(s);
+  // Votes of the leaves below each interior ball, within its support.
+  std::vector<std::int64_t> votes(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (has_child[i]) continue;
+    const Eigen::Vector3d x = balls[i].centre;
+    const Eigen::Vector3d g = direction_at(balls[i], x);
+    for (std::int32_t a = parent[i]; a >= 0; a = parent[static_cast<std::size_t>(a)]) {
+      const SlimPatch& b = balls[static_cast<std::size_t>(a)];
+      if ((x - b.centre).norm() > b.radius) continue;
+      const double d = direction_at(b, x).dot(g);
+      votes[static_cast<std::size_t>(a)] += (d > 0) - (d < 0);
+    }
+  }
+  std::size_t flipped = 0, undecided = 0, leaf_disagree = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!has_child[i]) continue;
+    if (votes[i] < 0) flip(balls[i]), ++flipped;
+    undecided += votes[i] == 0;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (has_child[i] || parent[i] < 0) continue;
+    const Eigen::Vector3d x = balls[i].centre;
+    leaf_disagree += direction_at(balls[static_cast<std::size_t>(parent[i])], x).dot(direction_at(balls[i], x)) < 0;
+  }
+  return fmt::format(
+      "unoriented file: {} of {} leaf gradients pointed towards the leaves' centroid, {} away{}; "
+      "{} of {} interior balls flipped to agree with the leaves below them ({} without a vote); "
+      "{} leaves disagree with their parent at their centre (kept)",
+      towards, leaves, away, flip_all ? ", so every ball was flipped" : "", flipped, n - leaves, undecided,
+      leaf_disagree);
+}
+
 Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
   const std::string file = path.string();
   auto fail = [&](std::int64_t ball, std::size_t byte, std::string_view what) -> void {
@@ -302,19 +436,20 @@ Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
   if (nuser < 0 || nuser >= 1024) fail(-1, 8, fmt::format("user value count {} is not in 0..1023", nuser));
   const std::size_t stride = (15 + static_cast<std::size_t>(nuser)) * 4;
   const std::size_t fits = (b.size() - 12) / stride;
-  if (static_cast<std::size_t>(nballs) > fits)
+  const std::size_t n = static_cast<std::size_t>(nballs);
+  if (n > fits)
     fail(static_cast<std::int64_t>(fits), 12 + fits * stride,
          fmt::format("truncated: {} balls of {} bytes declared but only {} bytes follow the header", nballs, stride,
                      b.size() - 12));
+  if (b.size() != 12 + n * stride)
+    fail(-1, 12 + n * stride,
+         fmt::format("{} bytes follow the {} declared balls of {} bytes", b.size() - 12 - n * stride, nballs, stride));
 
-  struct Ball {
-    Eigen::Vector3d centre;
-    QuadricCoefficients k;
-    double radius;
-  };
-  std::vector<Ball> balls(static_cast<std::size_t>(nballs));
-  std::vector<char> is_parent(static_cast<std::size_t>(nballs) + 1, 0);
-  for (std::size_t i = 0; i < balls.size(); ++i) {
+  std::vector<SlimPatch> balls(n);
+  std::vector<std::int32_t> parent(n, -1);
+  std::vector<double> error(n, 0.0);
+  std::vector<char> has_child(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
     const std::size_t at = 12 + i * stride;
     auto value = [&](std::size_t j, std::string_view what) {
       const double v = load_le<float>(b, at + 4 * j);
@@ -322,27 +457,74 @@ Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
         fail(static_cast<std::int64_t>(i), at + 4 * j, fmt::format("{} value {} is not finite", what, v));
       return v;
     };
-    Ball& ball = balls[i];
-    for (std::size_t j = 0; j < 3; ++j) ball.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
-    for (std::size_t j = 0; j < 10; ++j) ball.k[j] = value(3 + j, "coefficient");
-    ball.radius = value(13, "radius");
-    if (!(ball.radius > 0))
-      fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", ball.radius));
-    const std::int32_t parent = load_le<std::int32_t>(b, at + 56);
-    if (parent < -1 || parent > nballs)
-      fail(static_cast<std::int64_t>(i), at + 56, fmt::format("parent id {} is not in [-1, {}]", parent, nballs));
-    if (parent > 0) is_parent[static_cast<std::size_t>(parent)] = 1;
+    SlimPatch& s = balls[i];
+    for (std::size_t j = 0; j < 3; ++j) s.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
+    QuadricCoefficients k;
+    for (std::size_t j = 0; j < 10; ++j) k[j] = value(3 + j, "coefficient");
+    s.radius = value(13, "radius");
+    if (!(s.radius > 0)) fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", s.radius));
+    // Coefficients are in y = x − centre, unscaled; the patch wants u = y / R.
+    s.local = Quadric::from_coefficients(k).to_local(Eigen::Vector3d::Zero(), s.radius);
+    // The parent id is a float32 holding an integer: 1-based, −1 for a root.
+    const double p = value(14, "parent id");
+    if (p != std::floor(p) || !(p == -1 || (p >= 1 && p <= nballs)))
+      fail(static_cast<std::int64_t>(i), at + 56,
+           fmt::format("parent id {} is not an integer in {{-1}} or [1, {}]", p, nballs));
+    if (p == static_cast<double>(i) + 1)
+      fail(static_cast<std::int64_t>(i), at + 56, fmt::format("parent id {} is the ball itself", p));
+    if (p > 0) {
+      parent[i] = static_cast<std::int32_t>(p) - 1;
+      has_child[static_cast<std::size_t>(parent[i])] = 1;
+    }
+    if (nuser > 0) {
+      error[i] = value(15, "error (first user value)");
+      if (error[i] < 0)
+        fail(static_cast<std::int64_t>(i), at + 60, fmt::format("error (first user value) {} is negative", error[i]));
+    }
   }
+  // A forest: following parents from any ball reaches a root within n steps.
+  {
+    std::vector<char> state(n, 0);  // 0 unseen, 1 on the current walk, 2 reaches a root
+    for (std::size_t i = 0; i < n; ++i) {
+      std::size_t j = i;
+      while (state[j] == 0) {
+        state[j] = 1;
+        if (parent[j] < 0) break;
+        j = static_cast<std::size_t>(parent[j]);
+      }
+      if (state[j] == 1 && parent[j] >= 0)
+        fail(static_cast<std::int64_t>(j), 12 + j * stride + 56, "parent links form a cycle through this ball");
+      for (std::size_t k = i; state[k] == 1; k = static_cast<std::size_t>(parent[k])) {
+        state[k] = 2;
+        if (parent[k] < 0) break;
+      }
+    }
+  }
+
   Model model;
   model.metadata["source_format"] = "slim2t";
-  for (std::size_t i = 0; i < balls.size(); ++i) {
-    if (is_parent[i + 1]) continue;  // ids are 1-based
-    SlimPatch s;
-    s.centre = balls[i].centre;
-    s.radius = balls[i].radius;
-    s.local = Quadric::from_coefficients(balls[i].k).to_local(Eigen::Vector3d::Zero(), s.radius);
-    model.slims.push_back(std::move(s));
+  model.metadata["slim2t_degree"] = std::to_string(degree);
+  if (nuser == 0) model.metadata["slim2t_error"] = "none recorded (errors read as 0)";
+  if (degree < 0) model.metadata["slim2t_orientation"] = orient_slim2t(balls, parent, has_child);
+  // Leaves first (the drawn patches), then the interior balls; ids renumbered to that order.
+  std::vector<std::int32_t> id(n);
+  std::size_t leaves = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!has_child[i]) id[i] = static_cast<std::int32_t>(leaves++);
+  std::size_t next = leaves;
+  for (std::size_t i = 0; i < n; ++i)
+    if (has_child[i]) id[i] = static_cast<std::int32_t>(next++);
+  model.slims.reserve(leaves);
+  SlimHierarchy& h = model.slim_hierarchy;
+  h.others.reserve(n - leaves);
+  h.parent.resize(n);
+  h.error.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto j = static_cast<std::size_t>(id[i]);
+    h.parent[j] = parent[i] < 0 ? -1 : id[static_cast<std::size_t>(parent[i])];
+    h.error[j] = error[i];
   }
+  for (std::size_t i = 0; i < n; ++i) (has_child[i] ? h.others : model.slims).push_back(std::move(balls[i]));
   return model;
 }
 
@@ -358,11 +540,15 @@ Model read_model(const std::filesystem::path& path) {
 Model read_slim2t(const std::filesystem::path& path) { return parse_slim2t(read_bytes(path), path); }
 
 void write_model(const Model& model, const std::filesystem::path& path) {
-  for (std::size_t i = 0; i < model.slims.size(); ++i) {
-    const SlimPatch& s = model.slims[i];
+  const SlimHierarchy& hy = model.slim_hierarchy;
+  if (const std::string why = validate_slim_hierarchy(model); !why.empty())
+    throw InvalidInput(fmt::format("{}: cannot write the SLIM hierarchy: {}", path.string(), why));
+  const bool hierarchy = !hy.empty();
+  for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i) {
+    const SlimPatch& s = slim_ball(model, i);
     check_finite(s.centre.allFinite() && std::isfinite(s.radius) && s.local.is_finite() &&
                      (!s.clip || (s.clip->n.allFinite() && std::isfinite(s.clip->d))),
-                 "slim patch", i, path);
+                 i < model.slims.size() ? "slim patch" : "slim_node", i, path);
   }
   for (std::size_t i = 0; i < model.tets.size(); ++i) {
     const TetPatch& t = model.tets[i];
@@ -375,10 +561,12 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     check_finite(g.centre.allFinite() && std::isfinite(g.radius) && g.axes.allFinite(), "glyph", i, path);
   }
 
-  const bool slim_clip =
-      std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.clip.has_value(); });
-  const bool slim_colour =
-      std::any_of(model.slims.begin(), model.slims.end(), [](const SlimPatch& s) { return s.colour.has_value(); });
+  const auto has_clip = [](const SlimPatch& s) { return s.clip.has_value(); };
+  const auto has_colour = [](const SlimPatch& s) { return s.colour.has_value(); };
+  const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), has_clip);
+  const bool slim_colour = std::any_of(model.slims.begin(), model.slims.end(), has_colour);
+  const bool node_clip = std::any_of(hy.others.begin(), hy.others.end(), has_clip);
+  const bool node_colour = std::any_of(hy.others.begin(), hy.others.end(), has_colour);
   const bool tet_colour =
       std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
   const bool glyph_colour =
@@ -396,12 +584,20 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
                                      box.max.y(), box.max.z()));
   const bool all = model.empty();  // an empty model still declares the whole profile
-  if (all || !model.slims.empty()) {
-    auto props =
-        names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kCoefficientNames});
-    if (slim_clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
-    h.elements.push_back(element("slim", model.slims.size(), props, slim_colour));
-  }
+  const auto slim_element = [&](std::string name, std::size_t count, bool clip, bool colour) {
+    auto props = names({std::span<const char* const>(kSlimNames), kCoefficientNames});
+    if (clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+    ply::Element e = element(std::move(name), count, props, colour);
+    if (hierarchy) {
+      e.properties.push_back({"parent", ply::Type::int32});
+      e.properties.push_back({"error", ply::Type::float64});
+    }
+    return e;
+  };
+  if (all || hierarchy || !model.slims.empty())
+    h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour));
+  if (hierarchy && !hy.others.empty())
+    h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour));
   if (all || !model.tets.empty())
     h.elements.push_back(element("tet", model.tets.size(), names({kCornerNames, kCoefficientNames}), tet_colour));
   if (all || !model.glyphs.empty()) {
@@ -410,16 +606,22 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   }
 
   std::string out = ply::header_text(h);
-  out.reserve(out.size() + model.slims.size() * 150 + model.tets.size() * 180 + model.glyphs.size() * 110);
-  for (const SlimPatch& s : model.slims) {
-    const auto k = s.local.coefficients();
+  out.reserve(out.size() + (model.slims.size() + hy.others.size()) * 160 + model.tets.size() * 180 +
+              model.glyphs.size() * 110);
+  for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i) {
+    const SlimPatch& s = slim_ball(model, i);
+    const bool drawn = i < model.slims.size();
     append_doubles(out, {s.centre.x(), s.centre.y(), s.centre.z(), s.radius});
-    for (double v : k) ply::append_le(out, ply::Type::float64, v);
-    if (slim_clip) {
+    for (double v : s.local.coefficients()) ply::append_le(out, ply::Type::float64, v);
+    if (drawn ? slim_clip : node_clip) {
       const ClipPlane p = s.clip.value_or(ClipPlane{});
       append_doubles(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
     }
-    if (slim_colour) append_colour(out, s.colour);
+    if (drawn ? slim_colour : node_colour) append_colour(out, s.colour);
+    if (hierarchy) {
+      ply::append_le(out, ply::Type::int32, hy.parent[i]);
+      ply::append_le(out, ply::Type::float64, hy.error[i]);
+    }
   }
   for (const TetPatch& t : model.tets) {
     for (const auto& p : t.corners) append_doubles(out, {p.x(), p.y(), p.z()});

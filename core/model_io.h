@@ -1,35 +1,40 @@
 #pragma once
-/// The .qxm model format (DESIGN §4): a PLY profile with elements `slim`, `tet` and `glyph`,
-/// written as binary little-endian PLY; read from binary little/big-endian or ASCII PLY of the
-/// same profile, and from Kanai et al.'s `.slim2t` SLIM files.
+/// The .qxm model format (DESIGN §4, docs/qxm-format.md): a PLY profile with elements `slim`,
+/// `slim_node`, `tet` and `glyph`, written as binary little-endian PLY; read from binary
+/// little/big-endian or ASCII PLY of the same profile, and from Kanai et al.'s `.slim2t` files.
 ///
-/// Profile (all coordinates double, world units unless noted):
-///   element slim:  x y z radius k_xx k_yy k_zz k_xy k_yz k_zx k_x k_y k_z k_1
-///                  [clip_nx clip_ny clip_nz clip_d] [red green blue]
-///                  (coefficients of g(u), u = (x − centre)/radius; clip plane in u)
-///   element tet:   x0 y0 z0 x1 y1 z1 x2 y2 z2 x3 y3 z3 k_xx … k_1 [red green blue]
-///                  (coefficients relative to the centroid of the four corners: y = x − centroid)
-///   element glyph: kind(uchar: 0 sphere, 1 ellipsoid, 2 cylinder) x y z radius
-///                  a0x a0y a0z a1x a1y a1z a2x a2y a2z [red green blue]
-///   header comments: `comment quadrix-format 1`, then `comment KEY VALUE` per metadata entry
-///   (producer, units, bbox, max_error, …).
+/// Profile, revision 2 (coordinates double, world units unless noted):
+///   element slim:      x y z radius k_xx k_yy k_zz k_xy k_yz k_zx k_x k_y k_z k_1
+///                      [clip_nx clip_ny clip_nz clip_d] [red green blue] [parent error]
+///                      (coefficients of g(u), u = (x − centre)/radius; clip plane in u)
+///   element slim_node: as slim, parent and error required: the hierarchy's balls that are not
+///                      drawn (Model::slim_hierarchy.others); only with slim's parent/error
+///   element tet:       x0 y0 z0 x1 y1 z1 x2 y2 z2 x3 y3 z3 k_xx … k_1 [red green blue]
+///                      (coefficients relative to the centroid of the four corners: y = x − centroid)
+///   element glyph:     kind(uchar: 0 sphere, 1 ellipsoid, 2 cylinder) x y z radius
+///                      a0x a0y a0z a1x a1y a1z a2x a2y a2z [red green blue]
+///   parent (int32): ball id of the parent, −1 for a root; ids count the slim rows, then the
+///   slim_node rows. error (double): the ball's fitting error, ≥ 0. The links form a forest.
+///   header comments: `comment quadrix-format 2`, then `comment KEY VALUE` per metadata entry
+///   (producer, units, bbox, max_error, …). Revision 1 (no hierarchy) is still read.
 ///
 /// Writer conventions: only non-empty elements are written, except that an entirely empty model
-/// declares all three with count 0. Optional columns appear when any primitive of that kind has
-/// them; a slim patch without a clip plane then gets an all-zero plane (a zero normal reads back
-/// as "no clip"), and a primitive without a colour is written black (0 0 0) and reads back black.
+/// declares slim, tet and glyph with count 0. Optional columns appear when any primitive of that
+/// element has them; a slim patch without a clip plane then gets an all-zero plane (a zero normal
+/// reads back as "no clip"), and a primitive without a colour is written black (0 0 0) and reads
+/// back black. parent/error are written on slim and slim_node when the model has a hierarchy.
 /// Metadata keys containing whitespace are skipped, values are made single-line; `bbox` is always
 /// recomputed from the model (`bbox x0 y0 z0 x1 y1 z1`, omitted for an empty model).
 /// Reader: every comment `KEY VALUE` except `quadrix-format` becomes a metadata entry (so `bbox`
-/// is in the metadata read back). Columns may be of any PLY numeric type; unknown extra
-/// properties and elements are ignored (but still validated).
+/// is in the metadata read back). Columns may be of any PLY numeric type (parent must hold an
+/// integer); unknown extra properties and elements are ignored (but still validated).
 #include <filesystem>
 
 #include "core/model.h"
 
 namespace quadrix {
 
-inline constexpr int kQxmFormatVersion = 1;
+inline constexpr int kQxmFormatVersion = 2;
 
 /// Reads a .qxm (any PLY encoding of the profile) or, by extension or magic, a .slim2t file.
 /// Validates before it trusts: element counts against the file size before any allocation,
@@ -38,12 +43,19 @@ inline constexpr int kQxmFormatVersion = 1;
 /// \throws IoError when the file cannot be opened.
 Model read_model(const std::filesystem::path& path);
 
-/// Kanai's .slim2t: int32 {±degree, #balls, #user values}, then per ball float32 centre(3),
-/// coefficients(10, order xx yy zz xy yz zx x y z 1, local to the centre, unscaled),
-/// support R, parent id (1-based, −1 root), user values. Only leaf balls are kept.
-/// All little-endian; we read the parent id as int32 and user values as float32 (ignored);
-/// |degree| ∈ {1, 2} (the sign is a flag), 0 ≤ #user values < 1024, parent ids in [−1, #balls]
-/// (0 and −1 mean no parent); R must be finite and > 0.
+/// Kanai's .slim2t: int32 {±degree, #balls, #user values}, then per ball only float32:
+/// centre(3), coefficients(10, order xx yy zz xy yz zx x y z 1, local to the centre, unscaled),
+/// support R, parent id (an integer-valued float, 1-based, −1 for a root), user values (the first
+/// is the ball's fitting error). All little-endian; |degree| ∈ {1, 2}, 0 ≤ #user values < 1024.
+/// Refused: trailing bytes after the declared balls, R not finite or ≤ 0, a parent id that is not
+/// an integer in {−1} ∪ [1, #balls] or is the ball itself, links that are not a forest, a
+/// negative error. The leaves become Model::slims (in file order); the whole tree, interior
+/// balls included, goes to Model::slim_hierarchy (leaves first, then interior balls in file
+/// order; errors 0 when the file has no user values).
+/// A negative degree marks an unoriented file: every ball is flipped when most leaf gradients
+/// point towards the leaves' centroid, and each interior ball is flipped to agree with the
+/// majority of the leaves below it inside its support; the account is in metadata
+/// `slim2t_orientation`. Leaves keep their relative signs.
 /// \throws FormatError, IoError as read_model.
 Model read_slim2t(const std::filesystem::path& path);
 

@@ -28,6 +28,17 @@ void add_info(CLI::App& root, Commands& commands) {
                           j["bbox"] = {{"min", {box.min.x(), box.min.y(), box.min.z()}},
                                        {"max", {box.max.x(), box.max.y(), box.max.z()}},
                                        {"diagonal", box.diagonal()}};
+                        const bool hierarchical = !m.slim_hierarchy.empty();
+                        SlimHierarchyStats hs;
+                        if (hierarchical) {
+                          hs = slim_hierarchy_stats(m);
+                          j["slim_hierarchy"] = {{"balls", m.slim_hierarchy.size()},
+                                                 {"levels", hs.levels},
+                                                 {"leaves", hs.leaves},
+                                                 {"interior", hs.interior},
+                                                 {"roots", hs.roots},
+                                                 {"error", {{"min", hs.min_error}, {"max", hs.max_error}}}};
+                        }
                         j["metadata"] = m.metadata;
                         report.json["info"] = j;
                         if (*json) {
@@ -39,6 +50,11 @@ void add_info(CLI::App& root, Commands& commands) {
                         std::cout << fmt::format("  tetrahedron patches {}\n", m.tets.size());
                         std::cout << fmt::format("  glyphs             {} (spheres {}, ellipsoids {}, cylinders {})\n",
                                                  m.glyphs.size(), g[0], g[1], g[2]);
+                        if (hierarchical)
+                          std::cout << fmt::format("  slim hierarchy     {} balls: {} levels, {} leaves, {} interior, "
+                                                   "{} roots; error {:.6g} – {:.6g}\n",
+                                                   m.slim_hierarchy.size(), hs.levels, hs.leaves, hs.interior,
+                                                   hs.roots, hs.min_error, hs.max_error);
                         if (!box.empty())
                           std::cout << fmt::format("  bounding box       [{:.6g} {:.6g} {:.6g}] – [{:.6g} {:.6g} {:.6g}], "
                                                    "diagonal {:.6g}\n",

@@ -353,7 +353,7 @@ inline std::vector<MalformedCase> make_malformed_corpus(const std::filesystem::p
   }
   {
     PlyDoc d = doc;
-    d.comments[0] = "quadrix-format 2";
+    d.comments[0] = "quadrix-format 3";
     add_doc("future_version.qxm", d, le, "unsupported quadrix-format");
     d.comments.erase(d.comments.begin());
     add_doc("plain_ply.qxm", d, le, "not a .qxm file");

@@ -4,8 +4,18 @@
 #include <cstring>
 #include <sstream>
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <random>
+
+#include "core/bvh.h"
+#include "core/camera.h"
 #include "core/error.h"
+#include "core/mesh_io.h"
 #include "core/model_io.h"
+#include "core/reference.h"
 #include "core/ply.h"
 #include "tests/core/malformed_corpus.h"
 
@@ -95,7 +105,7 @@ TEST(ModelIo, HeaderFollowsTheProfile) {
   m.tets.clear();
   write_model(m, dir / "m.qxm");
   const std::string bytes = test::read_bytes(dir / "m.qxm");
-  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 1\n", 0), 0u);
+  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 2\n", 0), 0u);
   const ply::File f = ply::File::open(dir / "m.qxm");
   ASSERT_NE(f.header().find("slim"), nullptr);
   EXPECT_EQ(f.header().find("tet"), nullptr);  // empty elements are left out
@@ -229,7 +239,7 @@ struct Ball {
   std::array<float, 3> centre;
   std::array<float, 10> k;
   float radius;
-  std::int32_t parent;
+  float parent;  // 1-based, −1 for a root: a float in the file, like every per-ball value
 };
 
 std::string slim2t_bytes(std::int32_t degree, const std::vector<Ball>& balls, std::int32_t nuser,
@@ -266,6 +276,11 @@ TEST(Slim2t, KeepsLeavesAndConvertsCoefficients) {
     write_bytes(dir / "s.slim2t", slim2t_bytes(degree, balls, 2));
     const Model m = read_model(dir / "s.slim2t");
     ASSERT_EQ(m.slims.size(), 2u);
+    // An unoriented file (degree < 0) may come back flipped as a whole, never leaf by leaf.
+    const double sign = degree < 0 && m.metadata.at("slim2t_orientation").find("every ball was flipped") !=
+                                          std::string::npos
+                            ? -1.0
+                            : 1.0;
     const Ball* src[2] = {&balls[2], &balls[3]};
     for (int i = 0; i < 2; ++i) {
       const SlimPatch& s = m.slims[i];
@@ -275,7 +290,7 @@ TEST(Slim2t, KeepsLeavesAndConvertsCoefficients) {
       EXPECT_EQ(s.centre, c);
       QuadricCoefficients k;
       for (int j = 0; j < 10; ++j) k[j] = b.k[j];
-      const Quadric original = Quadric::from_coefficients(k);  // local to the centre, unscaled
+      const Quadric original = Quadric::from_coefficients(k) * sign;  // local to the centre, unscaled
       const Quadric world = s.world();
       std::mt19937_64 rng(7);
       std::uniform_real_distribution<double> u(-2, 2);
@@ -327,6 +342,395 @@ TEST(Slim2t, MalformedFilesThrowFormatErrors) {
   bad = balls;
   bad[3].k[4] = std::numeric_limits<float>::infinity();
   expect_error("inf.slim2t", slim2t_bytes(2, bad, 0), "not finite");
+  // Parent ids are integer-valued floats in {−1} ∪ [1, #balls], not the ball itself, no cycles.
+  bad = balls;
+  bad[2].parent = 1.5f;
+  expect_error("fraction.slim2t", slim2t_bytes(2, bad, 0), "ball 2 at byte 188: parent id 1.5 is not an integer");
+  bad = balls;
+  bad[2].parent = 0.0f;
+  expect_error("zero.slim2t", slim2t_bytes(2, bad, 0), "ball 2 at byte 188: parent id 0");
+  bad = balls;
+  bad[1].parent = -2.0f;
+  expect_error("minus2.slim2t", slim2t_bytes(2, bad, 0), "ball 1 at byte 128: parent id -2");
+  bad = balls;
+  bad[1].parent = std::nanf("");
+  expect_error("nan_parent.slim2t", slim2t_bytes(2, bad, 0), "ball 1 at byte 128: parent id value nan is not finite");
+  bad = balls;
+  bad[3].parent = 4.0f;
+  expect_error("self.slim2t", slim2t_bytes(2, bad, 0), "ball 3 at byte 248: parent id 4 is the ball itself");
+  bad = balls;
+  bad[0].parent = 4.0f;  // 1 → 4 → 2 → 1
+  expect_error("cycle.slim2t", slim2t_bytes(2, bad, 0), "parent links form a cycle");
+  // Bytes after the declared balls are refused, named by their offset.
+  expect_error("trailing.slim2t", slim2t_bytes(2, balls, 0) + std::string(3, '\0'),
+               "at byte 252: 3 bytes follow the 4 declared balls");
+  expect_error("extra_ball.slim2t", slim2t_bytes(2, balls, 0, 3), "60 bytes follow the 3 declared balls");
+  // Errors (the first user value) are ≥ 0.
+  std::string neg = slim2t_bytes(2, balls, 1);
+  const float minus = -1.0f;
+  std::memcpy(neg.data() + 12 + 64 + 60, &minus, 4);
+  expect_error("error.slim2t", neg, "ball 1 at byte 136: error (first user value) -1 is negative");
+}
+
+TEST(Slim2t, KeepsTheHierarchyWithErrors) {
+  ScratchDir dir("slim2t");
+  write_bytes(dir / "s.slim2t", slim2t_bytes(2, sample_balls(), 2));  // errors: 0.5 for every ball
+  const Model m = read_model(dir / "s.slim2t");
+  // Leaves (file balls 2, 3) are ids 0, 1; interior balls (file 0, 1) ids 2, 3.
+  ASSERT_EQ(m.slims.size(), 2u);
+  const SlimHierarchy& h = m.slim_hierarchy;
+  ASSERT_EQ(h.others.size(), 2u);
+  EXPECT_EQ(h.parent, (std::vector<std::int32_t>{2, 3, -1, 2}));
+  EXPECT_EQ(h.error, (std::vector<double>(4, 0.5)));
+  EXPECT_EQ(h.others[0].radius, 3.0);
+  EXPECT_EQ(h.others[1].centre, Eigen::Vector3d(1, 0, 0));
+  EXPECT_EQ(validate_slim_hierarchy(m), "");
+  const SlimHierarchyStats st = slim_hierarchy_stats(m);
+  EXPECT_EQ(st.levels, 3u);
+  EXPECT_EQ(st.leaves, 2u);
+  EXPECT_EQ(st.interior, 2u);
+  EXPECT_EQ(st.roots, 1u);
+  EXPECT_EQ(m.metadata.at("slim2t_degree"), "2");
+  EXPECT_EQ(m.metadata.count("slim2t_orientation"), 0u);  // positive degree: oriented, untouched
+}
+
+/// A hand-made hierarchy: 4 leaves (ids 0–3), interior 4 = {0, 1}, 5 = {4, 2}, root 6 = {5, 3}.
+Model sample_hierarchy() {
+  Model m;
+  for (int i = 0; i < 4; ++i) {
+    SlimPatch& s = m.slims.emplace_back();
+    s.centre = Eigen::Vector3d(i, 0.5 * i, -i);
+    s.radius = 0.25 + i;
+    s.local = Quadric::sphere(Eigen::Vector3d::Zero(), 0.5);
+    s.colour = Rgb{static_cast<std::uint8_t>(i), 2, 3};
+  }
+  m.slims[1].clip = ClipPlane{Eigen::Vector3d(0, 0, 1), 0.25};
+  auto& h = m.slim_hierarchy;
+  for (int i = 0; i < 3; ++i) {
+    SlimPatch& s = h.others.emplace_back();
+    s.centre = Eigen::Vector3d(0.1 * i, 1, 2);
+    s.radius = 4.0 + i;
+    s.local = Quadric::plane(Eigen::Vector3d(1, 2, 3), -0.1 * i);
+    s.colour = Rgb{9, 8, static_cast<std::uint8_t>(i)};
+  }
+  h.parent = {4, 4, 5, 6, 5, 6, -1};
+  h.error = {0, 0, 0, 0, 0.3, 0.7, 1.0 / 3.0};
+  return m;
+}
+
+TEST(SlimHierarchy, CutByError) {
+  Model m = sample_hierarchy();
+  EXPECT_EQ(select_slim_cut(m, -1), (std::vector<std::int32_t>{0, 1, 2, 3}));
+  EXPECT_EQ(select_slim_cut(m, 0.0), (std::vector<std::int32_t>{0, 1, 2, 3}));
+  EXPECT_EQ(select_slim_cut(m, 0.3), (std::vector<std::int32_t>{2, 3, 4}));
+  // Errors not monotone at the root (1/3 < 0.7): the walk from the root takes the root.
+  EXPECT_EQ(select_slim_cut(m, 0.5), (std::vector<std::int32_t>{6}));
+  m.slim_hierarchy.error[6] = 2.0;
+  EXPECT_EQ(select_slim_cut(m, 0.7), (std::vector<std::int32_t>{3, 5}));
+  EXPECT_EQ(select_slim_cut(m, 2.0), (std::vector<std::int32_t>{6}));
+  m.slim_hierarchy.parent[6] = 5;  // 5 → 6 → 5
+  EXPECT_NE(validate_slim_hierarchy(m).find("cycle"), std::string::npos) << validate_slim_hierarchy(m);
+  EXPECT_THROW(select_slim_cut(m, 0.5), InvalidInput);
+  m.slim_hierarchy.parent[6] = 6;
+  EXPECT_NE(validate_slim_hierarchy(m).find("ball 6: parent 6 is itself"), std::string::npos);
+  m.slim_hierarchy.parent.clear();
+  m.slim_hierarchy.error.clear();
+  m.slim_hierarchy.others.clear();
+  EXPECT_EQ(select_slim_cut(m, 0.5), (std::vector<std::int32_t>{0, 1, 2, 3}));  // no hierarchy: all drawn
+}
+
+TEST(ModelIo, HierarchyRoundTripsThroughRevision2) {
+  ScratchDir dir("qxm2");
+  Model m = sample_hierarchy();
+  m.metadata["producer"] = "test";
+  write_model(m, dir / "h.qxm");
+  std::ifstream in(dir / "h.qxm", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("comment quadrix-format 2\n"), std::string::npos);
+  EXPECT_NE(bytes.find("element slim 4\n"), std::string::npos);
+  EXPECT_NE(bytes.find("element slim_node 3\n"), std::string::npos);
+  EXPECT_NE(bytes.find("property int parent\nproperty double error\n"), std::string::npos);
+  const Model r = read_model(dir / "h.qxm");
+  expect_same_primitives(m, r);
+  ASSERT_EQ(r.slim_hierarchy.others.size(), 3u);
+  Model mo, ro;  // the interior balls, compared the same way
+  mo.slims = m.slim_hierarchy.others;
+  ro.slims = r.slim_hierarchy.others;
+  expect_same_primitives(mo, ro);
+  EXPECT_EQ(r.slim_hierarchy.parent, m.slim_hierarchy.parent);
+  EXPECT_EQ(r.slim_hierarchy.error, m.slim_hierarchy.error);  // doubles, bit for bit
+  EXPECT_EQ(without_bbox(r.metadata), m.metadata);
+
+  // Corrupt hierarchies are refused with the element, row and byte.
+  Model bad = m;
+  bad.slim_hierarchy.parent[2] = 9;
+  EXPECT_THROW(write_model(bad, dir / "bad.qxm"), InvalidInput);
+  std::string cyc = bytes;
+  // Row 6 (slim_node row 2) is the root: make its parent 5, closing 5 → 6 → 5.
+  const std::size_t body = cyc.find("end_header\n") + 11;
+  const std::size_t slim_row = 14 * 8 + 4 * 8 + 3 + 4 + 8;  // with clip and colour
+  const std::size_t node_row = 14 * 8 + 3 + 4 + 8;              // colour, no clip
+  const std::size_t at = body + 4 * slim_row + 2 * node_row + 14 * 8 + 3;
+  std::int32_t old = 0;
+  std::memcpy(&old, cyc.data() + at, 4);
+  ASSERT_EQ(old, -1);
+  const std::int32_t five = 5;
+  std::memcpy(cyc.data() + at, &five, 4);
+  write_bytes(dir / "cycle.qxm", cyc);
+  try {
+    read_model(dir / "cycle.qxm");
+    ADD_FAILURE() << "cycle accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("cycle.qxm: element 'slim_node' row"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("property 'parent' at byte"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cycle"), std::string::npos) << e.what();
+  }
+  std::string self = bytes;
+  const std::int32_t six = 6;
+  std::memcpy(self.data() + at, &six, 4);
+  write_bytes(dir / "self.qxm", self);
+  try {
+    read_model(dir / "self.qxm");
+    ADD_FAILURE() << "self parent accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("element 'slim_node' row 2 property 'parent' at byte " + std::to_string(at) +
+                                           ": parent 6 is the ball itself"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ModelIo, Revision1FilesStillLoad) {
+  ScratchDir dir("qxm1");
+  // A revision-1 file as the previous writer made it: no parent/error, no slim_node.
+  const std::string rev1 =
+      "ply\nformat ascii 1.0\ncomment quadrix-format 1\ncomment producer old\nelement slim 1\n"
+      "property double x\nproperty double y\nproperty double z\nproperty double radius\n"
+      "property double k_xx\nproperty double k_yy\nproperty double k_zz\nproperty double k_xy\n"
+      "property double k_yz\nproperty double k_zx\nproperty double k_x\nproperty double k_y\n"
+      "property double k_z\nproperty double k_1\nend_header\n1 2 3 0.5 1 1 1 0 0 0 0 0 0 -0.25\n";
+  write_bytes(dir / "old.qxm", rev1);
+  const Model m = read_model(dir / "old.qxm");
+  ASSERT_EQ(m.slims.size(), 1u);
+  EXPECT_EQ(m.slims[0].centre, Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(m.slim_hierarchy.empty());
+  EXPECT_EQ(m.metadata.at("producer"), "old");
+  // slim_node without the hierarchy columns on slim is refused.
+  std::string orphan = rev1;
+  orphan.replace(orphan.find("end_header"), 10,
+                 "element slim_node 0\nproperty double x\nend_header");
+  write_bytes(dir / "orphan.qxm", orphan);
+  EXPECT_THROW(read_model(dir / "orphan.qxm"), FormatError);
+}
+
+// ------------------------------------------------------------------ the real .slim2t
+
+const std::filesystem::path kBunnySlim = std::filesystem::path(QUADRIX_DATASETS) / "slim/bunny_mesh2slim.slim2t";
+const std::filesystem::path kBunnyMesh = std::filesystem::path(QUADRIX_DATASETS) / "meshes/bunny.ply";
+
+constexpr std::size_t kBunnyLevels = 21;  // measured
+// Measured (8 views at 128²): distance p99 0.010, p99.9 0.045 (size 10); depth gap p50 1.1e-4,
+// p99 0.081; pixels hit by one surface only: 0.9 % (mesh only) and 0.5 % (SLIM only), silhouettes.
+constexpr double kBunnyP99Distance = 0.02;
+constexpr double kBunnyP50DepthGap = 1e-3;  // the far side (a flipped model) would be units away
+constexpr double kBunnyP99DepthGap = 0.15;
+constexpr double kBunnyOneSidedShare = 0.015;  // the longest root-to-leaf path, counted in balls
+
+/// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection §5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                    const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+/// Triangles for nearest-point and first-hit queries: a BVH and a uniform grid of cell h.
+struct MeshQueries {
+  std::vector<std::array<Eigen::Vector3d, 3>> tris;
+  Bvh bvh;
+  double h = 0.1;
+  std::map<std::array<int, 3>, std::vector<int>> grid;
+
+  explicit MeshQueries(std::vector<std::array<Eigen::Vector3d, 3>> t) : tris(std::move(t)) {
+    std::vector<Box3> boxes(tris.size());
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      for (const auto& v : tris[i]) boxes[i].extend(v);
+      const auto lo = cell(boxes[i].min), hi = cell(boxes[i].max);
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int z = lo[2]; z <= hi[2]; ++z) grid[{x, y, z}].push_back(static_cast<int>(i));
+    }
+    bvh = Bvh(boxes);
+  }
+  std::array<int, 3> cell(const Eigen::Vector3d& p) const {
+    return {static_cast<int>(std::floor(p.x() / h)), static_cast<int>(std::floor(p.y() / h)),
+            static_cast<int>(std::floor(p.z() / h))};
+  }
+  /// Exact distance to the nearest triangle (rings of cells until the ring bounds the answer).
+  double distance(const Eigen::Vector3d& p) const {
+    const auto c = cell(p);
+    double best = std::numeric_limits<double>::infinity();
+    for (int k = 1; k < 200; ++k) {
+      for (int x = -k; x <= k; ++x)
+        for (int y = -k; y <= k; ++y)
+          for (int z = -k; z <= k; ++z) {
+            if (std::max({std::abs(x), std::abs(y), std::abs(z)}) < k - 1 && k > 1) continue;
+            const auto it = grid.find({c[0] + x, c[1] + y, c[2] + z});
+            if (it == grid.end()) continue;
+            for (int t : it->second) {
+              const auto& tr = tris[static_cast<std::size_t>(t)];
+              best = std::min(best, (p - closest_on_triangle(p, tr[0], tr[1], tr[2])).norm());
+            }
+          }
+      if (best <= (k - 1) * h) return best;  // everything within (k − 1)·h has been visited
+    }
+    return best;
+  }
+  /// Distance to the first triangle along the ray (Möller–Trumbore), or +inf.
+  double first_hit(const Ray& ray) const {
+    double best = std::numeric_limits<double>::infinity();
+    bvh.traverse(ray, 0.0, [&] { return best; }, [&](std::uint32_t i) {
+      const auto& tr = tris[i];
+      const Eigen::Vector3d e1 = tr[1] - tr[0], e2 = tr[2] - tr[0], pv = ray.dir.cross(e2);
+      const double det = e1.dot(pv);
+      if (std::abs(det) < 1e-300) return;
+      const Eigen::Vector3d tv = ray.origin - tr[0];
+      const double u = tv.dot(pv) / det;
+      if (u < 0 || u > 1) return;
+      const Eigen::Vector3d q = tv.cross(e1);
+      const double v = ray.dir.dot(q) / det, t = e2.dot(q) / det;
+      if (v < 0 || u + v > 1 || t <= 0) return;
+      best = std::min(best, t);
+    });
+    return best;
+  }
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+TEST(Slim2tReal, LeavesBlendToTheBunnyMesh) {
+  if (!std::filesystem::exists(kBunnySlim) || !std::filesystem::exists(kBunnyMesh))
+    GTEST_SKIP() << "data set not found: " << kBunnySlim.string() << " or " << kBunnyMesh.string();
+  const Model m = read_model(kBunnySlim);
+  // bunny.ply in mesh2slim's frame: centred on its bounding-box centre, largest box side 10.
+  const PolygonMesh mesh = read_mesh(kBunnyMesh);
+  Box3 box;
+  for (const auto& v : mesh.vertices) box.extend(v);
+  const double scale = 10.0 / (box.max - box.min).maxCoeff();
+  std::vector<std::array<Eigen::Vector3d, 3>> tris;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto face = mesh.face(f);
+    ASSERT_EQ(face.size(), 3u);
+    std::array<Eigen::Vector3d, 3> t;
+    for (int k = 0; k < 3; ++k) t[k] = (mesh.vertices[static_cast<std::size_t>(face[k])] - box.centre()) * scale;
+    tris.push_back(t);
+  }
+  const MeshQueries queries(std::move(tris));
+  const ReferenceScene scene(m);
+  std::vector<double> distances, depth_gaps;
+  std::size_t mesh_pixels = 0, slim_pixels = 0, holes = 0, extra = 0;
+  for (const auto& [az, el] : std::vector<std::pair<double, double>>{
+           {0, 10}, {60, 20}, {120, -10}, {180, 30}, {240, 0}, {300, -30}, {90, 80}, {30, -80}}) {
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = el, .width = 128, .height = 128});
+    const ReferenceImage img = render_reference(scene, cam);
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const std::size_t px = static_cast<std::size_t>(y) * static_cast<std::size_t>(cam.width) +
+                               static_cast<std::size_t>(x);
+        const Ray ray = cam.pixel_ray(x + 0.5, y + 0.5);
+        const double t_mesh = queries.first_hit(ray);
+        const bool has_mesh = std::isfinite(t_mesh), has_slim = img.coverage[px] != 0;
+        mesh_pixels += has_mesh;
+        slim_pixels += has_slim;
+        holes += has_mesh && !has_slim;
+        extra += has_slim && !has_mesh;
+        if (!has_slim) continue;
+        const double t = img.distance[px];
+        distances.push_back(queries.distance(ray.at(t)));
+        if (has_mesh) depth_gaps.push_back(std::abs(t - t_mesh));
+      }
+  }
+  const double p50 = percentile(distances, 0.5), p99 = percentile(distances, 0.99),
+               p999 = percentile(distances, 0.999), worst = percentile(distances, 1.0);
+  const double gap99 = percentile(depth_gaps, 0.99);
+  std::printf("[   INFO   ] %zu hit pixels (mesh %zu): distance to the mesh p50 %.3g p99 %.3g p99.9 %.3g max %.3g "
+              "(model size 10); first-hit depth gap p50 %.3g p99 %.3g; holes %zu, outside the mesh %zu\n",
+              slim_pixels, mesh_pixels, p50, p99, p999, worst, percentile(depth_gaps, 0.5), gap99, holes, extra);
+  EXPECT_LT(p99, kBunnyP99Distance);
+  EXPECT_LT(percentile(depth_gaps, 0.5), kBunnyP50DepthGap);
+  EXPECT_LT(gap99, kBunnyP99DepthGap);
+  EXPECT_LT(static_cast<double>(holes), kBunnyOneSidedShare * static_cast<double>(mesh_pixels));
+  EXPECT_LT(static_cast<double>(extra), kBunnyOneSidedShare * static_cast<double>(mesh_pixels));
+}
+
+TEST(Slim2tReal, BunnyHierarchyLoads) {
+  if (!std::filesystem::exists(kBunnySlim)) GTEST_SKIP() << "data set not found: " << kBunnySlim.string();
+  const Model m = read_model(kBunnySlim);
+  EXPECT_EQ(m.slims.size(), 69451u);  // one leaf per triangle of bunny.ply
+  const SlimHierarchy& h = m.slim_hierarchy;
+  EXPECT_EQ(h.size(), 138901u);
+  EXPECT_EQ(h.others.size(), 69450u);
+  EXPECT_EQ(validate_slim_hierarchy(m), "");
+  const SlimHierarchyStats st = slim_hierarchy_stats(m);
+  EXPECT_EQ(st.leaves, 69451u);
+  EXPECT_EQ(st.interior, 69450u);
+  EXPECT_EQ(st.roots, 1u);
+  EXPECT_EQ(st.levels, kBunnyLevels);
+  EXPECT_EQ(st.min_error, 0.0);
+  EXPECT_EQ(st.max_error, static_cast<double>(42736.43359375f));
+  for (std::size_t i = 0; i < m.slims.size(); ++i) ASSERT_EQ(h.error[i], 0.0) << "leaf " << i;
+  // Errors grow towards the root, so a cut is the set the definition names.
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (h.parent[i] >= 0) {
+      ASSERT_GE(h.error[static_cast<std::size_t>(h.parent[i])], h.error[i]) << "ball " << i;
+    }
+  EXPECT_EQ(select_slim_cut(m, 0.0).size(), 69451u);
+  EXPECT_EQ(select_slim_cut(m, st.max_error), (std::vector<std::int32_t>{static_cast<std::int32_t>(
+                                                  std::find(h.parent.begin(), h.parent.end(), -1) - h.parent.begin())}));
+  for (const double threshold : {1e-3, 1.0, 100.0}) {
+    const auto cut = select_slim_cut(m, threshold);
+    std::vector<int> covered(h.size(), 0);
+    for (std::int32_t b : cut) {
+      EXPECT_LE(h.error[static_cast<std::size_t>(b)], threshold);
+      const std::int32_t p = h.parent[static_cast<std::size_t>(b)];
+      if (p >= 0) {
+        EXPECT_GT(h.error[static_cast<std::size_t>(p)], threshold);
+      }
+      covered[static_cast<std::size_t>(b)] = 1;
+    }
+    // Every leaf lies under exactly one ball of the cut.
+    for (std::size_t leaf = 0; leaf < m.slims.size(); ++leaf) {
+      int under = 0;
+      for (std::int64_t a = static_cast<std::int64_t>(leaf); a >= 0; a = h.parent[static_cast<std::size_t>(a)])
+        under += covered[static_cast<std::size_t>(a)];
+      ASSERT_EQ(under, 1) << "leaf " << leaf << " threshold " << threshold;
+    }
+    std::printf("[   INFO   ] cut at error %g: %zu balls\n", threshold, cut.size());
+  }
+  // The file is unoriented (degree −2); every ball pointed inwards and was flipped.
+  EXPECT_EQ(m.metadata.at("slim2t_degree"), "-2");
+  EXPECT_NE(m.metadata.at("slim2t_orientation").find("every ball was flipped"), std::string::npos)
+      << m.metadata.at("slim2t_orientation");
+  std::printf("[   INFO   ] %s\n", m.metadata.at("slim2t_orientation").c_str());
 }
 
 }  // namespace
