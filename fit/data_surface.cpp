@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "core/bvh.h"
 #include "core/error.h"
+#include "core/ray.h"
 #include "fit/point_index.h"
 
 namespace quadrix {
@@ -45,6 +47,7 @@ struct DataSurface::Impl {
   std::vector<Eigen::Vector3d> inward;  // boundary points: unit tangent towards the data; else 0
   std::vector<std::array<Eigen::Vector3d, 3>> triangles;
   double max_reach = 0;  // largest centroid–corner distance
+  bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
   Bvh bvh;
   DataSurfaceOptions options;
@@ -107,6 +110,16 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
       m.triangles.push_back({mesh.vertices[vs[0]], mesh.vertices[vs[k]], mesh.vertices[vs[k + 1]]});
   }
   if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
+  // A closed mesh (every edge on two faces) with a negative enclosed volume is wound inwards.
+  std::map<std::pair<int, int>, int> edges;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 0; k < vs.size(); ++k) ++edges[std::minmax(vs[k], vs[(k + 1) % vs.size()])];
+  }
+  const bool closed = std::all_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 2; });
+  double volume = 0;
+  for (const auto& t : m.triangles) volume += t[0].dot(t[1].cross(t[2]));
+  m.wound_inward = closed && volume < 0;
   std::vector<Box3> boxes;
   boxes.reserve(m.triangles.size());
   m.points.reserve(m.triangles.size());
@@ -181,8 +194,55 @@ std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* 
     if (d > tmin && d < best) best = d, best_front = det > 0.0;
   });
   if (best == kInf) return std::nullopt;
-  if (front) *front = best_front;
+  if (front) *front = best_front != m.wound_inward;
   return best;
+}
+
+bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bound, int grid) {
+  struct Cell {
+    int axis;
+    double a, b, h;  // line through (a, b) in the two other local coordinates; cell side h
+  };
+  // A sheet point of the cell is within reach of the cell's sample on the best-aligned axis
+  // (|n·axis| ≥ 1/√3): half the cell diagonal, stretched by at most √3 along the sheet.
+  constexpr double kReach = 0.7071 * 1.7321;
+  constexpr double kAligned = 0.57;
+  std::vector<Cell> stack;
+  const double h0 = 2.0 / grid;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int i = 0; i < grid; ++i)
+      for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0});
+  const double min_reach = bound / 16.0;
+  while (!stack.empty()) {
+    const Cell c = stack.back();
+    stack.pop_back();
+    const int a1 = (c.axis + 1) % 3, a2 = (c.axis + 2) % 3;
+    // Cells wholly outside the ball's cross-section hold no part of the zero set.
+    const double nearest = std::hypot(std::max(0.0, std::abs(c.a) - 0.5 * c.h), std::max(0.0, std::abs(c.b) - 0.5 * c.h));
+    if (nearest >= 1.0) continue;
+    Ray line;
+    line.origin = Eigen::Vector3d::Zero();
+    line.origin[a1] = c.a;
+    line.origin[a2] = c.b;
+    line.dir = Eigen::Vector3d::Unit(c.axis);
+    const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
+    const double reach = kReach * c.h * patch.radius;
+    bool split = false;
+    for (int k = 0; k < roots.count; ++k) {
+      const Eigen::Vector3d u = line.at(roots.t[k]);
+      if (!(u.squaredNorm() < 1.0) || (patch.clip && !patch.clip->keeps(u))) continue;
+      const double d = data.distance(patch.centre + patch.radius * u);
+      if (!(d <= bound)) return false;
+      const Eigen::Vector3d g = patch.local.gradient(u);
+      const bool aligned = std::abs(g[c.axis]) >= kAligned * g.norm();
+      if (aligned && d + reach > bound && reach > min_reach) split = true;
+    }
+    if (!split) continue;
+    const double q = 0.25 * c.h;
+    for (const double da : {-q, q})
+      for (const double db : {-q, q}) stack.push_back({c.axis, c.a + da, c.b + db, 0.5 * c.h});
+  }
+  return true;
 }
 
 }  // namespace quadrix

@@ -12,23 +12,25 @@
 #include <Eigen/Core>
 
 #include "core/mesh_io.h"
+#include "core/model.h"
 #include "core/ray.h"
 
 namespace quadrix {
 
 struct DataSurfaceOptions {
   /// Tangent-disc radius of a point: disc_factor × the distance to its spacing_neighbour-th
-  /// nearest neighbour (6 neighbours of a regular sampling sit at about one spacing).
+  /// nearest neighbour on the same sheet (6 neighbours of a regular sampling sit at about one
+  /// spacing; random samplings leave gaps of up to about 1.5 spacings).
   std::size_t spacing_neighbour = 6;
-  double disc_factor = 1.0;
+  double disc_factor = 1.5;
   /// Points (nearest first) whose discs are tried per distance query.
   std::size_t candidates = 12;
   /// Open boundaries: a point whose boundary_neighbours nearest neighbours have their tangential
   /// centroid more than boundary_offset × their mean distance away lies on a boundary; its disc
   /// reaches only boundary_reach × its radius past the point, away from that centroid (so the
   /// data's surface stops near the boundary instead of extrapolating by a whole spacing).
-  std::size_t boundary_neighbours = 12;
-  double boundary_offset = 0.3;
+  std::size_t boundary_neighbours = 24;
+  double boundary_offset = 0.45;
   double boundary_reach = 0.25;
 };
 
@@ -47,7 +49,8 @@ public:
   /// Distance from x to the data's surface, world units (thread-safe).
   double distance(const Eigen::Vector3d& x) const;
   /// Nearest intersection of the ray with the triangles (either side); nothing for points.
-  /// front: whether that triangle faces the ray (counter-clockwise seen from the ray's origin).
+  /// front: whether that triangle faces the ray: counter-clockwise seen from the ray's origin, or
+  /// clockwise when the mesh is closed and its signed volume negative (wound inwards).
   std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr) const;
   bool has_faces() const;
   /// Tangent-disc radius of point i (points only).
@@ -58,6 +61,13 @@ private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Whether a SLIM patch's zero set inside its ball (and clip plane) lies within bound of data.
+/// Lines parallel to the three local axes on a grid × grid lattice find its points; as distance
+/// to the data is 1-Lipschitz, a sample at distance d vouches for its lattice cell when
+/// d + (the cell's reach on the sheet) ≤ bound, and cells it cannot vouch for are split in four,
+/// down to a reach of bound/16 — so no piece wider than that cell escapes, whatever R is.
+bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bound, int grid);
 
 /// Distance from x to triangle (a, b, c), any shape (degenerate ones as segments).
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

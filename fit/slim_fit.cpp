@@ -131,13 +131,9 @@ struct BallFitter {
   // The local form of the surface side: the patch's zero set inside its ball stays within
   // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
   // open boundary).
-  bool surface_ok(const Ball& b, Scratch& s) const {
-    s.zero.clear();
-    sample_slim_patch(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, opt.local_surface_grid, s.zero);
-    const double bound = opt.local_surface_factor * E;
-    for (const auto& z : s.zero)
-      if (!(data->distance(z.point) <= bound)) return false;
-    return true;
+  bool surface_ok(const Ball& b, Scratch&) const {
+    return zero_set_within(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, *data,
+                           opt.local_surface_factor * E, opt.local_surface_grid);
   }
 
   // A ball at (ci, R) whose points are within E and whose zero set passes surface_ok: the
@@ -148,9 +144,32 @@ struct BallFitter {
     if (!b) return std::nullopt;
     if (surface_ok(*b, s)) return b;
     if (b->clip) return std::nullopt;  // try_ball already tried the clipped sheet (--sharp)
-    auto c = try_sharp(ci, R, s);      // uses the check points try_ball left in s
+    // Both use the check points try_ball left in s.
+    if (auto c = try_boundary(*b, s); c && surface_ok(*c, s)) return c;
+    auto c = try_sharp(ci, R, s);
     if (c && surface_ok(*c, s)) return c;
     return std::nullopt;
+  }
+
+  // An open boundary inside the ball: the ball's points lie to one side (their tangential
+  // centroid is off the centre), so the patch is clipped by the plane across the sheet just
+  // beyond the outermost point, instead of extrapolating to the ball's rim.
+  std::optional<Ball> try_boundary(const Ball& b, const Scratch& s) const {
+    if (s.u.size() < 3) return std::nullopt;
+    Eigen::Vector3d nbar = Eigen::Vector3d::Zero(), centroid = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < s.u.size(); ++j) nbar += s.n[j], centroid += s.u[j];
+    if (!(nbar.norm() > 0)) return std::nullopt;
+    nbar.normalize();
+    centroid /= double(s.u.size());
+    Eigen::Vector3d m = centroid - nbar.dot(centroid) * nbar;
+    if (m.norm() < opt.boundary_offset) return std::nullopt;
+    m.normalize();
+    double lo = std::numeric_limits<double>::infinity();
+    for (const auto& u : s.u) lo = std::min(lo, m.dot(u));
+    Ball c = b;
+    c.clip = ClipPlane{m, -(lo - 0.5 * E / b.R)};
+    if (!c.clip->keeps(Eigen::Vector3d::Zero())) return std::nullopt;  // must own its centre
+    return c;
   }
 
   // grow, then shrink (×shrink_step) until the zero set passes surface_ok too; when nothing
@@ -434,7 +453,8 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
 // verification on both sides of the contract and repair of the patches at fault.
 class SlimFitter {
 public:
-  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options) : cloud_(cloud), opt_(options), P_(cloud.points) {}
+  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)
+      : cloud_(cloud), opt_(options), P_(cloud.points), surface_(surface) {}
 
   SlimFitResult run() {
     const auto t_start = Clock::now();
@@ -479,7 +499,7 @@ private:
     st_.time_normals = seconds_since(t0);
     index_ = std::make_unique<PointIndex>(P_);
     subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
-    data_ = std::make_unique<DataSurface>(DataSurface::from_points(P_, N_));
+    data_ = std::make_unique<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
     fitter_ = std::make_unique<BallFitter>(BallFitter{P_, N_, *index_, opt_, E_, opt_.probe_factor * E_});
     fitter_->subsamples = subsamples_.get();
     fitter_->data = data_.get();
@@ -779,6 +799,7 @@ private:
     md["max_error"] = num(E_ / st_.diagonal);
     md["max_error_abs"] = num(E_);
     md["surface_bound_abs"] = num(opt_.surface_factor * E_);
+    md["surface_reference"] = surface_ ? "mesh" : "points";
     md["diagonal"] = num(st_.diagonal);
     md["normals"] = st_.normals_estimated ? "estimated" : "given";
     md["points"] = std::to_string(st_.points);
@@ -810,6 +831,7 @@ private:
   const PointCloud& cloud_;
   const SlimFitOptions& opt_;
   const std::vector<Eigen::Vector3d>& P_;
+  const PolygonMesh* surface_;
   std::vector<Eigen::Vector3d> N_;
   double E_ = 0;
   SlimFitResult result_;
@@ -835,7 +857,11 @@ private:
 }  // namespace
 
 SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
-  return SlimFitter(cloud, options).run();
+  return SlimFitter(cloud, options, nullptr).run();
+}
+
+SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options) {
+  return SlimFitter(cloud, options, &surface).run();
 }
 
 }  // namespace quadrix

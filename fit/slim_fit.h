@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "core/mesh_io.h"
 #include "core/model.h"
 #include "core/points_io.h"
 
@@ -83,7 +84,11 @@ struct SlimFitOptions {
   double local_surface_factor = 1.5;
   int local_surface_grid = 6;
   double shrink_step = 0.75;
-  int shrink_steps = 10;
+  /// Open boundaries: when a ball's points have their tangential centroid farther than
+  /// boundary_offset·R from its centre and its zero set runs past the data, the patch gets a
+  /// clip plane across the sheet just beyond its outermost point.
+  double boundary_offset = 0.15;
+  int shrink_steps = 16;
   /// Verification: zero-set samples on a verify_surface_grid² lattice per axis and patch, each
   /// seen through the blend along its normal from surface_probe_factor·E above it.
   int verify_surface_grid = 8;
@@ -143,5 +148,10 @@ struct SlimFitResult {
 ///         count that differs from the point count, zero normals, coincident or coplanar points,
 ///         or bad options.
 SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options = {});
+
+/// The same with the data's own surface given (the mesh the points come from): the surface side
+/// is then bounded against the mesh's triangles instead of the points' tangent discs, so the
+/// surface stops where the mesh does (open boundaries) rather than a sample spacing beyond.
+SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options = {});
 
 }  // namespace quadrix
