@@ -23,6 +23,7 @@ enum class Format { ply, off, obj, stl, xyz, pts, qxm, slim2t };
 
 /// The file's format by extension; by its first bytes for an unknown one.
 Format format_of(const fs::path& path) {
+  io::read_file_prefix(path, 0);  // a missing file or a folder: IoError naming it, before anything else
   const std::string ext = io::lower_extension(path);
   if (ext == ".ply") return Format::ply;
   if (ext == ".off") return Format::off;
