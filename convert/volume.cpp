@@ -25,6 +25,7 @@
 #include "core/atomic_file.h"
 #include "core/bounds.h"
 #include "core/error.h"
+#include "core/io/file.h"
 #include "core/log.h"
 
 namespace quadrix {
@@ -53,55 +54,6 @@ std::string trim(std::string_view s) {
 bool ends_with(const fs::path& p, std::string_view suffix) {
   const std::string name = lower(p.filename().string());
   return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-// The whole decompressed content of a gzip file (or stream of gzip members).
-std::string read_gzip(const fs::path& path) {
-  gzFile f = gzopen(path.string().c_str(), "rb");
-  if (!f) throw IoError(fmt::format("cannot open '{}'", path.string()));
-  std::string out;
-  std::array<char, 1 << 16> buf{};
-  for (;;) {
-    const int n = gzread(f, buf.data(), static_cast<unsigned>(buf.size()));
-    if (n < 0) {
-      int code = 0;
-      const std::string msg = gzerror(f, &code);
-      gzclose(f);
-      throw FormatError(fmt::format("'{}': corrupt gzip data after {} decompressed bytes: {}", path.string(),
-                                    out.size(), msg));
-    }
-    if (n == 0) break;
-    out.append(buf.data(), static_cast<std::size_t>(n));
-  }
-  gzclose(f);
-  return out;
-}
-
-// zlib inflate of an in-memory gzip stream (NRRD `encoding: gzip`).
-std::string gunzip(std::string_view data, const std::string& what) {
-  z_stream z{};
-  if (inflateInit2(&z, 15 + 32) != Z_OK) throw FormatError(fmt::format("{}: cannot initialise zlib", what));
-  std::string out;
-  std::array<char, 1 << 16> buf{};
-  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
-  z.avail_in = static_cast<uInt>(data.size());
-  int rc = Z_OK;
-  while (rc != Z_STREAM_END) {
-    z.next_out = reinterpret_cast<Bytef*>(buf.data());
-    z.avail_out = static_cast<uInt>(buf.size());
-    rc = inflate(&z, Z_NO_FLUSH);
-    if (rc != Z_OK && rc != Z_STREAM_END) {
-      inflateEnd(&z);
-      throw FormatError(fmt::format("{}: corrupt gzip data after {} decompressed bytes", what, out.size()));
-    }
-    out.append(buf.data(), buf.size() - z.avail_out);
-    if (rc == Z_OK && z.avail_in == 0 && z.avail_out != 0) {
-      inflateEnd(&z);
-      throw FormatError(fmt::format("{}: truncated gzip data after {} decompressed bytes", what, out.size()));
-    }
-  }
-  inflateEnd(&z);
-  return out;
 }
 
 std::size_t voxel_bytes(VoxelType t) {
@@ -228,8 +180,13 @@ VoxelType parse_voxel_type(std::string_view name) {
 }
 
 Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
-  std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_file(path);
   const std::string what = path.string();
+  // Read no more than the layout promises (a small .gz must not inflate past it).
+  double need = static_cast<double>(voxel_bytes(layout.type));
+  for (const int d : layout.dims) need *= std::max(d, 0);
+  need += static_cast<double>(layout.header_bytes);
+  const std::size_t bound = need > 1e18 ? io::kNoLimit : static_cast<std::size_t>(need);
+  const std::string bytes = ends_with(path, ".gz") ? io::read_gzip(path, bound) : io::read_file(path, bound);
   if (layout.header_bytes > bytes.size())
     throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what,
                                   layout.header_bytes, bytes.size()));
@@ -239,7 +196,7 @@ Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
 
 Volume read_nrrd(const fs::path& path) {
   const std::string what = path.string();
-  const std::string text = read_file(path);
+  const std::string text = io::read_file(path);
   if (text.rfind("NRRD000", 0) != 0)
     throw FormatError(fmt::format("{}: not a NRRD file (no NRRD000x magic on line 1)", what));
   std::optional<VoxelType> type;
@@ -342,7 +299,14 @@ Volume read_nrrd(const fs::path& path) {
     fs::path df = data_file;
     if (df.is_relative()) df = path.parent_path() / df;
     data_what = df.string();
-    data = read_file(df);
+    std::error_code ec;
+    if (fs::exists(df, ec) && !fs::is_directory(df, ec) && !fs::is_regular_file(df, ec))
+      throw FormatError(fmt::format("{}: 'data file: {}' is not a regular file (a device or a pipe)", what,
+                                    io::echo(data_file)));
+    const double need = static_cast<double>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) * std::max(sizes[2], 0) *
+                        static_cast<double>(voxel_bytes(*type));
+    const bool exact = !gz && line_skip == 0 && byte_skip >= 0 && need < 1e18;
+    data = io::read_file(df, exact ? static_cast<std::size_t>(byte_skip) + static_cast<std::size_t>(need) : io::kNoLimit);
   } else {
     if (data_start == std::string::npos)
       throw FormatError(fmt::format("{}: no 'data file' field and no attached data after a blank line", what));
@@ -358,7 +322,9 @@ Volume read_nrrd(const fs::path& path) {
   std::string inflated;
   if (gz) {
     if (byte_skip > 0) d.remove_prefix(std::min<std::size_t>(d.size(), static_cast<std::size_t>(byte_skip)));
-    inflated = gunzip(d, data_what);
+    const double need = static_cast<double>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) * std::max(sizes[2], 0) *
+                        static_cast<double>(voxel_bytes(*type));
+    inflated = io::gunzip(d, data_what, need < 1e18 ? static_cast<std::size_t>(need) : io::kNoLimit);
     d = inflated;
   } else if (byte_skip == -1) {
     const std::size_t need = static_cast<std::size_t>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) *
@@ -380,7 +346,9 @@ Volume read_nrrd(const fs::path& path) {
 
 Volume read_inr(const fs::path& path) {
   const std::string what = path.string();
-  const std::string bytes = ends_with(path, ".gz") ? read_gzip(path) : read_file(path);
+  // The header from the first 64 KiB; the whole file only up to what the header promises.
+  const bool gz = ends_with(path, ".gz");
+  const std::string bytes = gz ? io::read_gzip(path, 1 << 16, true) : io::read_file_prefix(path, 1 << 16);
   if (bytes.rfind("#INRIMAGE-4#{", 0) != 0)
     throw FormatError(fmt::format("{}: not an INRIMAGE-4 file (no '#INRIMAGE-4#{{' magic)", what));
   const std::size_t end = bytes.find("##}");
@@ -430,7 +398,12 @@ Volume read_inr(const fs::path& path) {
   if (cpu == "sun" || cpu == "sgi") big = true;
   else if (cpu != "decm" && cpu != "alpha" && cpu != "pc")
     throw FormatError(fmt::format("{}: unknown CPU='{}' (decm, alpha, pc, sun, sgi)", what, cpu));
-  Volume v = decode(std::string_view(bytes).substr(header), dims, type, big, spacing, what);
+  double need = static_cast<double>(voxel_bytes(type));
+  for (const int d : dims) need *= std::max(d, 0);
+  need += static_cast<double>(header);
+  const std::size_t bound = need < 1e18 ? static_cast<std::size_t>(need) : io::kNoLimit;
+  const std::string all = gz ? io::read_gzip(path, bound) : io::read_file(path, bound);
+  Volume v = decode(std::string_view(all).substr(header), dims, type, big, spacing, what);
   return v;
 }
 

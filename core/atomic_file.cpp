@@ -35,16 +35,4 @@ void write_file_atomically(const std::filesystem::path& path, const std::functio
   }
 }
 
-std::string read_file(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw IoError(fmt::format("{}: no such file", path.string()));
-  if (std::filesystem::is_directory(path, ec)) throw IoError(fmt::format("{}: is a folder, not a file", path.string()));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
-  return std::move(buffer).str();
-}
-
 }  // namespace quadrix

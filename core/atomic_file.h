@@ -1,10 +1,12 @@
 #pragma once
 /// Outputs are written to a temporary file beside the target and renamed at the end,
-/// so a crash or an error never leaves a half-written file behind. Inputs read whole.
+/// so a crash or an error never leaves a half-written file behind.
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <string>
+
+#include "core/io/file.h"
 
 namespace quadrix {
 
@@ -14,8 +16,7 @@ namespace quadrix {
 ///         rethrows whatever write throws.
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 
-/// The whole file as bytes. \throws IoError naming the path when it is missing, a folder,
-/// unopenable or unreadable (with the system's reason).
-std::string read_file(const std::filesystem::path& path);
+/// Whole-file reading lives in the I/O kit; kept here for callers of quadrix::read_file.
+using io::read_file;
 
 }  // namespace quadrix

@@ -1,36 +1,3 @@
 #pragma once
-/// Polygon meshes through OpenMesh (OFF, OBJ, PLY): triangles, quads and mixed polygons kept
-/// as they are in the file (no triangulation).
-#include <filesystem>
-#include <span>
-#include <vector>
-
-#include <Eigen/Core>
-
-namespace quadrix {
-
-/// Faces in compressed form: face f has the vertex indices
-/// indices[offsets[f] .. offsets[f+1]), counter-clockwise seen from outside.
-struct PolygonMesh {
-  std::vector<Eigen::Vector3d> vertices;
-  std::vector<int> indices;
-  std::vector<int> offsets{0};
-
-  std::size_t face_count() const { return offsets.size() - 1; }
-  std::span<const int> face(std::size_t f) const {
-    return {indices.data() + offsets[f], static_cast<std::size_t>(offsets[f + 1] - offsets[f])};
-  }
-  void add_face(std::span<const int> vs) {
-    indices.insert(indices.end(), vs.begin(), vs.end());
-    offsets.push_back(static_cast<int>(indices.size()));
-  }
-};
-
-/// \throws FormatError naming the file when it cannot be parsed, has no faces, or holds
-///         NaN/Inf coordinates or out-of-range indices; IoError when it cannot be opened.
-PolygonMesh read_mesh(const std::filesystem::path& path);
-
-/// Writes OBJ or OFF by extension (temporary file + rename).
-void write_mesh(const PolygonMesh& mesh, const std::filesystem::path& path);
-
-}  // namespace quadrix
+/// Meshes: read_mesh / write_mesh and PolygonMesh, from the I/O kit (core/io/io.h).
+#include "core/io/io.h"

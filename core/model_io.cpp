@@ -14,7 +14,8 @@
 #include "core/atomic_file.h"
 #include "core/bounds.h"
 #include "core/error.h"
-#include "core/ply.h"
+#include "core/io/file.h"
+#include "core/io/ply.h"
 
 namespace quadrix {
 namespace {
@@ -158,7 +159,7 @@ SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarc
   if (c.colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
   c.parent = props.size();
   if (c.hierarchy) props.insert(props.end(), kHierarchyNames.begin(), kHierarchyNames.end());
-  requests.push_back({e.name, std::move(props)});
+  requests.push_back({e.name, std::move(props), {}});
   return c;
 }
 
@@ -250,7 +251,7 @@ Model read_qxm(const ply::File& f) {
     auto props = required(f, *et, names({kCornerNames, kCoefficientNames}));
     if (tet_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
     it = static_cast<int>(requests.size());
-    requests.push_back({"tet", std::move(props)});
+    requests.push_back({"tet", std::move(props), {}});
   }
   if (eg) {
     glyph_colour = optional_group(f, *eg, kColourNames);
@@ -259,7 +260,7 @@ Model read_qxm(const ply::File& f) {
         names({std::span<const char* const>(std::array<const char*, 5>{"kind", "x", "y", "z", "radius"}), kAxisNames}));
     if (glyph_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
     ig = static_cast<int>(requests.size());
-    requests.push_back({"glyph", std::move(props)});
+    requests.push_back({"glyph", std::move(props), {}});
   }
 
   const std::vector<ply::Table> tables = f.read(requests);
@@ -333,14 +334,6 @@ bool has_extension(const std::filesystem::path& p, std::string_view ext) {
   std::string e = p.extension().string();
   std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return e == ext;
-}
-
-std::string read_bytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("{}: cannot open for reading", path.string()));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw IoError(fmt::format("{}: read failed", path.string()));
-  return bytes;
 }
 
 template <class T>
@@ -532,12 +525,12 @@ Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
 
 Model read_model(const std::filesystem::path& path) {
   if (has_extension(path, ".slim2t")) return read_slim2t(path);
-  std::string bytes = read_bytes(path);
+  std::string bytes = io::read_file(path);
   if (!bytes.starts_with("ply") && looks_like_slim2t(bytes)) return parse_slim2t(bytes, path);
   return read_qxm(ply::File::from_bytes(std::move(bytes), path));
 }
 
-Model read_slim2t(const std::filesystem::path& path) { return parse_slim2t(read_bytes(path), path); }
+Model read_slim2t(const std::filesystem::path& path) { return parse_slim2t(io::read_file(path), path); }
 
 void write_model(const Model& model, const std::filesystem::path& path) {
   const SlimHierarchy& hy = model.slim_hierarchy;

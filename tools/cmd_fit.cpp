@@ -25,7 +25,7 @@ void add_fit(CLI::App& root, Commands& commands) {
     SlimFitOptions options;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("POINTS", a->points, "Point cloud: PLY, XYZ (3 or 6 columns), OFF/OBJ vertices")->required();
+  app->add_option("POINTS", a->points, "Point cloud (PLY, XYZ with 3 or 6 columns) or mesh (PLY, OFF, OBJ, STL: its faces give the normals)")->required();
   app->add_option("-o,--out", a->out, "Output .qxm")->required();
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
       ->check(CLI::Range(1e-7, 0.5));
@@ -46,7 +46,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
       ->check(CLI::Range(1.0, 179.0));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
-                        PointCloud cloud = read_points(a->points);
+                        PointCloud cloud = read_surface_points(a->points);
                         PointCloud held;
                         if (a->holdout > 0) {
                           // Fit on a random subset; measure the held-out rest afterwards.

@@ -47,8 +47,7 @@ FloatImage normals_of(const render::GBuffer& g) {
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   const auto [w, h] = parse_size(a.size);
   // A mesh file as MODEL draws just that mesh as flat triangles (the baseline of the benchmarks).
-  const std::string ext = std::filesystem::path(a.model).extension().string();
-  const bool model_is_mesh = ext == ".obj" || ext == ".off";
+  const bool model_is_mesh = detect_file_kind(a.model) == FileKind::mesh;
   const Model model = model_is_mesh ? Model{} : read_model(a.model);
   std::optional<PolygonMesh> mesh;
   if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
@@ -138,7 +137,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 void add_render(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("render", "Ray-cast a model into a PNG (and depth/normal PFM)");
   auto a = std::make_shared<RenderArgs>();
-  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.obj/.off) drawn as flat triangles")->required();
+  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles")->required();
   app->add_option("-o,--out", a->out, "Output PNG")->required();
   app->add_option("--backend", a->backend, "auto (gl where it draws every kind, else cpu), gl, or cpu (the reference)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include "tests/support.h"
 #include <tbb/parallel_for.h>
@@ -899,3 +900,44 @@ TEST_F(VolumeCli, ConvertVolumeTets) {
 
 }  // namespace
 }  // namespace quadrix
+
+// The I/O kit's bounds on volume inputs: a data file that never ends, a small gzip bomb.
+TEST(VolumeIoKit, DevZeroDataFileIsRefused) {
+  if (!std::filesystem::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero";
+  const auto dir = std::filesystem::temp_directory_path() / ("quadrix-volkit-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto h = dir / "zero.nhdr";
+  std::ofstream(h) << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1024 1024 1024\nencoding: raw\n"
+                      "data file: /dev/zero\n";
+  try {
+    quadrix::read_volume(h);
+    ADD_FAILURE() << "accepted";
+  } catch (const quadrix::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("zero.nhdr"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VolumeIoKit, InrGzBombIsNotInflatedWhole) {
+  const auto dir = std::filesystem::temp_directory_path() / ("quadrix-volkit-gz-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto p = dir / "bomb.inr.gz";
+  std::string header = "#INRIMAGE-4#{\nXDIM=8\nYDIM=8\nZDIM=8\nVDIM=1\nTYPE=unsigned fixed\nPIXSIZE=8 bits\nCPU=decm\n";
+  header += std::string(256 - 4 - header.size(), '\n') + "##}\n";
+  gzFile f = gzopen(p.string().c_str(), "wb9");
+  gzwrite(f, header.data(), static_cast<unsigned>(header.size()));
+  const std::string zeros(1 << 20, '\0');
+  for (int i = 0; i < 256; ++i) gzwrite(f, zeros.data(), static_cast<unsigned>(zeros.size()));  // 256 MB
+  gzclose(f);
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    quadrix::read_volume(p);
+    ADD_FAILURE() << "accepted";
+  } catch (const quadrix::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("bomb.inr.gz"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("768 bytes its header promises"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.5);
+  std::filesystem::remove_all(dir);
+}

@@ -465,4 +465,72 @@ inline std::vector<MalformedCase> make_malformed_corpus(const std::filesystem::p
   return cases;
 }
 
+/// A malformed input for one of the kit's readers: which reader, the file, a message fragment.
+struct IoCase {
+  std::string reader;  ///< "model", "mesh" or "points"
+  std::filesystem::path path;
+  std::string expected;
+};
+
+/// The I/O kit's hardening cases (counts against the bytes, trailing data, extreme indices,
+/// long and control-byte tokens), for read_model, read_mesh and read_points.
+inline std::vector<IoCase> make_io_corpus(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::vector<IoCase> cases;
+  auto add = [&](const std::string& reader, const std::string& name, const std::string& bytes, const std::string& expected) {
+    write_bytes(dir / name, bytes);
+    cases.push_back({reader, dir / name, expected});
+  };
+  const Model model = make_sample_model(false);
+  const PlyDoc doc = qxm_doc(model);
+  {  // .qxm counts one too small / too large / zero, and a binary header over an ASCII body
+    PlyDoc d = doc;
+    d.element("slim").count_override = "2";
+    add("model", "count_small.qxm", encode_ply(d, "binary_little_endian"), "trailing data");
+    d.element("slim").count_override = "4";
+    add("model", "count_large.qxm", encode_ply(d, "binary_little_endian"), "element 'glyph'");
+    PlyDoc z = doc;
+    z.element("slim").count_override = "0";
+    add("model", "count_zero.qxm", encode_ply(z, "binary_little_endian"), "trailing data");
+    std::string mixed = encode_ply(doc, "ascii");
+    mixed.replace(mixed.find("format ascii"), 12, "format binary_little_endian");
+    add("model", "binary_header_ascii_body.qxm", mixed, "");
+    std::string ascii_tail = encode_ply(doc, "ascii") + "1 2 3\n";
+    add("model", "ascii_trailing.qxm", ascii_tail, "trailing data");
+  }
+  // OFF: 2^30 vertices declared in a tiny file; trailing data after the faces.
+  add("mesh", "huge_count.off", "OFF\n1073741824 1 0\n0 0 0\n", "1073741824 vertices");
+  add("points", "huge_count_points.off", "OFF\n1073741824 0 0\n0 0 0\n", "1073741824 vertices");
+  add("mesh", "trailing.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0 0 1\n", "trailing data");
+  add("mesh", "face_count_bomb.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2000000000 0 1 2\n", "2000000000 vertices");
+  // OBJ: the most negative 64-bit index, and one past it.
+  add("mesh", "int64_min.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n", "reaches before the first vertex");
+  add("mesh", "int64_overflow.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775809\n", "not a vertex reference");
+  // Echoed tokens: a 300,000-digit number and control bytes are cut and escaped.
+  add("points", "long_token.xyz", "1 2 3\n1 " + std::string(300000, '7') + "x 3\n", "bytes)");
+  add("points", "control.xyz", "1 2 \x1b[31m\n", "\\x1b");
+  // PLY points with bytes after the declared vertices; a mesh PLY with a list beyond the file.
+  {
+    PlyDoc d;
+    PlyElem v{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}}, {{0, 0, 0}, {1, 0, 0}}, {}};
+    d.elements.push_back(v);
+    add("points", "trailing_points.ply", encode_ply(d, "binary_little_endian") + "junk", "trailing data");
+    add("points", "trailing_points_ascii.ply", encode_ply(d, "ascii") + "4 5 6\n", "trailing data");
+    PlyElem f{"face", {{"int", "vertex_indices", "uchar"}}, {{3, 0, 1, 7}}, {}};
+    d.elements.push_back(f);
+    add("mesh", "bad_index.ply", encode_ply(d, "binary_big_endian"), "vertex index 7 out of range");
+  }
+  // STL: a binary count that disagrees with the size; ASCII with garbage after endsolid.
+  {
+    std::string b(84, '\0');
+    b[80] = 5;
+    add("mesh", "short.stl", b + std::string(50, '\0'), "5 triangles");
+    add("mesh", "trailing.stl",
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+        "endsolid t\nmore\n",
+        "trailing data");
+  }
+  return cases;
+}
+
 }  // namespace quadrix::test

@@ -16,7 +16,7 @@
 #include "core/mesh_io.h"
 #include "core/model_io.h"
 #include "core/reference.h"
-#include "core/ply.h"
+#include "core/io/ply.h"
 #include "tests/core/malformed_corpus.h"
 
 namespace quadrix {

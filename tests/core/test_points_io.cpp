@@ -95,13 +95,13 @@ TEST(PointsXyz, CommentsBlankLinesAndNormalisation) {
 TEST(PointsXyz, MalformedFiles) {
   ScratchDir dir("points-io");
   write_bytes(dir / "mixed.xyz", "1 2 3\n4 5 6\n1 2 3 0 0 1\n");
-  expect_format_error(dir / "mixed.xyz", "line 3");
+  expect_format_error(dir / "mixed.xyz", ":3:");
   write_bytes(dir / "cols.txt", "1 2 3\n1 2 3 4\n");
-  expect_format_error(dir / "cols.txt", "line 2: 4 values");
+  expect_format_error(dir / "cols.txt", "4 values");
   write_bytes(dir / "nan.xyz", "1 2 3\n\n1 nan 3\n");
-  expect_format_error(dir / "nan.xyz", "line 3");
+  expect_format_error(dir / "nan.xyz", ":3:");
   write_bytes(dir / "token.pts", "1 2 3\n1 two 3\n");
-  expect_format_error(dir / "token.pts", "line 2: 'two' is not a number");
+  expect_format_error(dir / "token.pts", ":2:3: 'two' is not a number");
   write_bytes(dir / "zero.xyz", "1 2 3 0 0 0\n");
   expect_format_error(dir / "zero.xyz", "zero normal");
   write_bytes(dir / "empty.xyz", "# nothing\n\n");
@@ -219,13 +219,13 @@ TEST(PointsOffObj, VariantsAndValidation) {
   EXPECT_EQ(c.points[1], Eigen::Vector3d(1, 2, 3));
   EXPECT_FALSE(c.has_normals());
   write_bytes(dir / "big.off", "OFF\n1000000000000 0 0\n0 0 0\n");
-  expect_format_error(dir / "big.off", "line 2");
+  expect_format_error(dir / "big.off", ":2:");
   write_bytes(dir / "short.off", "OFF\n3 0 0\n0 0 0\n1 1 1\n");
   expect_format_error(dir / "short.off", "truncated");
   write_bytes(dir / "faces.off", "OFF\n3 5 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   expect_format_error(dir / "faces.off", "5 faces");
   write_bytes(dir / "nan.off", "OFF\n2 0 0\n0 0 0\n1 inf 0\n");
-  expect_format_error(dir / "nan.off", "line 4");
+  expect_format_error(dir / "nan.off", ":4:");
 
   write_bytes(dir / "a.obj", "# obj\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 0 0 1\nvn 0 0 1\nf 1 2 3\n");
   c = read_points(dir / "a.obj");
@@ -237,7 +237,7 @@ TEST(PointsOffObj, VariantsAndValidation) {
   EXPECT_EQ(c.points.size(), 2u);
   EXPECT_FALSE(c.has_normals());  // normal count differs from the vertex count
   write_bytes(dir / "bad.obj", "v 0 0 0\nv 1 x 0\n");
-  expect_format_error(dir / "bad.obj", "line 2");
+  expect_format_error(dir / "bad.obj", ":2:");
   write_bytes(dir / "none.obj", "# nothing\nf 1 2 3\n");
   expect_format_error(dir / "none.obj", "no points");
 }

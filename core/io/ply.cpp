@@ -1,4 +1,4 @@
-#include "core/ply.h"
+#include "core/io/ply.h"
 
 #include <algorithm>
 #include <bit>
@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/io/file.h"
 
 namespace quadrix::ply {
 namespace {
@@ -202,25 +203,16 @@ std::string File::message(std::string_view element, std::int64_t row, std::strin
                           std::string_view what) const {
   std::string where;
   auto add = [&](const std::string& part) { where += (where.empty() ? "" : " ") + part; };
-  if (!element.empty()) add(fmt::format("element '{}'", element));
+  if (!element.empty()) add(fmt::format("element '{}'", io::echo(element)));
   if (row >= 0) add(fmt::format("row {}", row));
-  if (!property.empty()) add(fmt::format("property '{}'", property));
+  if (!property.empty()) add(fmt::format("property '{}'", io::echo(property)));
+  // Element-level faults keep `… at byte B: what` after the place; the rest read `FILE: byte B: what`.
+  if (where.empty()) return byte == kNoByte ? fmt::format("{}: {}", path_.string(), what) : io::byte_message(path_, byte, what);
   if (byte != kNoByte) add(fmt::format("at byte {}", byte));
-  return where.empty() ? fmt::format("{}: {}", path_.string(), what)
-                       : fmt::format("{}: {}: {}", path_.string(), where, what);
+  return fmt::format("{}: {}: {}", path_.string(), where, what);
 }
 
-File File::open(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("{}: cannot open for reading", path.string()));
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw IoError(fmt::format("{}: cannot determine the file size", path.string()));
-  in.seekg(0, std::ios::beg);
-  std::string bytes(static_cast<std::size_t>(size), '\0');
-  if (size > 0 && !in.read(bytes.data(), size)) throw IoError(fmt::format("{}: read failed", path.string()));
-  return from_bytes(std::move(bytes), path);
-}
+File File::open(const std::filesystem::path& path) { return from_bytes(io::read_file(path), path); }
 
 File File::from_bytes(std::string bytes, const std::filesystem::path& path) {
   File f;
@@ -256,7 +248,7 @@ File File::from_bytes(std::string bytes, const std::filesystem::path& path) {
       h.obj_info.push_back(rest_after_keyword(line));
     } else if (kw == "format") {
       if (has_format) bad("second 'format' line");
-      if (words.size() != 3) bad(fmt::format("bad format line '{}'", line));
+      if (words.size() != 3) bad(fmt::format("bad format line '{}'", io::echo(line)));
       if (words[1] == "ascii")
         h.encoding = Encoding::ascii;
       else if (words[1] == "binary_little_endian")
@@ -264,45 +256,45 @@ File File::from_bytes(std::string bytes, const std::filesystem::path& path) {
       else if (words[1] == "binary_big_endian")
         h.encoding = Encoding::binary_big_endian;
       else
-        bad(fmt::format("unknown format '{}'", words[1]));
-      if (words[2] != "1.0" && words[2] != "1") bad(fmt::format("unsupported PLY format version '{}'", words[2]));
+        bad(fmt::format("unknown format '{}'", io::echo(words[1])));
+      if (words[2] != "1.0" && words[2] != "1") bad(fmt::format("unsupported PLY format version '{}'", io::echo(words[2])));
       has_format = true;
     } else if (kw == "element") {
-      if (words.size() != 3) bad(fmt::format("bad element line '{}'", line));
+      if (words.size() != 3) bad(fmt::format("bad element line '{}'", io::echo(line)));
       Element e;
       e.name = std::string(words[1]);
-      if (h.find(e.name)) bad(fmt::format("element '{}' declared twice", e.name));
+      if (h.find(e.name)) bad(fmt::format("element '{}' declared twice", io::echo(e.name)));
       const std::string_view c = words[2];
-      if (c.starts_with('-')) bad(fmt::format("element '{}': count {} is negative", e.name, c));
+      if (c.starts_with('-')) bad(fmt::format("element '{}': count {} is negative", io::echo(e.name), io::echo(c)));
       const auto [end, ec] = std::from_chars(c.data(), c.data() + c.size(), e.count);
-      if (ec == std::errc::result_out_of_range) bad(fmt::format("element '{}': count {} is absurd", e.name, c));
+      if (ec == std::errc::result_out_of_range) bad(fmt::format("element '{}': count {} is absurd", io::echo(e.name), io::echo(c)));
       if (ec != std::errc() || end != c.data() + c.size())
-        bad(fmt::format("element '{}': count '{}' is not a non-negative integer", e.name, c));
+        bad(fmt::format("element '{}': count '{}' is not a non-negative integer", io::echo(e.name), io::echo(c)));
       h.elements.push_back(std::move(e));
     } else if (kw == "property") {
       if (h.elements.empty()) bad("property before any element");
       Element& e = h.elements.back();
       Property p;
       if (words.size() >= 2 && words[1] == "list") {
-        if (words.size() != 5) bad(fmt::format("element '{}': bad list property line '{}'", e.name, line));
+        if (words.size() != 5) bad(fmt::format("element '{}': bad list property line '{}'", io::echo(e.name), io::echo(line)));
         if (!parse_type(words[2], p.count_type))
-          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", e.name, words[2], words[4]));
+          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", io::echo(e.name), io::echo(words[2]), io::echo(words[4])));
         if (!parse_type(words[3], p.type))
-          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", e.name, words[3], words[4]));
+          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", io::echo(e.name), io::echo(words[3]), io::echo(words[4])));
         if (!is_integer_type(p.count_type))
-          bad(fmt::format("element '{}': list count type of property '{}' must be an integer type", e.name, words[4]));
+          bad(fmt::format("element '{}': list count type of property '{}' must be an integer type", io::echo(e.name), io::echo(words[4])));
         p.is_list = true;
         p.name = std::string(words[4]);
       } else {
-        if (words.size() != 3) bad(fmt::format("element '{}': bad property line '{}'", e.name, line));
+        if (words.size() != 3) bad(fmt::format("element '{}': bad property line '{}'", io::echo(e.name), io::echo(line)));
         if (!parse_type(words[1], p.type))
-          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", e.name, words[1], words[2]));
+          bad(fmt::format("element '{}': unknown type '{}' of property '{}'", io::echo(e.name), io::echo(words[1]), io::echo(words[2])));
         p.name = std::string(words[2]);
       }
-      if (e.find(p.name) >= 0) bad(fmt::format("element '{}': property '{}' declared twice", e.name, p.name));
+      if (e.find(p.name) >= 0) bad(fmt::format("element '{}': property '{}' declared twice", io::echo(e.name), io::echo(p.name)));
       e.properties.push_back(std::move(p));
     } else {
-      bad(fmt::format("unknown keyword '{}'", kw));
+      bad(fmt::format("unknown keyword '{}'", io::echo(kw)));
     }
   }
   if (!has_format) fail(pos, "no 'format' line in the header");
@@ -320,6 +312,7 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
   std::vector<int> element_request(h.elements.size(), -1);
   std::vector<std::vector<int>> column(h.elements.size());
   std::vector<Table> tables(requests.size());
+  std::vector<int> list_property(h.elements.size(), -1);
   for (std::size_t r = 0; r < requests.size(); ++r) {
     const Request& req = requests[r];
     const auto it =
@@ -340,6 +333,15 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
     }
     tables[r].element = it->name;
     tables[r].properties = req.properties;
+    if (!req.list.empty()) {
+      const int pi = it->find(req.list);
+      if (pi < 0)
+        throw FormatError(message(it->name, -1, req.list, kNoByte, "required property is missing from the header"));
+      if (!it->properties[pi].is_list)
+        throw FormatError(message(it->name, -1, req.list, kNoByte, "is a scalar where a list is required"));
+      list_property[ei] = pi;
+      tables[r].list = req.list;
+    }
   }
 
   std::size_t pos = h.body_offset;
@@ -377,6 +379,7 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
       table->values.resize(e.count * ncols);
       table->row_offsets.resize(e.count);
       table->column_offsets.assign(ncols, -1);
+      if (!table->list.empty()) table->list_offsets.assign(1, 0);
       if (!ascii) {
         std::int64_t off = 0;
         for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
@@ -416,8 +419,12 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
             throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos,
                                       fmt::format("truncated: list count {} needs {} bytes but only {} are left", count,
                                                   count * static_cast<double>(vn), left)));
+          if (table && list_property[ei] == static_cast<int>(pi))
+            for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k)
+              table->list_values.push_back(load_value(s.data() + pos + cn + k * vn, p.type, swap));
           pos += cn + static_cast<std::size_t>(count) * vn;
         }
+        if (table && !table->list.empty()) table->list_offsets.push_back(table->list_values.size());
       }
       continue;
     }
@@ -444,10 +451,10 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         const auto [end, ec] = std::from_chars(num.data(), num.data() + num.size(), v);
         if (ec != std::errc() || end != num.data() + num.size() || num.empty())
           throw FormatError(
-              message(e.name, static_cast<std::int64_t>(row), p.name, start, fmt::format("'{}' is not a number", tok)));
+              message(e.name, static_cast<std::int64_t>(row), p.name, start, fmt::format("'{}' is not a number", io::echo(tok))));
         if (is_integer_type(t) && (v != std::floor(v) || v < type_min(t) || v > type_max(t)))
           throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, start,
-                                    fmt::format("'{}' is not a valid {} value", tok, type_name(t))));
+                                    fmt::format("'{}' is not a valid {} value", io::echo(tok), type_name(t))));
         return v;
       };
       for (std::size_t pi = 0; pi < e.properties.size(); ++pi) {
@@ -465,8 +472,13 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         if (count > static_cast<double>((s.size() - pos) / 2 + 1))
           throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, count_at,
                                     fmt::format("truncated: list count {} exceeds the rest of the file", count)));
-        for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k) next_value(p, p.type, "a list entry");
+        const bool keep = table && list_property[ei] == static_cast<int>(pi);
+        for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k) {
+          const double v = next_value(p, p.type, "a list entry");
+          if (keep) table->list_values.push_back(v);
+        }
       }
+      if (table && !table->list.empty()) table->list_offsets.push_back(table->list_values.size());
       while (pos < s.size() && is_blank(s[pos])) ++pos;
       if (pos < s.size() && s[pos] != '\n') {
         std::size_t end = pos;
@@ -474,11 +486,19 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         throw FormatError(
             message(e.name, static_cast<std::int64_t>(row), {}, pos,
                     fmt::format("extra value '{}' at the end of the row ({} properties declared)",
-                                s.substr(pos, std::min<std::size_t>(end - pos, 40)), e.properties.size())));
+                                io::echo(s.substr(pos, std::min<std::size_t>(end - pos, 40))), e.properties.size())));
       }
       if (pos < s.size()) ++pos;
     }
   }
+  // Bytes after the declared rows: a wrong count or a wrong encoding, never silently ignored.
+  if (ascii)
+    while (pos < s.size() && (is_blank(s[pos]) || s[pos] == '\n')) ++pos;
+  if (pos < s.size())
+    throw FormatError(message({}, -1, {}, pos,
+                              fmt::format("{} bytes of trailing data after the declared elements (a count too small, "
+                                          "or a body in another encoding than the header's '{}'?)",
+                                          s.size() - pos, ascii ? "ascii" : swap ? "binary_big_endian" : "binary_little_endian")));
   return tables;
 }
 

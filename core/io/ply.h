@@ -57,6 +57,9 @@ struct Table {
   std::vector<double> values;
   std::vector<std::uint64_t> row_offsets;    ///< byte offset in the file where each row starts
   std::vector<std::int64_t> column_offsets;  ///< byte offset of a column within a binary row, or −1
+  std::string list;                          ///< the requested list property, or empty
+  std::vector<std::uint64_t> list_offsets;   ///< row r's list entries: list_values[list_offsets[r] .. [r+1])
+  std::vector<double> list_values;
   double operator()(std::size_t row, std::size_t col) const { return values[row * properties.size() + col]; }
   /// Byte offset of one value (its row's start where the column offset is not fixed).
   std::uint64_t byte_offset(std::size_t row, std::size_t col) const;
@@ -69,6 +72,7 @@ inline constexpr std::uint64_t kNoByte = ~std::uint64_t{0};
 struct Request {
   std::string element;
   std::vector<std::string> properties;
+  std::string list;  ///< optional: one list property whose entries are returned too
 };
 
 /// A PLY file read into memory and its parsed header.
@@ -88,7 +92,8 @@ public:
   /// Walks the whole body once; returns one Table per request, in request order.
   /// \throws FormatError when a requested element or property is missing or is a list,
   ///         a count exceeds the file, the file is truncated, a token is not a number or out
-  ///         of its type's range, or a list count is negative or exceeds the file.
+  ///         of its type's range, a list count is negative or exceeds the file, or bytes
+  ///         follow the last declared row (ASCII: anything but whitespace).
   std::vector<Table> read(std::span<const Request> requests) const;
 
   /// `FILE: element 'E' row R property 'P' at byte B: what` (empty E or P, row < 0 and

@@ -1,0 +1,217 @@
+#include "core/io/io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include <Eigen/Geometry>
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/io/file.h"
+#include "core/io/formats.h"
+#include "core/log.h"
+
+namespace quadrix {
+namespace {
+
+namespace fs = std::filesystem;
+
+enum class Format { ply, off, obj, stl, xyz, pts, qxm, slim2t };
+
+/// The file's format by extension; by its first bytes for an unknown one.
+Format format_of(const fs::path& path) {
+  io::read_file_prefix(path, 0);  // a missing file or a folder: IoError naming it, before anything else
+  const std::string ext = io::lower_extension(path);
+  if (ext == ".ply") return Format::ply;
+  if (ext == ".off") return Format::off;
+  if (ext == ".obj") return Format::obj;
+  if (ext == ".stl") return Format::stl;
+  if (ext == ".xyz" || ext == ".txt") return Format::xyz;
+  if (ext == ".pts") return Format::pts;
+  if (ext == ".qxm") return Format::qxm;
+  if (ext == ".slim2t") return Format::slim2t;
+  const std::string head = io::read_file_prefix(path, 128);
+  if (head.starts_with("ply")) return Format::ply;
+  const std::string_view first(head.data(), std::min(head.find_first_of(" \t\r\n"), head.size()));
+  if (first.ends_with("OFF") && first.size() <= 6) return Format::off;
+  if (head.starts_with("solid")) return Format::stl;
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (!ec && head.size() >= 84) {
+    std::uint32_t n;
+    std::memcpy(&n, head.data() + 80, 4);
+    if (size - 84 == 50 * std::uint64_t{n}) return Format::stl;
+  }
+  if (head.size() >= 12) {
+    std::int32_t d;
+    std::memcpy(&d, head.data(), 4);
+    if (d == 1 || d == 2 || d == -1 || d == -2) return Format::slim2t;
+  }
+  return Format::xyz;
+}
+
+/// Silences OpenMesh's omerr/omlog (they write to stderr/stdout on their own) for one scope.
+/// The streams are process-wide, so concurrent OpenMesh use elsewhere is muted meanwhile.
+class OpenMeshQuiet {
+public:
+  OpenMeshQuiet() : err_(::omerr().is_enabled()), log_(::omlog().is_enabled()) {
+    ::omerr().disable();
+    ::omlog().disable();
+  }
+  ~OpenMeshQuiet() {
+    if (err_) ::omerr().enable();
+    if (log_) ::omlog().enable();
+  }
+  OpenMeshQuiet(const OpenMeshQuiet&) = delete;
+  OpenMeshQuiet& operator=(const OpenMeshQuiet&) = delete;
+
+private:
+  bool err_, log_;
+};
+
+/// Number of faces OpenMesh's halfedge mesh refuses (complex edge or vertex, repeated vertex),
+/// adding the faces in file order. Indices must be valid.
+std::size_t count_non_manifold_faces(const PolygonMesh& mesh) {
+  OpenMesh::PolyMesh_ArrayKernelT<> om;
+  om.reserve(mesh.vertices.size(), mesh.indices.size() / 2 + 3, mesh.face_count());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) om.add_vertex({0.0f, 0.0f, 0.0f});
+  OpenMeshQuiet quiet;
+  std::size_t refused = 0;
+  std::vector<OpenMesh::VertexHandle> vhs;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    vhs.clear();
+    for (const int v : mesh.face(f)) vhs.emplace_back(v);
+    bool repeated = false;
+    for (std::size_t a = 0; a < vhs.size() && !repeated; ++a)
+      for (std::size_t b = a + 1; b < vhs.size(); ++b) repeated = repeated || vhs[a] == vhs[b];
+    if (repeated || !om.add_face(vhs).is_valid()) ++refused;
+  }
+  return refused;
+}
+
+
+io::Surface read_surface(const fs::path& path, Format format) {
+  switch (format) {
+    case Format::ply: return io::read_ply(io::read_file(path), path);
+    case Format::off: return io::read_off(io::read_file(path), path);
+    case Format::obj: return io::read_obj(io::read_file(path), path);
+    case Format::stl: return io::read_stl(io::read_file(path), path);
+    case Format::qxm:
+    case Format::slim2t:
+      throw FormatError(fmt::format("{}: a quadric model, not a mesh or point cloud", path.string()));
+    default:
+      throw FormatError(fmt::format("{}: unsupported mesh format '{}' (expected .ply, .off, .obj or .stl)",
+                                    path.string(), io::lower_extension(path)));
+  }
+}
+
+}  // namespace
+
+FileKind detect_file_kind(const fs::path& path) {
+  switch (format_of(path)) {
+    case Format::qxm:
+    case Format::slim2t: return FileKind::model;
+    case Format::off:
+    case Format::obj:
+    case Format::stl: return FileKind::mesh;
+    case Format::xyz:
+    case Format::pts: return FileKind::points;
+    case Format::ply: break;
+  }
+  // PLY: the header says which.
+  const std::string head = io::read_file_prefix(path, 1 << 16);
+  const auto end = head.find("end_header");
+  std::string_view h(head.data(), end == std::string::npos ? head.size() : end);
+  bool has_faces = false;
+  while (!h.empty()) {
+    const auto eol = std::min(h.find('\n'), h.size());
+    std::string_view line = h.substr(0, eol);
+    h.remove_prefix(std::min(eol + 1, h.size()));
+    if (line.starts_with("comment quadrix-format")) return FileKind::model;
+    if (line.starts_with("element face ")) has_faces = line.substr(13).find_first_not_of("0 \r") != std::string_view::npos;
+  }
+  return has_faces ? FileKind::mesh : FileKind::points;
+}
+
+PolygonMesh read_mesh(const fs::path& path) {
+  PolygonMesh mesh = read_surface(path, format_of(path)).mesh;
+  if (mesh.face_count() == 0) throw FormatError(fmt::format("{}: the mesh has no faces", path.string()));
+  if (const std::size_t refused = count_non_manifold_faces(mesh); refused > 0)
+    log::warn("{}: {} of {} faces are non-manifold or degenerate (complex edge or vertex, repeated vertex); they "
+              "are kept, but OpenMesh's halfedge mesh would drop them",
+              path.string(), refused, mesh.face_count());
+  log::debug("{}: {} vertices, {} faces", path.string(), mesh.vertices.size(), mesh.face_count());
+  return mesh;
+}
+
+void write_mesh(const PolygonMesh& mesh, const fs::path& path) {
+  const std::string ext = io::lower_extension(path);
+  if (ext == ".off") return io::write_off(mesh, path);
+  if (ext == ".obj") return io::write_obj(mesh, path);
+  throw InvalidInput(fmt::format("{}: cannot write mesh format '{}' (expected .off or .obj)", path.string(), ext));
+}
+
+PointCloud read_points(const fs::path& path) {
+  const Format format = format_of(path);
+  PointCloud cloud;
+  if (format == Format::xyz || format == Format::pts) {
+    cloud = io::read_xyz(io::read_file(path), path, format == Format::pts);
+  } else {
+    io::Surface s = read_surface(path, format);
+    cloud.points = std::move(s.mesh.vertices);
+    cloud.normals = std::move(s.normals);
+  }
+  if (cloud.points.empty()) throw FormatError(fmt::format("{}: no points", path.string()));
+  return cloud;
+}
+
+PointCloud read_surface_points(const fs::path& path) {
+  const Format format = format_of(path);
+  if (format == Format::xyz || format == Format::pts) return read_points(path);
+  io::Surface s = read_surface(path, format);
+  if (s.mesh.face_count() == 0) {
+    if (s.mesh.vertices.empty()) throw FormatError(fmt::format("{}: no points", path.string()));
+    return {std::move(s.mesh.vertices), std::move(s.normals)};
+  }
+  PointCloud cloud = points_from_mesh(s.mesh);
+  if (cloud.points.empty()) throw FormatError(fmt::format("{}: no face has a non-zero area", path.string()));
+  if (cloud.points.size() < s.mesh.vertices.size())
+    log::info("{}: {} of {} vertices left out (in no face, or their face normals cancel)", path.string(),
+              s.mesh.vertices.size() - cloud.points.size(), s.mesh.vertices.size());
+  return cloud;
+}
+
+PointCloud points_from_mesh(const PolygonMesh& mesh) {
+  std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  std::map<std::pair<int, int>, int> edges;  // undirected edge → number of faces using it
+  double volume6 = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();  // Newell: twice the area vector
+    const Eigen::Vector3d& p0 = mesh.vertices[vs[0]];
+    for (std::size_t k = 0; k < vs.size(); ++k) {
+      const int a = vs[k], b = vs[(k + 1) % vs.size()];
+      n += mesh.vertices[a].cross(mesh.vertices[b]);
+      ++edges[{std::min(a, b), std::max(a, b)}];
+      if (k > 0 && k + 1 < vs.size()) volume6 += p0.dot(mesh.vertices[a].cross(mesh.vertices[b]));
+    }
+    for (const int v : vs) sum[v] += n;
+  }
+  const bool closed = std::all_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 2; });
+  const double sign = closed && volume6 < 0 ? -1.0 : 1.0;
+  PointCloud cloud;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const double len = sum[v].norm();
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    cloud.points.push_back(mesh.vertices[v]);
+    cloud.normals.push_back(sign * sum[v] / len);
+  }
+  return cloud;
+}
+
+void write_points_xyz(const PointCloud& cloud, const fs::path& path) { io::write_xyz(cloud, path); }
+
+}  // namespace quadrix

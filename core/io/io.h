@@ -1,0 +1,59 @@
+#pragma once
+/// The one I/O entry point for meshes and point clouds (models: core/model_io.h; tetrahedral
+/// meshes and volumes: convert/). A file's format is chosen by its extension and, for PLY and
+/// unknown extensions, by its content; each format has one reader in core/io/read_X.cpp.
+///
+/// | format          | read as        | extension          | reader / writer           |
+/// |-----------------|----------------|--------------------|---------------------------|
+/// | PLY (all three encodings) with `comment quadrix-format` | model | .qxm .ply | core/model_io |
+/// | PLY with faces  | mesh, points   | .ply               | read_ply.cpp              |
+/// | PLY without     | points         | .ply               | read_ply.cpp              |
+/// | OFF ([ST][C][N]OFF) | mesh, points | .off             | read_off.cpp / write_mesh.cpp |
+/// | OBJ (v, vn, f)  | mesh, points   | .obj               | read_obj.cpp / write_mesh.cpp |
+/// | STL ASCII/binary | mesh, points  | .stl               | read_stl.cpp              |
+/// | XYZ, 3 or 6 columns | points     | .xyz .txt .pts     | read_xyz.cpp              |
+/// | Kanai's SLIM    | model          | .slim2t            | core/model_io             |
+///
+/// Every reader goes through io::read_file and io::TextReader or ply::File: counts are checked
+/// against the bytes left before anything is reserved, bytes after the declared data are an
+/// error, and every message names the file (`FILE:LINE:COL: …`, binary `FILE: byte N: …`).
+#include <filesystem>
+
+#include "core/io/point_cloud.h"
+#include "core/io/polygon_mesh.h"
+
+namespace quadrix {
+
+enum class FileKind { model, mesh, points };
+
+/// What a file holds, by extension and content (reads at most its first 64 KiB).
+/// \throws IoError when it is missing, a folder or unreadable.
+FileKind detect_file_kind(const std::filesystem::path& path);
+
+/// Reads a mesh (PLY, OFF, OBJ, STL). Faces are kept as in the file (no triangulation); faces
+/// that a halfedge mesh would refuse (complex edge/vertex, repeated vertex) are kept and counted
+/// in a warning. \throws FormatError naming the file and place (no faces, NaN, bad indices,
+/// counts beyond the file, trailing data); IoError when it cannot be read.
+PolygonMesh read_mesh(const std::filesystem::path& path);
+
+/// Writes OBJ or OFF by extension (temporary file + rename). \throws InvalidInput, IoError.
+void write_mesh(const PolygonMesh& mesh, const std::filesystem::path& path);
+
+/// Reads points (and the file's normals, if any) from PLY, XYZ/PTS/TXT, OFF, OBJ or STL vertices.
+/// \throws FormatError (no points, NaN, wrong columns, bad counts), IoError.
+PointCloud read_points(const std::filesystem::path& path);
+
+/// Points with normals for fitting: a mesh file with faces gives its vertices and normals from
+/// its faces (points_from_mesh); any other file is read_points.
+PointCloud read_surface_points(const std::filesystem::path& path);
+
+/// The vertices used by some face, each with the unit area-weighted sum of its faces' normals
+/// (Newell's polygon normal); when every edge is shared by exactly two faces (a closed mesh)
+/// all normals are flipped if the enclosed signed volume is negative, so they point outward.
+/// Vertices of no face, or whose face normals cancel, are left out.
+PointCloud points_from_mesh(const PolygonMesh& mesh);
+
+/// Writes x y z [nx ny nz] lines (temporary file + rename).
+void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
+
+}  // namespace quadrix

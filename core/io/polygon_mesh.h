@@ -1,0 +1,27 @@
+#pragma once
+/// A polygon mesh as a face soup: triangles, quads and mixed polygons kept as in the file.
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace quadrix {
+
+/// Faces in compressed form: face f has the vertex indices
+/// indices[offsets[f] .. offsets[f+1]), counter-clockwise seen from outside.
+struct PolygonMesh {
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<int> indices;
+  std::vector<int> offsets{0};
+
+  std::size_t face_count() const { return offsets.size() - 1; }
+  std::span<const int> face(std::size_t f) const {
+    return {indices.data() + offsets[f], static_cast<std::size_t>(offsets[f + 1] - offsets[f])};
+  }
+  void add_face(std::span<const int> vs) {
+    indices.insert(indices.end(), vs.begin(), vs.end());
+    offsets.push_back(static_cast<int>(indices.size()));
+  }
+};
+
+}  // namespace quadrix

@@ -1,0 +1,72 @@
+// PLY surfaces through core/io/ply.h (ASCII, binary either endianness): element `vertex`
+// (x y z [nx ny nz], other properties ignored) and, when present, element `face` with the list
+// `vertex_indices` (or `vertex_index`). Counts, lists and trailing bytes are checked by ply::File.
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/io/formats.h"
+#include "core/io/ply.h"
+
+namespace quadrix::io {
+
+Surface read_ply(std::string bytes, const std::filesystem::path& path) {
+  const ply::File f = ply::File::from_bytes(std::move(bytes), path);
+  const ply::Element* ev = f.header().find("vertex");
+  if (!ev) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "no element 'vertex' in the header"));
+  std::vector<std::string> props = {"x", "y", "z"};
+  const int normal_count = (ev->find("nx") >= 0) + (ev->find("ny") >= 0) + (ev->find("nz") >= 0);
+  if (normal_count != 0 && normal_count != 3)
+    throw FormatError(
+        f.message("vertex", -1, {}, ply::kNoByte, "has some but not all of the normal properties nx ny nz"));
+  if (normal_count == 3) props.insert(props.end(), {"nx", "ny", "nz"});
+  std::vector<ply::Request> req = {{"vertex", props, {}}};
+  const ply::Element* ef = f.header().find("face");
+  if (ef) {
+    const char* list = ef->find("vertex_indices") >= 0 ? "vertex_indices" : "vertex_index";
+    req.push_back({"face", {}, list});
+  }
+  const std::vector<ply::Table> tables = f.read(req);
+  const ply::Table& t = tables[0];
+
+  Surface s;
+  s.mesh.vertices.resize(t.rows);
+  if (normal_count == 3) s.normals.resize(t.rows);
+  for (std::size_t i = 0; i < t.rows; ++i) {
+    for (std::size_t c = 0; c < props.size(); ++c)
+      if (!std::isfinite(t(i, c)))
+        throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), props[c], t.byte_offset(i, c),
+                                    fmt::format("value {} is not finite", t(i, c))));
+    s.mesh.vertices[i] = {t(i, 0), t(i, 1), t(i, 2)};
+    if (normal_count == 3) {
+      const Eigen::Vector3d n(t(i, 3), t(i, 4), t(i, 5));
+      if (!(n.norm() > 0))
+        throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3), "zero normal"));
+      s.normals[i] = n.normalized();
+    }
+  }
+  if (!ef) return s;
+  const ply::Table& ft = tables[1];
+  s.mesh.offsets.reserve(ft.rows + 1);
+  s.mesh.indices.reserve(ft.list_values.size());
+  std::vector<int> face;
+  for (std::size_t r = 0; r < ft.rows; ++r) {
+    const auto b = ft.list_offsets[r], e = ft.list_offsets[r + 1];
+    auto fail = [&](std::string_view what) {
+      throw FormatError(f.message("face", static_cast<std::int64_t>(r), ft.list, ft.row_offsets[r], what));
+    };
+    if (e - b < 3) fail(fmt::format("{} vertices (at least 3 needed)", e - b));
+    face.clear();
+    for (auto k = b; k < e; ++k) {
+      const double v = ft.list_values[k];
+      if (v != std::floor(v) || v < 0 || v >= static_cast<double>(t.rows))
+        fail(fmt::format("vertex index {} out of range [0, {})", v, t.rows));
+      face.push_back(static_cast<int>(v));
+    }
+    s.mesh.add_face(face);
+  }
+  return s;
+}
+
+}  // namespace quadrix::io

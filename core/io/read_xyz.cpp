@@ -1,0 +1,74 @@
+// XYZ, PTS, TXT point clouds: one point per line, "x y z" or "x y z nx ny nz" (the same count on
+// every line), `#` comments; .pts may start with a point count that must then match.
+#include <array>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/io/formats.h"
+#include "core/io/text_reader.h"
+
+namespace quadrix::io {
+
+PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bool count_line) {
+  TextReader r(text, path);
+  PointCloud cloud;
+  std::size_t columns = 0, first_line = 0;
+  long long declared = -1;
+  std::array<double, 6> v{};
+  while (r.next_line()) {
+    std::size_t n = 0;
+    for (std::string_view tok = r.token(); !tok.empty(); tok = r.token(), ++n) {
+      double x = 0;
+      if (!TextReader::parse(tok, x)) r.fail("'{}' is not a number", echo(tok));
+      if (n < v.size()) v[n] = x;
+    }
+    if (n == 1 && count_line && columns == 0 && declared < 0 && v[0] >= 0 && v[0] == std::floor(v[0])) {
+      declared = static_cast<long long>(v[0]);  // .pts: a leading point count
+      continue;
+    }
+    if (n != 3 && n != 6) r.fail("{} values (expected 3: x y z, or 6: x y z nx ny nz)", n);
+    if (columns == 0) {
+      columns = n;
+      first_line = r.line_number();
+    } else if (n != columns) {
+      r.fail("{} values but line {} has {} (all lines must have the same count)", n, first_line, columns);
+    }
+    const Eigen::Vector3d p(v[0], v[1], v[2]);
+    if (!p.allFinite()) r.fail("point ({} {} {}) is not finite", v[0], v[1], v[2]);
+    cloud.points.push_back(p);
+    if (n == 6) {
+      const Eigen::Vector3d nn(v[3], v[4], v[5]);
+      if (!nn.allFinite()) r.fail("normal ({} {} {}) is not finite", v[3], v[4], v[5]);
+      if (!(nn.norm() > 0)) r.fail("zero normal");
+      cloud.normals.push_back(nn.normalized());
+    }
+  }
+  if (declared >= 0 && static_cast<std::size_t>(declared) != cloud.points.size())
+    throw FormatError(fmt::format("{}: the count line declares {} points but the file holds {}", path.string(),
+                                  declared, cloud.points.size()));
+  return cloud;
+}
+
+void write_xyz(const PointCloud& cloud, const std::filesystem::path& path) {
+  if (cloud.has_normals() && cloud.normals.size() != cloud.points.size())
+    throw InvalidInput(
+        fmt::format("{}: {} normals for {} points", path.string(), cloud.normals.size(), cloud.points.size()));
+  fmt::memory_buffer buf;
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    const auto& p = cloud.points[i];
+    if (cloud.has_normals()) {
+      const auto& n = cloud.normals[i];
+      fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n", p.x(), p.y(), p.z(),
+                     n.x(), n.y(), n.z());
+    } else {
+      fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g}\n", p.x(), p.y(), p.z());
+    }
+  }
+  write_file_atomically(path,
+                        [&](std::ostream& os) { os.write(buf.data(), static_cast<std::streamsize>(buf.size())); });
+}
+
+}  // namespace quadrix::io

@@ -1,0 +1,198 @@
+// The I/O kit: hardening corpus for every reader, format dispatch, STL and PLY meshes,
+// normals from faces, bounded reads.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+#include <zlib.h>
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/io/file.h"
+#include "core/io/io.h"
+#include "core/model_io.h"
+#include "tests/core/malformed_corpus.h"
+
+namespace quadrix {
+namespace {
+
+using test::ScratchDir;
+using test::write_bytes;
+
+void read_with(const std::string& reader, const std::filesystem::path& p) {
+  if (reader == "model") read_model(p);
+  else if (reader == "mesh") read_mesh(p);
+  else read_points(p);
+}
+
+TEST(IoKit, HardeningCorpusRefusedWithFileNameAndBoundedMessages) {
+  ScratchDir dir("io-kit");
+  const auto cases = test::make_io_corpus(dir.path());
+  ASSERT_GE(cases.size(), 18u);
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.path.filename().string());
+    try {
+      read_with(c.reader, c.path);
+      ADD_FAILURE() << "accepted";
+    } catch (const FormatError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(c.path.filename().string()), std::string::npos) << m;
+      EXPECT_NE(m.find(c.expected), std::string::npos) << "expected '" << c.expected << "' in: " << m;
+      EXPECT_LT(m.size(), 600u) << "message too long";
+      for (unsigned char ch : m) EXPECT_TRUE(ch >= 0x20 || ch == '\n') << "control byte in: " << m;
+    }
+  }
+}
+
+TEST(IoKit, FolderIsIoErrorNamingIt) {
+  ScratchDir dir("io-kit");
+  for (const char* name : {"d.qxm", "d.slim2t", "d.xyz", "d.off", "d.ply", "d.stl"}) {
+    std::filesystem::create_directories(dir / name);
+    for (const std::string reader : {"model", "mesh", "points"}) {
+      const bool is_model = std::string(name) == "d.qxm" || std::string(name) == "d.slim2t";
+      if ((reader == "model") != is_model) continue;
+      try {
+        read_with(reader, dir / name);
+        ADD_FAILURE() << name << " accepted";
+      } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("folder"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
+TEST(IoKit, DevZeroIsBounded) {
+  if (!std::filesystem::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero";
+  EXPECT_THROW(io::read_file("/dev/zero", 1 << 20), FormatError);
+}
+
+TEST(IoKit, GzipBombStopsAtTheBound) {
+  ScratchDir dir("io-kit");
+  const auto p = dir / "bomb.gz";
+  gzFile f = gzopen(p.string().c_str(), "wb9");
+  const std::string zeros(1 << 20, '\0');
+  for (int i = 0; i < 64; ++i) gzwrite(f, zeros.data(), static_cast<unsigned>(zeros.size()));
+  gzclose(f);
+  EXPECT_LT(std::filesystem::file_size(p), 200000u);
+  try {
+    io::read_gzip(p, 1000);
+    ADD_FAILURE() << "accepted";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("1000 bytes"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(io::read_gzip(p, 1000, true).size(), 1000u);
+}
+
+TEST(IoKit, EchoCutsAndEscapes) {
+  EXPECT_EQ(io::echo("abc"), "abc");
+  EXPECT_EQ(io::echo("a\x01"), "a\\x01");
+  const std::string e = io::echo(std::string(1000, 'x'));
+  EXPECT_EQ(e.substr(0, 80), std::string(80, 'x'));
+  EXPECT_NE(e.find("1000 bytes"), std::string::npos);
+  EXPECT_LT(e.size(), 100u);
+}
+
+// A unit cube as 12 triangles, outward winding.
+PolygonMesh cube() {
+  PolygonMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+  const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : f) {
+    m.add_face(std::vector<int>{q[0], q[1], q[2]});
+    m.add_face(std::vector<int>{q[0], q[2], q[3]});
+  }
+  return m;
+}
+
+std::string stl_ascii(const PolygonMesh& m) {
+  std::string s = "solid cube\n";
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    s += "facet normal 0 0 0\n outer loop\n";
+    for (int v : m.face(f))
+      s += fmt::format("  vertex {} {} {}\n", m.vertices[v].x(), m.vertices[v].y(), m.vertices[v].z());
+    s += " endloop\nendfacet\n";
+  }
+  return s + "endsolid cube\n";
+}
+
+std::string stl_binary(const PolygonMesh& m) {
+  std::string s(80, ' ');
+  const auto n = static_cast<std::uint32_t>(m.face_count());
+  s.append(reinterpret_cast<const char*>(&n), 4);
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    float v[12] = {};
+    int k = 3;
+    for (int i : m.face(f))
+      for (int a = 0; a < 3; ++a) v[k++] = static_cast<float>(m.vertices[i][a]);
+    s.append(reinterpret_cast<const char*>(v), 48);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+std::string ply_mesh(const PolygonMesh& m, const std::string& enc) {
+  test::PlyDoc d;
+  test::PlyElem v{"vertex", {{"double", "x", ""}, {"double", "y", ""}, {"double", "z", ""}}, {}, {}};
+  for (const auto& p : m.vertices) v.rows.push_back({p.x(), p.y(), p.z()});
+  test::PlyElem f{"face", {{"int", "vertex_indices", "uchar"}}, {}, {}};
+  for (std::size_t i = 0; i < m.face_count(); ++i) {
+    std::vector<double> r = {double(m.face(i).size())};
+    for (int k : m.face(i)) r.push_back(k);
+    f.rows.push_back(r);
+  }
+  d.elements = {v, f};
+  return test::encode_ply(d, enc);
+}
+
+TEST(IoKit, EveryMeshFormatReadsTheSameCube) {
+  ScratchDir dir("io-kit");
+  const PolygonMesh m = cube();
+  write_mesh(m, dir / "c.off");
+  write_mesh(m, dir / "c.obj");
+  write_bytes(dir / "c.stl", stl_ascii(m));
+  write_bytes(dir / "b.stl", stl_binary(m));
+  write_bytes(dir / "solid_named.stl", stl_binary(m).replace(0, 5, "solid"));  // binary despite "solid"
+  for (const char* enc : {"ascii", "binary_little_endian", "binary_big_endian"})
+    write_bytes(dir / (std::string(enc) + ".ply"), ply_mesh(m, enc));
+  write_bytes(dir / "noext", ply_mesh(m, "ascii"));
+  for (const char* name : {"c.off", "c.obj", "c.stl", "b.stl", "solid_named.stl", "ascii.ply",
+                           "binary_little_endian.ply", "binary_big_endian.ply", "noext"}) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(detect_file_kind(dir / name), FileKind::mesh);
+    const PolygonMesh r = read_mesh(dir / name);
+    EXPECT_EQ(r.vertices.size(), 8u);
+    EXPECT_EQ(r.face_count(), 12u);
+    const PointCloud c = read_surface_points(dir / name);
+    ASSERT_EQ(c.points.size(), 8u);
+    for (std::size_t i = 0; i < 8; ++i)  // outward: along the corner's direction from the centre
+      EXPECT_GT(c.normals[i].dot(c.points[i] - Eigen::Vector3d(0.5, 0.5, 0.5)), 0.5);
+  }
+}
+
+TEST(IoKit, ClosedMeshNormalsPointOutwardWhateverTheWinding) {
+  PolygonMesh m = cube();
+  for (std::size_t f = 0; f < m.face_count(); ++f)
+    std::reverse(m.indices.begin() + m.offsets[f], m.indices.begin() + m.offsets[f + 1]);
+  const PointCloud c = points_from_mesh(m);
+  ASSERT_EQ(c.points.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i)
+    EXPECT_GT(c.normals[i].dot(c.points[i] - Eigen::Vector3d(0.5, 0.5, 0.5)), 0.5);
+  // Area weighting: a corner's normal is the (normalised) sum of its faces' area vectors.
+  EXPECT_NEAR(c.normals[0].norm(), 1.0, 1e-15);
+}
+
+TEST(IoKit, PlyKindsByContent) {
+  ScratchDir dir("io-kit");
+  write_model(test::make_sample_model(false), dir / "m.ply");
+  EXPECT_EQ(detect_file_kind(dir / "m.ply"), FileKind::model);
+  EXPECT_EQ(read_model(dir / "m.ply").slims.size(), 3u);
+  test::PlyDoc d;
+  d.elements.push_back({"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}}, {{0, 0, 0}}, {}});
+  write_bytes(dir / "p.ply", test::encode_ply(d, "ascii"));
+  EXPECT_EQ(detect_file_kind(dir / "p.ply"), FileKind::points);
+  EXPECT_EQ(read_points(dir / "p.ply").points.size(), 1u);
+}
+
+}  // namespace
+}  // namespace quadrix
