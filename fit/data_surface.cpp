@@ -198,10 +198,11 @@ std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* 
   return best;
 }
 
-bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bound, int grid) {
+double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth) {
   struct Cell {
     int axis;
     double a, b, h;  // line through (a, b) in the two other local coordinates; cell side h
+    int depth;
   };
   // A sheet point of the cell is within reach of the cell's sample on the best-aligned axis
   // (|n·axis| ≥ 1/√3): half the cell diagonal, stretched by at most √3 along the sheet.
@@ -211,7 +212,7 @@ bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bou
   const double h0 = 2.0 / grid;
   for (int axis = 0; axis < 3; ++axis)
     for (int i = 0; i < grid; ++i)
-      for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0});
+      for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0, 0});
   const double min_reach = bound / 16.0;
   while (!stack.empty()) {
     const Cell c = stack.back();
@@ -232,17 +233,17 @@ bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bou
       const Eigen::Vector3d u = line.at(roots.t[k]);
       if (!(u.squaredNorm() < 1.0) || (patch.clip && !patch.clip->keeps(u))) continue;
       const double d = data.distance(patch.centre + patch.radius * u);
-      if (!(d <= bound)) return false;
+      if (!(d <= bound)) return std::isnan(d) ? kInf : d;
       const Eigen::Vector3d g = patch.local.gradient(u);
       const bool aligned = std::abs(g[c.axis]) >= kAligned * g.norm();
-      if (aligned && d + reach > bound && reach > min_reach) split = true;
+      if (aligned && d + reach > bound && reach > min_reach && c.depth < max_depth) split = true;
     }
     if (!split) continue;
     const double q = 0.25 * c.h;
     for (const double da : {-q, q})
-      for (const double db : {-q, q}) stack.push_back({c.axis, c.a + da, c.b + db, 0.5 * c.h});
+      for (const double db : {-q, q}) stack.push_back({c.axis, c.a + da, c.b + db, 0.5 * c.h, c.depth + 1});
   }
-  return true;
+  return 0.0;
 }
 
 }  // namespace quadrix

@@ -66,8 +66,10 @@ private:
 /// Lines parallel to the three local axes on a grid × grid lattice find its points; as distance
 /// to the data is 1-Lipschitz, a sample at distance d vouches for its lattice cell when
 /// d + (the cell's reach on the sheet) ≤ bound, and cells it cannot vouch for are split in four,
-/// down to a reach of bound/16 — so no piece wider than that cell escapes, whatever R is.
-bool zero_set_within(const SlimPatch& patch, const DataSurface& data, double bound, int grid);
+/// down to a reach of bound/16 or max_depth splits, whichever comes first (the cost of a full
+/// guarantee grows with (R/bound)²; the blended verification samples the rest).
+/// Returns 0 when within, else the distance of the first sample found beyond bound.
+double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth);
 
 /// Distance from x to triangle (a, b, c), any shape (degenerate ones as segments).
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -132,8 +132,8 @@ struct BallFitter {
   // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
   // open boundary).
   bool surface_ok(const Ball& b, Scratch&) const {
-    return zero_set_within(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, *data,
-                           opt.local_surface_factor * E, opt.local_surface_grid);
+    return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, *data,
+                           opt.local_surface_factor * E, opt.local_surface_grid, opt.local_surface_depth) == 0.0;
   }
 
   // A ball at (ci, R) whose points are within E and whose zero set passes surface_ok: the
@@ -681,10 +681,22 @@ private:
     TraceOptions trace;
     trace.slim.offset = opt_.blend_offset;
     std::vector<std::vector<double>> errors(slims.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+    shrink_.assign(slims.size(), opt_.shrink_step);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<SlimSurfaceSample> zero;
       std::vector<SlimSample> blended;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        // The patch alone on a lattice fine in world units (≈ verify_spacing·E), so slivers
+        // past a curved boundary are found on large balls too; a patch found d > bound away
+        // shrinks by √(bound/d) (a sliver's sagitta goes with R²).
+        const int grid = std::clamp(static_cast<int>(std::ceil(2.0 * slims[k].radius / (opt_.verify_spacing * E_))),
+                                    opt_.verify_surface_grid, opt_.verify_max_grid);
+        if (const double d = zero_set_excess(slims[k], *data_, local, grid, 1); d > 0) {
+          at_fault[k] = 1;
+          errors[k].push_back(d);
+          shrink_[k] = std::clamp(std::sqrt(local / d), 0.3, opt_.shrink_step);
+          continue;
+        }
         zero.clear();
         sample_slim_patch(slims[k], opt_.verify_surface_grid, zero);
         for (const auto& z : zero) {
@@ -718,6 +730,7 @@ private:
       const PointIndex centre_index{std::span<const Eigen::Vector3d>(centres)};
       std::vector<std::uint8_t> at_fault(result_.model.slims.size(), 0);
       st_.blend_failures = verify_points(scene, centre_index, at_fault);
+      shrink_.clear();
       st_.surface_failures = opt_.check_surface ? verify_surface(scene, at_fault) : 0;
       if ((st_.blend_failures == 0 && st_.surface_failures == 0) || round >= opt_.repair_rounds) break;
       ++st_.repair_rounds;
@@ -738,7 +751,8 @@ private:
         continue;
       }
       chosen_flag_[b] = 0;
-      cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], opt_.shrink_step * balls_[b].R);
+      const double f = k < shrink_.size() ? shrink_[k] : opt_.shrink_step;
+      cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], f * balls_[b].R);
     }
     chosen_.swap(keep);
     std::fill(covered_.begin(), covered_.end(), 0);
@@ -852,6 +866,7 @@ private:
   std::priority_queue<std::pair<std::size_t, std::uint32_t>> heap_;  // gain, candidate
   std::vector<double> cap_;                           // radius cap per centre point (repair)
   std::vector<double> point_error_, surface_error_;
+  std::vector<double> shrink_;                        // per chosen patch: radius factor on repair
 };
 
 }  // namespace

@@ -83,6 +83,7 @@ struct SlimFitOptions {
   /// core/slim.h sample_slim_patch); else its radius shrinks by shrink_step, up to shrink_steps times.
   double local_surface_factor = 1.5;
   int local_surface_grid = 6;
+  int local_surface_depth = 2;  ///< refinement levels of that lattice (fit/data_surface.h)
   double shrink_step = 0.75;
   /// Open boundaries: when a ball's points have their tangential centroid farther than
   /// boundary_offset·R from its centre and its zero set runs past the data, the patch gets a
@@ -92,6 +93,10 @@ struct SlimFitOptions {
   /// Verification: zero-set samples on a verify_surface_grid² lattice per axis and patch, each
   /// seen through the blend along its normal from surface_probe_factor·E above it.
   int verify_surface_grid = 8;
+  /// Verification also checks each patch alone (as while fitting) on a lattice of about
+  /// verify_spacing·E in world units, at most verify_max_grid lines per side.
+  double verify_spacing = 2.0;
+  int verify_max_grid = 48;
   double surface_probe_factor = 2.0;
   /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
   /// the model as `slim_offset`, and renderers use it.
