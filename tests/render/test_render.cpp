@@ -384,7 +384,7 @@ TEST_F(GlSlim, Slim2tModelsRenderThroughTheSamePath) {
     const float k[10] = {1, 1, 1, 0, 0, 0, 2 * c.x(), 2 * c.y(), 2 * c.z(), c.squaredNorm() - 1};
     for (float v : k) put(v);
     put(static_cast<float>(s.radius));
-    put(std::int32_t{-1});
+    put(-1.0f);  // parent id (a float in .slim2t): a root
   }
   const auto path = std::filesystem::temp_directory_path() / "quadrix-test-sphere.slim2t";
   std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
