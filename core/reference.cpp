@@ -177,7 +177,8 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
       case PrimitiveKind::glyph:
         if (!impl_->hit_glyph(impl_->glyphs[r.index], ray, tmin, best_t, options.cull_backfaces, h)) return;
         break;
-      case PrimitiveKind::none: return;
+      case PrimitiveKind::none:
+      case PrimitiveKind::mesh: return;  // the reference traces no meshes
     }
     best_t = h.t;
     best = h;
@@ -249,7 +250,7 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
         img.distance[i] = static_cast<float>(hit->t);
         img.depth[i] = static_cast<float>(hit->t * ray.dir.dot(fwd));
         img.normal[i] = hit->normal.cast<float>();
-        img.primitive[i] = static_cast<std::int32_t>((static_cast<int>(hit->kind) << 28) | hit->index);
+        img.primitive[i] = primitive_id(hit->kind, static_cast<std::size_t>(hit->index));
         img.albedo[i] = hit->colour;
       }
     }

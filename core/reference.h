@@ -10,11 +10,10 @@
 
 #include "core/camera.h"
 #include "core/model.h"
+#include "core/primitive.h"
 #include "core/slim.h"
 
 namespace quadrix {
-
-enum class PrimitiveKind : std::uint8_t { none = 0, slim = 1, tet = 2, glyph = 3 };
 
 /// What a ray sees first.
 struct SurfaceHit {
@@ -58,7 +57,7 @@ struct ReferenceImage {
   std::vector<float> depth;            ///< eye-space depth (distance along the view axis); +inf background
   std::vector<float> distance;         ///< distance from the eye along the ray; +inf background
   std::vector<Eigen::Vector3f> normal;  ///< unit world-space normal facing the viewer; 0 background
-  std::vector<std::int32_t> primitive; ///< index encoded as kind·2²⁸ + index; −1 background
+  std::vector<std::int32_t> primitive; ///< primitive_id(kind, index); −1 background
   std::vector<Rgb> albedo;             ///< primitive colour
 };
 

@@ -54,6 +54,13 @@ void add_common_options(CLI::App& app, CommonOptions& o) {
   app.add_option("--report", o.report, "Write the measured figures as JSON to this file");
 }
 
+nlohmann::json camera_json(const Camera& c) {
+  const auto vec = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  return {{"eye", vec(c.eye)},       {"target", vec(c.target)}, {"up", vec(c.up)},
+          {"fov_y_deg", c.fov_y_deg}, {"width", c.width},        {"height", c.height},
+          {"near", c.near_plane},     {"far", c.far_plane}};
+}
+
 std::pair<int, int> parse_size(const std::string& text) {
   int w = 0, h = 0;
   char x = 0, extra = 0;

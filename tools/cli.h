@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "core/camera.h"
 #include "core/model.h"
 
 namespace quadrix::cli {
@@ -70,6 +71,11 @@ using Commands = std::vector<Command>;
 
 /// Adds --quiet, --verbose and --report to a subcommand.
 void add_common_options(CLI::App& app, CommonOptions& options);
+
+/// The view as reports record it, enough for another tool to reproduce it: eye, target, up
+/// (world units), fov_y_deg (vertical), width and height (pixels), near and far (world units).
+/// A right-handed look-at camera; pixel (i, j) is centred at (i + ½, j + ½), row 0 at the top.
+nlohmann::json camera_json(const Camera& camera);
 
 /// Parses "WxH" (e.g. 1024x768). \throws CLI::ValidationError.
 std::pair<int, int> parse_size(const std::string& text);

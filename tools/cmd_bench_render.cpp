@@ -116,7 +116,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         }
                         nlohmann::json j = {{"input", a->input}, {"width", w}, {"height", h},
                                             {"frames", a->frames}, {"context", context->description()},
-                                            {"primitives", model.size()}, {"baseline_triangles", triangles}};
+                                            {"primitives", model.size()}, {"baseline_triangles", triangles},
+                                            {"camera", camera_json(cam)}};
                         std::string csv = "configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
                                           "covered_pixels,invocations_per_covered_pixel\n";
                         for (const auto& r : rows) {

@@ -62,7 +62,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   const Camera camera = frame_box(
       box, {.azimuth_deg = a.azimuth, .elevation_deg = a.elevation, .fov_y_deg = a.fov, .width = w, .height = h});
   nlohmann::json& j = report.json["render"];
-  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}};
+  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)}};
 
   std::string backend = a.backend;
   if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";

@@ -42,6 +42,20 @@ Query make_query(GLenum) {
 }
 
 namespace {
+// Samplers and images: their units come from layout(binding = …) in the shaders.
+bool is_opaque(GLenum type) {
+  switch (type) {
+    case GL_SAMPLER_1D: case GL_SAMPLER_2D: case GL_SAMPLER_3D: case GL_SAMPLER_CUBE:
+    case GL_SAMPLER_2D_SHADOW: case GL_SAMPLER_2D_ARRAY: case GL_SAMPLER_BUFFER:
+    case GL_INT_SAMPLER_2D: case GL_UNSIGNED_INT_SAMPLER_2D: case GL_SAMPLER_2D_MULTISAMPLE:
+    case GL_IMAGE_2D: case GL_INT_IMAGE_2D: case GL_UNSIGNED_INT_IMAGE_2D: case GL_IMAGE_3D:
+    case GL_UNSIGNED_INT_ATOMIC_COUNTER:
+      return true;
+    default:
+      return false;
+  }
+}
+
 GLuint compile(GLenum stage, std::string_view name, std::string_view source, std::string_view defines) {
   const std::string full = std::string(shader_source("prelude.glsl")) + "\n" + std::string(defines) + "\n#line 1\n" +
                            std::string(source);
@@ -89,14 +103,44 @@ Program::Program(std::string_view name, std::string_view vertex, std::string_vie
     glGetProgramInfoLog(p, len, nullptr, log.data());
     throw GlError(fmt::format("program {} failed to link:\n{}", name, log));
   }
+  name_ = name;
+  GLint count = 0, max_length = 0;
+  glGetProgramiv(p, GL_ACTIVE_UNIFORMS, &count);
+  glGetProgramiv(p, GL_ACTIVE_UNIFORM_MAX_LENGTH, &max_length);
+  std::string buffer(static_cast<std::size_t>(std::max(max_length, 1)), '\0');
+  for (GLint i = 0; i < count; ++i) {
+    GLsizei length = 0;
+    GLint size = 0;
+    GLenum type = 0;
+    glGetActiveUniform(p, static_cast<GLuint>(i), max_length, &length, &size, &type, buffer.data());
+    std::string uniform(buffer.data(), static_cast<std::size_t>(length));
+    if (is_opaque(type)) continue;  // bound through layout(binding = …)
+    if (uniform.ends_with("[0]")) uniform.resize(uniform.size() - 3);
+    const GLint loc = glGetUniformLocation(p, uniform.c_str());
+    if (loc < 0) continue;  // in a uniform block: set through its buffer
+    uniforms_.push_back({std::move(uniform), loc, false});
+  }
 }
 
 GLint Program::location(const char* uniform) const {
-  auto it = locations_.find(uniform);
-  if (it != locations_.end()) return it->second;
-  const GLint loc = glGetUniformLocation(id(), uniform);
-  locations_.emplace(uniform, loc);
-  return loc;
+  for (const auto& u : uniforms_)
+    if (u.name == uniform) return u.location;
+  return -1;
+}
+
+GLint Program::mark(const char* uniform) const {
+  for (auto& u : uniforms_)
+    if (u.name == uniform) {
+      u.is_set = true;
+      return u.location;
+    }
+  return -1;
+}
+
+void Program::use() const {
+  for (const auto& u : uniforms_)
+    if (!u.is_set) throw GlError(fmt::format("program '{}' draws with uniform '{}' never set", name_, u.name));
+  glUseProgram(handle_.id());
 }
 
 void check_error(const char* where) {

@@ -4,8 +4,8 @@
 
 #include <string>
 #include <string_view>
-#include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -59,7 +59,8 @@ VertexArray make_vertex_array();
 Texture make_texture_2d(GLenum internal_format, int width, int height);
 Query make_query(GLenum target);
 
-/// A linked program with cached uniform locations and typed setters.
+/// A linked program with cached uniform locations and typed setters. It refuses to draw (use()
+/// throws) while a uniform it declares was never set; samplers are set by their layout binding.
 class Program {
 public:
   Program() = default;
@@ -67,24 +68,37 @@ public:
   /// every stage. \throws GlError with the compiler log and the stage's file name.
   Program(std::string_view name, std::string_view vertex, std::string_view fragment, std::string_view defines = {});
   GLuint id() const { return handle_.id(); }
-  void use() const { glUseProgram(handle_.id()); }
+  const std::string& name() const { return name_; }
+  /// Binds the program for drawing. \throws GlError naming the program and the first active
+  /// uniform that was never set.
+  void use() const;
+  /// Location of an active uniform, −1 for one the program does not declare (setting it is a no-op).
   GLint location(const char* uniform) const;
-  void set(const char* u, int v) const { glProgramUniform1i(id(), location(u), v); }
-  void set(const char* u, unsigned v) const { glProgramUniform1ui(id(), location(u), v); }
-  void set(const char* u, float v) const { glProgramUniform1f(id(), location(u), v); }
-  void set(const char* u, const Eigen::Vector2f& v) const { glProgramUniform2fv(id(), location(u), 1, v.data()); }
-  void set(const char* u, const Eigen::Vector3f& v) const { glProgramUniform3fv(id(), location(u), 1, v.data()); }
-  void set(const char* u, const Eigen::Vector4f& v) const { glProgramUniform4fv(id(), location(u), 1, v.data()); }
+  void set(const char* u, int v) const { glProgramUniform1i(id(), mark(u), v); }
+  void set(const char* u, unsigned v) const { glProgramUniform1ui(id(), mark(u), v); }
+  void set(const char* u, float v) const { glProgramUniform1f(id(), mark(u), v); }
+  void set(const char* u, const Eigen::Vector2f& v) const { glProgramUniform2fv(id(), mark(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector3f& v) const { glProgramUniform3fv(id(), mark(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector4f& v) const { glProgramUniform4fv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Matrix3f& m) const {
-    glProgramUniformMatrix3fv(id(), location(u), 1, GL_FALSE, m.data());
+    glProgramUniformMatrix3fv(id(), mark(u), 1, GL_FALSE, m.data());
   }
   void set(const char* u, const Eigen::Matrix4f& m) const {
-    glProgramUniformMatrix4fv(id(), location(u), 1, GL_FALSE, m.data());
+    glProgramUniformMatrix4fv(id(), mark(u), 1, GL_FALSE, m.data());
   }
 
 private:
+  struct Uniform {
+    std::string name;
+    GLint location = -1;
+    bool is_set = false;
+  };
+  /// The uniform's location, recorded as set.
+  GLint mark(const char* uniform) const;
+
   Handle<detail::delete_program> handle_;
-  mutable std::unordered_map<std::string, GLint> locations_;
+  std::string name_;
+  mutable std::vector<Uniform> uniforms_;  // active non-sampler uniforms, queried after linking
 };
 
 /// Throws GlError naming `where` if glGetError reports an error.

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <utility>
 #include <cmath>
 #include <numbers>
 
@@ -19,7 +21,10 @@
 #include "fit/slim_fit.h"
 #include "core/reference.h"
 #include "core/synth.h"
+#include "core/error.h"
+#include "core/primitive.h"
 #include "render/context.h"
+#include "render/gl/objects.h"
 #include "render/renderer.h"
 
 using namespace quadrix;
@@ -120,6 +125,58 @@ TEST_F(GlRender, HyperboloidsMatchTheCpuReference) {
         const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 25, .width = 200, .height = 160});
         expect_accurate(run(m, cam, cull), 2500);
       }
+}
+
+TEST_F(GlRender, ProgramsRefuseToDrawWithAnUnsetUniformNamingIt) {
+  const char* vertex = "uniform float u_scale;\nvoid main() { gl_Position = vec4(u_scale); }\n";
+  const char* fragment = "uniform vec3 u_tint;\nout vec4 c;\nvoid main() { c = vec4(u_tint, 1.0); }\n";
+  const render::gl::Program p("probe", vertex, fragment);
+  p.set("u_scale", 1.0f);
+  try {
+    p.use();
+    ADD_FAILURE() << "use() accepted a program with u_tint never set";
+  } catch (const GlError& e) {
+    EXPECT_NE(std::string(e.what()).find("'probe'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'u_tint'"), std::string::npos) << e.what();
+  }
+  p.set("u_tint", Eigen::Vector3f(1, 0, 0));
+  EXPECT_NO_THROW(p.use());
+  p.set("u_not_declared", 2.0f);  // a uniform the program does not have: a no-op, as in GL
+  EXPECT_NO_THROW(p.use());
+}
+
+TEST_F(GlRender, PrimitiveIdsNameTheirKindInEveryPass) {
+  // Tetrahedron patches behind a two-triangle square: each pixel's id names the pass that drew it.
+  const Model m = synth_model("hyperboloid1", {.resolution = 6});
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 120, .height = 100});
+  // Inside the bounding sphere (the near plane touches it), in front of the hyperboloid's middle.
+  const Eigen::Vector3d centre = cam.target - 2.0 * cam.forward();
+  const Eigen::Vector3d right = cam.forward().cross(cam.up).normalized(), up = right.cross(cam.forward());
+  const double s = 0.6;
+  PolygonMesh square;
+  for (const auto& [a, b] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
+    square.vertices.push_back(centre + s * (a * right + b * up));
+  square.add_face(std::array{0, 1, 2, 3});
+  renderer_->set_model(m);
+  renderer_->set_mesh(square);
+  renderer_->draw(cam, {});
+  const auto gl = renderer_->read_gbuffer();
+  const ReferenceImage ref = render_reference(ReferenceScene(m), cam);
+  int mesh_pixels = 0, kind_agree = 0, tet_agree = 0, tet_compared = 0;
+  for (std::size_t i = 0; i < gl.primitive.size(); ++i) {
+    const PrimitiveKind kind = primitive_kind(gl.primitive[i]);
+    if (kind == PrimitiveKind::mesh) {
+      ++mesh_pixels;
+      EXPECT_LT(gl.primitive[i], primitive_id(PrimitiveKind::mesh, 2)) << "pixel " << i;
+      continue;
+    }
+    kind_agree += kind == primitive_kind(ref.primitive[i]);  // differs on silhouettes only
+    if (kind == PrimitiveKind::tet) tet_agree += gl.primitive[i] == ref.primitive[i], ++tet_compared;
+  }
+  EXPECT_GT(mesh_pixels, 500);
+  EXPECT_GE(double(kind_agree) / (gl.primitive.size() - mesh_pixels), 0.98);
+  EXPECT_GT(tet_compared, 500);
+  EXPECT_GE(double(tet_agree) / tet_compared, 0.95);
 }
 
 TEST_F(GlRender, FarCameraNarrowFieldOfView) {
@@ -327,7 +384,7 @@ TEST_F(GlSlim, Slim2tModelsRenderThroughTheSamePath) {
     const float k[10] = {1, 1, 1, 0, 0, 0, 2 * c.x(), 2 * c.y(), 2 * c.z(), c.squaredNorm() - 1};
     for (float v : k) put(v);
     put(static_cast<float>(s.radius));
-    put(std::int32_t{-1});
+    put(-1.0f);  // parent id (a float in .slim2t): a root
   }
   const auto path = std::filesystem::temp_directory_path() / "quadrix-test-sphere.slim2t";
   std::ofstream(path, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));

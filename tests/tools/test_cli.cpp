@@ -4,6 +4,7 @@
 #include "tests/support.h"
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -12,6 +13,8 @@
 
 #include "core/image.h"
 #include "core/model_io.h"
+#include "core/reference.h"
+#include "core/shade.h"
 #include "tests/core/malformed_corpus.h"
 
 using namespace quadrix;
@@ -22,6 +25,29 @@ using test_support::CmdResult;
 CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+// A camera from the fields a report records, and nothing else.
+Camera camera_from(const nlohmann::json& j) {
+  const auto vec = [&](const char* key) {
+    const auto& v = j.at(key);
+    return Eigen::Vector3d(v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>());
+  };
+  Camera c;
+  c.eye = vec("eye");
+  c.target = vec("target");
+  c.up = vec("up");
+  c.fov_y_deg = j.at("fov_y_deg").get<double>();
+  c.width = j.at("width").get<int>();
+  c.height = j.at("height").get<int>();
+  c.near_plane = j.at("near").get<double>();
+  c.far_plane = j.at("far").get<double>();
+  return c;
+}
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
 }  // namespace
 
 TEST(Cli, SynthInfoRenderRoundTrip) {
@@ -99,4 +125,56 @@ TEST(Cli, MissingFilesAndUnwritableOutputsFailCleanly) {
   EXPECT_EQ(s, "previous");
   for (const auto& e : std::filesystem::directory_iterator(dir.path()))
     EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+}
+
+TEST(Cli, RenderReportRecordsTheCameraThatReproducesTheView) {
+  ScratchDir dir("cli-camera");
+  const auto model = dir / "h.qxm";
+  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 6 -o " + q(model)).code, 0);
+  // An unusual view and aspect, so a default camera cannot reproduce it by accident.
+  const std::string view = " --size 80x56 --azimuth 115 --elevation -35 --fov 25 --quiet";
+  const auto png = dir / "cpu.png", report = dir / "cpu.json";
+  CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + view + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Camera camera = camera_from(read_json(report)["render"]["camera"]);
+  EXPECT_EQ(camera.width, 80);
+  EXPECT_EQ(camera.height, 56);
+  EXPECT_EQ(camera.fov_y_deg, 25.0);
+
+  // The CPU reference from the recorded camera gives the written image, pixel for pixel.
+  const Model m = read_model(model);
+  const ReferenceScene scene(m);
+  const ReferenceImage ref = render_reference(scene, camera, {});
+  const Image8 written = read_png(png);
+  ASSERT_EQ(written.width, ref.width);
+  ASSERT_EQ(written.height, ref.height);
+  EXPECT_EQ(written.rgba, shade_phong(ref, camera).rgba);
+  const auto covered = std::count(ref.coverage.begin(), ref.coverage.end(), 1);
+  EXPECT_GT(covered, 200) << "the view shows too little of the model to test anything";
+
+  // The GL backend records the same view, and its image covers the reference's pixels.
+  const auto gl_png = dir / "gl.png", gl_report = dir / "gl.json";
+  r = quadrix_run("render --backend gl " + q(model) + " -o " + q(gl_png) + view + " --report " + q(gl_report));
+  if (r.code == 6) GTEST_SKIP() << "no OpenGL context: " << r.out;
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto gl_camera = read_json(gl_report)["render"]["camera"];
+  EXPECT_EQ(gl_camera, read_json(report)["render"]["camera"]);
+  const Image8 gl = read_png(gl_png);
+  ASSERT_EQ(gl.width, ref.width);
+  ASSERT_EQ(gl.height, ref.height);
+  int agree = 0, counted = 0;
+  for (int y = 1; y + 1 < ref.height; ++y)
+    for (int x = 1; x + 1 < ref.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * ref.width + x;
+      bool silhouette = false;  // the 1-pixel band where coverage legitimately differs
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) silhouette |= ref.coverage[i + dy * ref.width + dx] != ref.coverage[i];
+      if (silhouette) continue;
+      const std::uint8_t* p = &gl.rgba[4 * i];
+      const bool gl_covered = !(p[0] == 255 && p[1] == 255 && p[2] == 255);  // white background
+      agree += gl_covered == (ref.coverage[i] != 0);
+      ++counted;
+    }
+  ASSERT_GT(counted, 0);
+  EXPECT_GE(double(agree) / counted, 0.98) << agree << " of " << counted << " pixels agree";
 }

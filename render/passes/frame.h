@@ -1,0 +1,69 @@
+#pragma once
+/// What the passes of one frame share: the camera as the shaders see it (set on every program by
+/// one function), the render targets, and the Pass interface the renderer runs in sequence.
+#include <cstdint>
+
+#include "core/camera.h"
+#include "render/gl/objects.h"
+#include "render/renderer.h"
+
+namespace quadrix::render {
+
+/// A double-precision point as float hi + lo; the shaders add the halves back.
+struct Split {
+  Eigen::Vector3f hi, lo;
+};
+Split split(const Eigen::Vector3d& p);
+/// The float whose bits are `u` (ids and packed colours in float buffers).
+float bits_float(std::uint32_t u);
+
+/// The camera's uniforms, computed once per frame (differences taken in double).
+struct CameraUniforms {
+  explicit CameraUniforms(const Camera& camera);
+  Eigen::Matrix4f proj;
+  Eigen::Matrix3f view_rot;
+  Split target;
+  Eigen::Vector3f target_minus_eye;
+  float target_distance;
+  float near_plane;
+  Eigen::Vector2f viewport;  ///< pixels
+  Eigen::Vector3d target_world;
+};
+
+/// Sets every camera uniform (u_proj, u_view_rot, u_target_hi, u_target_lo, u_target_minus_eye,
+/// u_target_distance, u_near, u_viewport) that the program declares.
+void set_camera_uniforms(const gl::Program& program, const CameraUniforms& camera);
+
+/// The G-buffer (normal + eye depth, albedo, primitive ids, depth) and the shaded output.
+struct FrameTargets {
+  int width = 0, height = 0;
+  unsigned generation = 0;  ///< bumped on every re-allocation, so dependants re-attach
+  gl::Texture normal_depth, albedo, ids, depth, colour;
+  gl::Framebuffer gbuffer, output;
+
+  /// Re-allocates at a new size (no-op at the same size). \throws GlError.
+  void resize(int width, int height);
+  /// Background everywhere: zero normal/depth and albedo, id −1, depth 1.
+  void clear() const;
+};
+
+/// One frame's shared inputs.
+struct Frame {
+  const CameraUniforms& camera;
+  const RenderOptions& options;
+  const FrameTargets& targets;
+  GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit fragment counts
+  GLuint empty_vao;
+};
+
+/// One step of a frame. Each pass owns its programs and the GPU data of its primitives, and
+/// sets the GL state it draws with.
+class Pass {
+public:
+  virtual ~Pass() = default;
+  /// False when this frame has nothing for the pass (no such primitives, option off).
+  virtual bool needed(const RenderOptions& options) const = 0;
+  virtual void run(const Frame& frame) = 0;
+};
+
+}  // namespace quadrix::render

@@ -1,0 +1,26 @@
+#pragma once
+/// Ordinary triangles (polygons fanned, flat face normals) drawn into the same G-buffer as the
+/// quadrics, depth-correct against them.
+#include "core/mesh_io.h"
+#include "render/passes/frame.h"
+
+namespace quadrix::render {
+
+class MeshPass final : public Pass {
+public:
+  MeshPass();  ///< compiles the program. \throws GlError.
+  void upload(const PolygonMesh& mesh, Rgb colour);
+  bool needed(const RenderOptions&) const override { return has_mesh_; }
+  void run(const Frame& frame) override;
+
+private:
+  gl::Program program_;
+  gl::VertexArray vao_;
+  gl::Buffer vbo_;
+  GLsizei vertices_ = 0;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // vertices are relative to it (float)
+  Rgb colour_{180, 180, 190};
+  bool has_mesh_ = false;
+};
+
+}  // namespace quadrix::render

@@ -1,0 +1,168 @@
+#include "render/passes/slim_pass.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/primitive.h"
+#include "render/shaders.h"
+
+namespace quadrix::render {
+namespace {
+
+// std430 layout of `Ball` in slim.vert (6 vec4 = 96 bytes).
+struct GpuBall {
+  float centre_hi[4];
+  float centre_lo[4];
+  float q0[4], q1[4], q2[4];
+  float clip[4];
+};
+static_assert(sizeof(GpuBall) == 96);
+
+GpuBall pack(const SlimPatch& b, std::int32_t id) {
+  GpuBall g{};
+  const Split cs = split(b.centre);
+  for (int i = 0; i < 3; ++i) {
+    g.centre_hi[i] = cs.hi[i];
+    g.centre_lo[i] = cs.lo[i];
+  }
+  g.centre_hi[3] = static_cast<float>(b.radius);
+  const Rgb col = b.colour.value_or(Rgb{200, 200, 200});
+  g.centre_lo[3] = bits_float(col[0] | (col[1] << 8) | (col[2] << 16));
+  const Quadric q = b.local.normalized();
+  const auto& A = q.A;
+  g.q0[0] = float(A(0, 0)), g.q0[1] = float(A(1, 1)), g.q0[2] = float(A(2, 2)), g.q0[3] = float(A(0, 1));
+  g.q1[0] = float(A(1, 2)), g.q1[1] = float(A(0, 2)), g.q1[2] = float(q.b.x()), g.q1[3] = float(q.b.y());
+  g.q2[0] = float(q.b.z()), g.q2[1] = float(q.c), g.q2[2] = bits_float(static_cast<std::uint32_t>(id));
+  if (b.clip) {
+    const double n = b.clip->n.norm();
+    if (n > 0)
+      for (int i = 0; i < 3; ++i) g.clip[i] = float(b.clip->n[i] / n);
+    if (n > 0) g.clip[3] = float(b.clip->d / n);
+  }
+  return g;
+}
+
+const float kZero[4] = {0, 0, 0, 0};
+
+void set_colour_writes(GLboolean on) {
+  for (GLuint i = 0; i < 3; ++i) glColorMaski(i, on, on, on, on);
+}
+
+}  // namespace
+
+SlimPass::SlimPass()
+    : visibility_("slim pass 1", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 1\n"),
+      accumulate_("slim pass 2", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 2\n"),
+      resolve_("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag")) {}
+
+void SlimPass::upload(std::span<const SlimPatch> patches) {
+  if (patches.size() > kMaxPrimitiveIndex + 1)
+    throw InvalidInput(fmt::format("{} SLIM patches: the GL renderer draws at most 2^{}", patches.size(),
+                                   kPrimitiveIndexBits));
+  std::vector<GpuBall> data;
+  data.reserve(patches.size());
+  for (std::size_t i = 0; i < patches.size(); ++i)
+    data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i)));
+  balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
+  count_ = data.size();
+}
+
+void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
+  if (acc_fbo_ && acc_half_ == half && acc_generation_ == t.generation) return;
+  acc_half_ = half;
+  acc_generation_ = t.generation;
+  const GLenum format = half ? GL_RGBA16F : GL_RGBA32F;
+  acc_normal_weight_ = gl::make_texture_2d(format, t.width, t.height);
+  acc_depth_colour_ = gl::make_texture_2d(format, t.width, t.height);
+  GLuint fb = 0;
+  glCreateFramebuffers(1, &fb);
+  acc_fbo_ = gl::Framebuffer(fb);
+  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT0, acc_normal_weight_.id(), 0);
+  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT1, acc_depth_colour_.id(), 0);
+  glNamedFramebufferTexture(fb, GL_DEPTH_ATTACHMENT, t.depth.id(), 0);
+  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(fb, 2, bufs);
+  if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GlError("SLIM accumulation framebuffer incomplete");
+}
+
+void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stats) const {
+  set_camera_uniforms(p, f.camera);
+  p.set("u_offset", f.options.slim_offset);
+  p.set("u_count_stats", count_stats);
+  p.set("u_cull", f.options.cull ? 1 : 0);
+}
+
+void SlimPass::run(const Frame& f) {
+  ensure_accumulation(f.targets, f.options.slim_half_float);
+  glEnable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, balls_.id());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
+  glBindVertexArray(f.empty_vao);
+  visibility(f);
+  accumulate(f);
+  resolve(f);
+}
+
+// Pass 1: the pushed-back depth of each ball's first hit, no colour writes.
+void SlimPass::visibility(const Frame& f) {
+  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
+  set_colour_writes(GL_FALSE);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  set_uniforms(visibility_, f, f.options.statistics ? 1 : 0);
+  visibility_.use();
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  set_colour_writes(GL_TRUE);
+}
+
+// Pass 2: every hit in front of pass 1's depth adds its weighted normal, depth and colour.
+void SlimPass::accumulate(const Frame& f) {
+  glBindFramebuffer(GL_FRAMEBUFFER, acc_fbo_.id());
+  glClearNamedFramebufferfv(acc_fbo_.id(), GL_COLOR, 0, kZero);
+  glClearNamedFramebufferfv(acc_fbo_.id(), GL_COLOR, 1, kZero);
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  set_uniforms(accumulate_, f, 0);
+  accumulate_.use();
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  glDisable(GL_BLEND);
+}
+
+// Pass 3: divide by Σw into the G-buffer; the deferred pass shades it with the rest.
+void SlimPass::resolve(const Frame& f) {
+  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
+  glDepthFunc(GL_ALWAYS);
+  glDepthMask(GL_TRUE);
+  set_camera_uniforms(resolve_, f.camera);
+  resolve_.use();
+  glBindTextureUnit(0, acc_normal_weight_.id());
+  glBindTextureUnit(1, acc_depth_colour_.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthFunc(GL_LESS);
+}
+
+SlimOutlinePass::SlimOutlinePass(const SlimPass& slim)
+    : slim_(slim),
+      program_("slim outline", shader_source("slim.vert"), shader_source("slim_outline.frag"),
+               "#define SLIM_OUTLINE 1\n") {}
+
+void SlimOutlinePass::run(const Frame& f) {
+  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.output.id());
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  set_camera_uniforms(program_, f.camera);
+  program_.set("u_count_stats", 0);
+  program_.set("u_cull", f.options.cull ? 1 : 0);
+  program_.use();
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
+  glBindVertexArray(f.empty_vao);
+  glDrawArraysInstanced(GL_LINE_STRIP, 0, 5, static_cast<GLsizei>(slim_.count()));
+}
+
+}  // namespace quadrix::render

@@ -1,0 +1,53 @@
+#pragma once
+/// SLIM patches in three passes ([Stoll06] §5.1.1, DESIGN §6): visibility (pushed-back depth of
+/// the first hit), accumulation (additive weighted normal, depth, colour), resolve (divide by Σw
+/// into the G-buffer, shaded later with everything else). And the debug overlay of their splats.
+#include <span>
+
+#include "core/model.h"
+#include "render/passes/frame.h"
+
+namespace quadrix::render {
+
+class SlimPass final : public Pass {
+public:
+  SlimPass();  ///< compiles the three programs. \throws GlError.
+  /// \throws InvalidInput past kMaxPrimitiveIndex patches, GlError (out of GPU memory).
+  void upload(std::span<const SlimPatch> patches);
+  std::size_t count() const { return count_; }
+  /// The packed balls (SSBO, `Ball` in slim.vert).
+  GLuint balls() const { return balls_.id(); }
+  bool needed(const RenderOptions&) const override { return count_ > 0; }
+  void run(const Frame& frame) override;
+
+private:
+  void visibility(const Frame& frame);
+  void accumulate(const Frame& frame);
+  void resolve(const Frame& frame);
+  void set_uniforms(const gl::Program& program, const Frame& frame, int count_stats) const;
+  /// (Re)makes the accumulation targets; they share the G-buffer's depth texture.
+  void ensure_accumulation(const FrameTargets& targets, bool half);
+
+  gl::Program visibility_, accumulate_, resolve_;
+  gl::Buffer balls_;
+  std::size_t count_ = 0;
+  gl::Texture acc_normal_weight_, acc_depth_colour_;
+  gl::Framebuffer acc_fbo_;
+  bool acc_half_ = false;
+  unsigned acc_generation_ = 0;  // the FrameTargets generation acc_fbo_ was made for
+};
+
+/// Debug overlay over the shaded image: the screen bound of every SLIM ball, red where the
+/// per-quadric test culls it (RenderOptions::slim_outlines).
+class SlimOutlinePass final : public Pass {
+public:
+  explicit SlimOutlinePass(const SlimPass& slim);
+  bool needed(const RenderOptions& options) const override { return options.slim_outlines && slim_.count() > 0; }
+  void run(const Frame& frame) override;
+
+private:
+  const SlimPass& slim_;
+  gl::Program program_;
+};
+
+}  // namespace quadrix::render

@@ -1,0 +1,106 @@
+#include "render/passes/tet_pass.h"
+
+#include <array>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/primitive.h"
+#include "render/shaders.h"
+
+namespace quadrix::render {
+namespace {
+
+// std430 layout of `Tet` in tet.vert (9 vec4 = 144 bytes).
+struct GpuTet {
+  float centre_hi[4];
+  float centre_lo[4];
+  float corner[4][4];
+  float q0[4], q1[4], q2[4];
+};
+static_assert(sizeof(GpuTet) == 144);
+
+GpuTet pack(const TetPatch& t, std::int32_t id) {
+  const Eigen::Vector3d c = t.centroid();
+  std::array<Eigen::Vector3d, 4> p = t.corners;
+  if ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) < 0) std::swap(p[1], p[2]);
+  double s = 0;
+  for (const auto& q : p) s = std::max(s, (q - c).norm());
+  // Relative to the centroid already; scaled by s so local coordinates are O(1).
+  const Quadric local = t.quadric.to_local(Eigen::Vector3d::Zero(), s).normalized();
+  GpuTet g{};
+  const Split cs = split(c);
+  for (int i = 0; i < 3; ++i) {
+    g.centre_hi[i] = cs.hi[i];
+    g.centre_lo[i] = cs.lo[i];
+  }
+  g.centre_hi[3] = static_cast<float>(s);
+  const Rgb col = t.colour.value_or(Rgb{200, 200, 200});
+  g.centre_lo[3] = bits_float(col[0] | (col[1] << 8) | (col[2] << 16));
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3f l = ((p[k] - c) / s).cast<float>();
+    g.corner[k][0] = l.x(), g.corner[k][1] = l.y(), g.corner[k][2] = l.z();
+  }
+  g.corner[0][3] = bits_float(static_cast<std::uint32_t>(id));
+  const auto& A = local.A;
+  g.q0[0] = float(A(0, 0)), g.q0[1] = float(A(1, 1)), g.q0[2] = float(A(2, 2)), g.q0[3] = float(A(0, 1));
+  g.q1[0] = float(A(1, 2)), g.q1[1] = float(A(0, 2)), g.q1[2] = float(local.b.x()), g.q1[3] = float(local.b.y());
+  g.q2[0] = float(local.b.z()), g.q2[1] = float(local.c);
+  return g;
+}
+
+}  // namespace
+
+TetPass::TetPass() : program_("tet", shader_source("tet.vert"), shader_source("tet.frag")) {}
+
+void TetPass::upload(std::span<const TetPatch> tets) {
+  if (tets.size() > kMaxPrimitiveIndex + 1)
+    throw InvalidInput(fmt::format("{} tetrahedron patches: the GL renderer draws at most 2^{}", tets.size(),
+                                   kPrimitiveIndexBits));
+  std::vector<GpuTet> data;
+  data.reserve(tets.size());
+  for (std::size_t i = 0; i < tets.size(); ++i) data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i)));
+  tets_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuTet)), data.data());
+  count_ = data.size();
+  // Faces with outward counter-clockwise order for a positively oriented tetrahedron (pack()
+  // orients them): corners of each face, as tet.vert's kFace.
+  constexpr std::array<std::uint32_t, 12> kFace{1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1};
+  std::vector<std::uint32_t> indices(12 * data.size());
+  for (std::size_t t = 0; t < data.size(); ++t)
+    for (std::size_t j = 0; j < 12; ++j) indices[12 * t + j] = static_cast<std::uint32_t>(4 * t) + kFace[j];
+  indices_ = gl::make_buffer(static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data());
+  vao_ = gl::make_vertex_array();
+  glVertexArrayElementBuffer(vao_.id(), indices_.id());
+}
+
+void TetPass::run(const Frame& f) {
+  const RenderOptions& o = f.options;
+  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  // Front faces of each tetrahedron only: every covered pixel gets exactly one ray.
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CCW);
+  set_camera_uniforms(program_, f.camera);
+  program_.set("u_cull", o.cull ? 1 : 0);
+  program_.set("u_count_stats", o.statistics ? 1 : 0);
+  program_.set("u_clip_eps", o.clip_eps);
+  // Statistics frames draw instanced so each tetrahedron is counted exactly once; other frames
+  // indexed, 4 vertex-shader runs per tetrahedron instead of 12 (measured on llvmpipe).
+  program_.set("u_indexed", o.statistics ? 0 : 1);
+  program_.use();
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tets_.id());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
+  if (o.statistics) {
+    glBindVertexArray(f.empty_vao);
+    glDrawArraysInstanced(GL_TRIANGLES, 0, 12, static_cast<GLsizei>(count_));
+  } else {
+    glBindVertexArray(vao_.id());
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(12 * count_), GL_UNSIGNED_INT, nullptr);
+  }
+}
+
+}  // namespace quadrix::render
