@@ -110,16 +110,7 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
       m.triangles.push_back({mesh.vertices[vs[0]], mesh.vertices[vs[k]], mesh.vertices[vs[k + 1]]});
   }
   if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
-  // A closed mesh (every edge on two faces) with a negative enclosed volume is wound inwards.
-  std::map<std::pair<int, int>, int> edges;
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    const auto vs = mesh.face(f);
-    for (std::size_t k = 0; k < vs.size(); ++k) ++edges[std::minmax(vs[k], vs[(k + 1) % vs.size()])];
-  }
-  const bool closed = std::all_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 2; });
-  double volume = 0;
-  for (const auto& t : m.triangles) volume += t[0].dot(t[1].cross(t[2]));
-  m.wound_inward = closed && volume < 0;
+  m.wound_inward = mesh_wound_inward(mesh);
   std::vector<Box3> boxes;
   boxes.reserve(m.triangles.size());
   m.points.reserve(m.triangles.size());
@@ -146,13 +137,34 @@ double DataSurface::distance(const Eigen::Vector3d& x) const {
     m.index->nearest(x, 1, nb);
     const auto& t0 = m.triangles[nb[0].first];
     double best = point_triangle_distance(x, t0[0], t0[1], t0[2]);
-    // Any closer triangle has its centroid within best + max_reach of x.
-    m.index->radius(x, best + m.max_reach, nb);
-    for (const auto& [i, d2] : nb) {
-      const double lower = std::sqrt(d2) - m.max_reach;
-      if (lower >= best) continue;
-      const auto& t = m.triangles[i];
-      best = std::min(best, point_triangle_distance(x, t[0], t[1], t[2]));
+    // BVH walk, nearest box first, pruning boxes farther than the best triangle so far.
+    const auto& nodes = m.bvh.nodes();
+    const auto& items = m.bvh.items();
+    const auto box_distance = [&](const Bvh::Node& n) {
+      return (x - x.cwiseMax(n.min).cwiseMin(n.max)).norm();
+    };
+    std::uint32_t stack[128];
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const Bvh::Node& n = nodes[stack[--sp]];
+      if (box_distance(n) >= best) continue;
+      if (n.count > 0) {
+        for (std::uint32_t k = 0; k < n.count; ++k) {
+          const auto& t = m.triangles[items[n.first + k]];
+          best = std::min(best, point_triangle_distance(x, t[0], t[1], t[2]));
+        }
+        continue;
+      }
+      const std::uint32_t left = static_cast<std::uint32_t>(&n - nodes.data()) + 1, right = n.first;
+      const double dl = box_distance(nodes[left]), dr = box_distance(nodes[right]);
+      if (dl <= dr) {
+        if (dr < best) stack[sp++] = right;
+        if (dl < best) stack[sp++] = left;
+      } else {
+        if (dl < best) stack[sp++] = left;
+        if (dr < best) stack[sp++] = right;
+      }
     }
     return best;
   }

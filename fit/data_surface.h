@@ -50,7 +50,7 @@ public:
   double distance(const Eigen::Vector3d& x) const;
   /// Nearest intersection of the ray with the triangles (either side); nothing for points.
   /// front: whether that triangle faces the ray: counter-clockwise seen from the ray's origin, or
-  /// clockwise when the mesh is closed and its signed volume negative (wound inwards).
+  /// clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).
   std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr) const;
   bool has_faces() const;
   /// Tangent-disc radius of point i (points only).

@@ -682,6 +682,7 @@ private:
     trace.slim.offset = opt_.blend_offset;
     std::vector<std::vector<double>> errors(slims.size());
     shrink_.assign(slims.size(), opt_.shrink_step);
+    patch_excess_.resize(balls_.size(), -1.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<SlimSurfaceSample> zero;
       std::vector<SlimSample> blended;
@@ -691,7 +692,10 @@ private:
         // shrinks by √(bound/d) (a sliver's sagitta goes with R²).
         const int grid = std::clamp(static_cast<int>(std::ceil(2.0 * slims[k].radius / (opt_.verify_spacing * E_))),
                                     opt_.verify_surface_grid, opt_.verify_max_grid);
-        if (const double d = zero_set_excess(slims[k], *data_, local, grid, 1); d > 0) {
+        // A patch's own zero set does not change between rounds: checked once per candidate ball.
+        double& excess = patch_excess_[chosen_[k]];
+        if (excess < 0) excess = zero_set_excess(slims[k], *data_, local, grid, 1);
+        if (const double d = excess; d > 0) {
           at_fault[k] = 1;
           errors[k].push_back(d);
           shrink_[k] = std::clamp(std::sqrt(local / d), 0.3, opt_.shrink_step);
@@ -732,7 +736,12 @@ private:
       st_.blend_failures = verify_points(scene, centre_index, at_fault);
       shrink_.clear();
       st_.surface_failures = opt_.check_surface ? verify_surface(scene, at_fault) : 0;
-      if ((st_.blend_failures == 0 && st_.surface_failures == 0) || round >= opt_.repair_rounds) break;
+      const std::size_t failing = st_.blend_failures + st_.surface_failures;
+      if (failing == 0 || round >= opt_.repair_rounds) break;
+      // Two rounds without progress: what is left is not what shrinking repairs.
+      stalled_ = failing >= last_failing_ ? stalled_ + 1 : 0;
+      last_failing_ = failing;
+      if (stalled_ >= 2) break;
       ++st_.repair_rounds;
       log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E", round + 1,
                  st_.blend_failures, st_.surface_failures, opt_.surface_factor);
@@ -867,6 +876,9 @@ private:
   std::vector<double> cap_;                           // radius cap per centre point (repair)
   std::vector<double> point_error_, surface_error_;
   std::vector<double> shrink_;                        // per chosen patch: radius factor on repair
+  std::vector<double> patch_excess_;
+  std::size_t last_failing_ = std::numeric_limits<std::size_t>::max();
+  int stalled_ = 0;                  // per candidate: zero_set_excess, −1 unknown
 };
 
 }  // namespace

@@ -92,11 +92,11 @@ struct SlimFitOptions {
   int shrink_steps = 16;
   /// Verification: zero-set samples on a verify_surface_grid² lattice per axis and patch, each
   /// seen through the blend along its normal from surface_probe_factor·E above it.
-  int verify_surface_grid = 8;
+  int verify_surface_grid = 4;
   /// Verification also checks each patch alone (as while fitting) on a lattice of about
   /// verify_spacing·E in world units, at most verify_max_grid lines per side.
   double verify_spacing = 2.0;
-  int verify_max_grid = 48;
+  int verify_max_grid = 32;
   double surface_probe_factor = 2.0;
   /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
   /// the model as `slim_offset`, and renderers use it.

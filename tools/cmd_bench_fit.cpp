@@ -22,6 +22,8 @@
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/slim_fit.h"
+#include "fit/data_surface.h"
+#include "fit/surface_error.h"
 #include "tools/cli.h"
 
 #ifndef QUADRIX_DATASETS
@@ -128,33 +130,64 @@ struct Row {
   std::string unit;
   double max_rel = 0, rms_rel = 0, seconds = 0;
   std::size_t beyond = 0;  // points farther than the bound
+  // Surface side (fit/surface_error.h: views back-projected, distance to the data's surface).
+  double surface_max_rel = 0, surface_p999_rel = 0, surface_share_beyond_2e = 0, hole_share = 0;
 };
+
+// The surface side of one result, measured the same way for every method.
+SurfaceError measure_surface(const TraceFn& trace, const DataSurface& data, const Box3& box, double bound, int resolution) {
+  return measure_surface_error(trace, data, box, {.views = 8, .resolution = resolution, .bound = bound});
+}
+
+TraceFn mesh_tracer(const DataSurface& mesh) {
+  return [&mesh](const Ray& ray) { return mesh.intersect(ray); };
+}
+
+void set_surface(Row& r, const SurfaceError& e, double diagonal) {
+  r.surface_max_rel = e.max / diagonal;
+  r.surface_p999_rel = e.p999 / diagonal;
+  r.surface_share_beyond_2e = e.share_beyond;
+  r.hole_share = e.has_holes_measure ? e.hole_share : std::numeric_limits<double>::quiet_NaN();
+}
+
+nlohmann::json surface_json(const Row& r) {
+  return {{"max_rel", r.surface_max_rel},
+          {"p999_rel", r.surface_p999_rel},
+          {"share_beyond_2e", r.surface_share_beyond_2e},
+          {"hole_share", std::isfinite(r.hole_share) ? nlohmann::json(r.hole_share) : nlohmann::json(nullptr)},
+          {"measure", "8 views, every covered pixel back-projected, distance to the input mesh (to the points' "
+                      "tangent discs without one); holes: front-facing mesh pixels away from its silhouette "
+                      "left empty"}};
+}
 
 constexpr Rgb kColours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}, {255, 127, 14}, {23, 190, 207}};
 
 Image8 draw_plot(const std::vector<std::string>& models, const std::vector<Row>& rows) {
   PlotPanel time{"TIME (S) AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
   PlotPanel size{"PATCHES / TRIANGLES AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
+  PlotPanel surface{"SURFACE P99.9 DISTANCE TO DATA AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
   for (std::size_t m = 0; m < models.size(); ++m) {
     const Rgb colour = kColours[m % std::size(kColours)];
     for (const auto& [method, style, label] :
          {std::tuple{"slim", PlotStyle::solid, "SLIM"}, std::tuple{"decimation", PlotStyle::dashed, "OPENMESH"},
           std::tuple{"poisson", PlotStyle::markers, "POISSON"}}) {
       PlotSeries t{fmt::format("{} {}", models[m], label), {}, {}, colour, style};
-      PlotSeries s = t;
+      PlotSeries s = t, f = t;
       for (const auto& r : rows) {
         if (r.model != models[m] || r.method != method) continue;
         // SLIM and decimation at the bound they were asked for; Poisson at the error it reached.
         const double x = r.max_error > 0 ? r.max_error : r.max_rel;
         t.x.push_back(x), t.y.push_back(r.seconds);
         s.x.push_back(x), s.y.push_back(double(r.size));
+        if (r.surface_p999_rel > 0) f.x.push_back(x), f.y.push_back(r.surface_p999_rel);
       }
       if (t.x.empty()) continue;
       time.series.push_back(std::move(t));
       size.series.push_back(std::move(s));
+      if (!f.x.empty()) surface.series.push_back(std::move(f));
     }
   }
-  const PlotPanel panels[] = {time, size};
+  const PlotPanel panels[] = {time, size, surface};
   return plot_log_log(panels);
 }
 
@@ -170,6 +203,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     std::string out = ".";
     bool peers = true;
     bool keep_models = false;
+    int view_resolution = 512;
   };
   auto a = std::make_shared<Args>();
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
@@ -183,6 +217,10 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->capture_default_str();
   app->add_option("--out", a->out, "Folder for bench_fit.csv, bench_fit.json and bench_fit.png")->capture_default_str();
   app->add_flag("--peers,!--no-peers", a->peers, "Run OpenMesh decimation and CGAL Poisson on the same data");
+  app->add_option("--view-resolution", a->view_resolution,
+                  "Pixels per side of each of the 8 views that measure the surface side")
+      ->check(CLI::Range(16, 4096))
+      ->capture_default_str();
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "
                 "e.g. for bench render --baseline-mesh");
@@ -214,6 +252,14 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                            {"mesh_triangles", nullptr},
                            {"runs", nlohmann::json::array()}};
       std::optional<Row> poisson;
+      // The data's surface for the surface side: the mesh, else the points' tangent discs. With a
+      // mesh, SLIM is fitted to the vertices on its faces, bounded against its triangles.
+      const DataSurface data =
+          d.mesh ? DataSurface::from_mesh(*d.mesh) : DataSurface::from_points(d.cloud.points, d.cloud.normals);
+      Box3 data_box;
+      for (const auto& p : d.cloud.points) data_box.extend(p);
+      const PointCloud on_faces = d.mesh ? points_from_mesh(*d.mesh) : PointCloud{};
+      const PointCloud& fit_cloud = d.mesh ? on_faces : d.cloud;
       if (d.mesh) {
         std::size_t t = 0;
         for (std::size_t f = 0; f < d.mesh->face_count(); ++f) t += d.mesh->face(f).size() - 2;
@@ -225,21 +271,29 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, p.mesh);
         poisson = Row{d.name, "poisson", 0, p.mesh.face_count(), "triangles", e.max / d.diagonal,
                       e.rms / d.diagonal, p.seconds, 0};
+        const DataSurface pm = DataSurface::from_mesh(p.mesh);
+        set_surface(*poisson, measure_surface(mesh_tracer(pm), data, data_box, 0, a->view_resolution), d.diagonal);
         rows.push_back(*poisson);
         jm["poisson"] = {{"triangles", p.mesh.face_count()}, {"vertices", p.mesh.vertices.size()},
                          {"seconds", p.seconds},            {"spacing", p.spacing},
                          {"max_rel", e.max / d.diagonal},   {"rms_rel", e.rms / d.diagonal},
-                         {"error_measure", "distance of every input point to the triangle mesh (CGAL AABB tree)"}};
+                         {"error_measure", "distance of every input point to the triangle mesh (CGAL AABB tree)"},
+                         {"surface", surface_json(*poisson)}};
       }
       progress.update(double(++done) / double(total));
       for (double E : a->errors) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
-        const SlimFitResult fit = fit_slim(d.cloud, {.max_error = E});
-        const SlimError se = evaluate_slim(fit.model, d.cloud, {.keep_per_point = true});
+        const SlimFitOptions fo{.max_error = E};
+        const SlimFitResult fit = d.mesh ? fit_slim(fit_cloud, *d.mesh, fo) : fit_slim(fit_cloud, fo);
+        const SlimError se = evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true});
         if (a->keep_models) write_model(fit.model, out_dir / fmt::format("{}_{:g}.qxm", d.name, E));
-        const double Eabs = E * d.diagonal;
-        const Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
-                       fit.stats.time_total, se.count_above(Eabs)};
+        const double Eabs = fit.stats.max_error_abs;
+        Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
+                 fit.stats.time_total, se.count_above(Eabs)};
+        log::info("bench fit: {}: surface side of SLIM at E = {:g}", d.name, E);
+        set_surface(slim, measure_surface_error(fit.model, data, data_box,
+                                                {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs}),
+                    d.diagonal);
         rows.push_back(slim);
         nlohmann::json run = {{"max_error", E},
                               {"slim",
@@ -250,7 +304,10 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"misses", se.misses},
                                 {"points_beyond_bound", slim.beyond},
                                 {"error_measure", "distance along each point's normal to the blended SLIM surface "
-                                                  "(fit/evaluate.h)"}}}};
+                                                  "(fit/evaluate.h)"},
+                                {"fitted_points", fit_cloud.points.size()},
+                                {"fitter_surface_samples_beyond_2e", fit.stats.surface_failures},
+                                {"surface", surface_json(slim)}}}};
         if (a->peers && d.mesh) {
           log::info("bench fit: {}: OpenMesh decimation to {:g}", d.name, E);
           const peers::Decimation dec = peers::decimate_quadric(*d.mesh, Eabs);
@@ -263,8 +320,10 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
           for (std::size_t i = 0; i < n; ++i)
             if (on_face[i]) referenced.push_back(d.cloud.points[i]);
           const peers::MeshDistance ef = peers::point_mesh_distance(referenced, dec.mesh);
-          const Row r{d.name, "decimation", E, dec.mesh.face_count(), "triangles", e.max / d.diagonal,
-                      e.rms / d.diagonal, dec.seconds, 0};
+          Row r{d.name, "decimation", E, dec.mesh.face_count(), "triangles", e.max / d.diagonal,
+                e.rms / d.diagonal, dec.seconds, 0};
+          const DataSurface dm = DataSurface::from_mesh(dec.mesh);
+          set_surface(r, measure_surface(mesh_tracer(dm), data, data_box, 2 * Eabs, a->view_resolution), d.diagonal);
           rows.push_back(r);
           run["decimation"] = {{"triangles", r.size},
                                {"vertices", dec.mesh.vertices.size()},
@@ -274,7 +333,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                {"skipped_faces", dec.skipped_faces},
                                {"max_rel_face_vertices", ef.max / d.diagonal},
                                {"face_vertices", referenced.size()},
-                               {"error_measure", "distance of every original vertex to the decimated mesh"}};
+                               {"error_measure", "distance of every original vertex to the decimated mesh"},
+                               {"surface", surface_json(r)}};
           run["ratios"]["patches_per_decimation_triangle"] = number(ratio(double(slim.size), double(r.size)));
           run["ratios"]["patches_per_decimation_vertex"] =
               number(ratio(double(slim.size), double(dec.mesh.vertices.size())));
@@ -294,22 +354,26 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     j["load_average_end"] = load_average();
 
     write_file_atomically(out_dir / "bench_fit.csv", [&](std::ostream& os) {
-      os << "model,method,max_error,size,unit,measured_max_rel,measured_rms_rel,seconds,points_beyond_bound\n";
+      os << "model,method,max_error,size,unit,measured_max_rel,measured_rms_rel,seconds,points_beyond_bound,"
+            "surface_max_rel,surface_p999_rel,surface_share_beyond_2e,hole_share\n";
       for (const auto& r : rows)
-        os << fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.4f},{}\n", r.model, r.method,
+        os << fmt::format("{},{},{},{},{},{:.6g},{:.6g},{:.4f},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", r.model, r.method,
                           r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "", r.size, r.unit, r.max_rel,
-                          r.rms_rel, r.seconds, r.beyond);
+                          r.rms_rel, r.seconds, r.beyond, r.surface_max_rel, r.surface_p999_rel,
+                          r.surface_share_beyond_2e, r.hole_share);
     });
     write_file_atomically(out_dir / "bench_fit.json", [&](std::ostream& os) { os << j.dump(2) << "\n"; });
     write_png(draw_plot(names, rows), out_dir / "bench_fit.png");
     report.json["bench_fit"] = j;
     if (!common.quiet) {
-      std::cout << fmt::format("{:<10} {:<10} {:>8} {:>9} {:>10} {:>10} {:>8}\n", "model", "method", "E", "size",
-                               "max/diag", "rms/diag", "seconds");
+      std::cout << fmt::format("{:<10} {:<10} {:>8} {:>9} {:>10} {:>10} {:>8} {:>6} {:>10} {:>10} {:>9} {:>9}\n",
+                               "model", "method", "E", "size", "max/diag", "rms/diag", "seconds", ">E", "surf max",
+                               "surf p99.9", "surf >2E", "holes");
       for (const auto& r : rows)
-        std::cout << fmt::format("{:<10} {:<10} {:>8} {:>9} {:>10.3g} {:>10.3g} {:>8.2f}\n", r.model, r.method,
-                                 r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "-", r.size, r.max_rel,
-                                 r.rms_rel, r.seconds);
+        std::cout << fmt::format(
+            "{:<10} {:<10} {:>8} {:>9} {:>10.3g} {:>10.3g} {:>8.2f} {:>6} {:>10.3g} {:>10.3g} {:>9.2e} {:>9.2e}\n",
+            r.model, r.method, r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "-", r.size, r.max_rel, r.rms_rel,
+            r.seconds, r.beyond, r.surface_max_rel, r.surface_p999_rel, r.surface_share_beyond_2e, r.hole_share);
       std::cout << fmt::format("wrote {}/bench_fit.{{csv,json,png}}\n", out_dir.string());
     }
     return kOk;

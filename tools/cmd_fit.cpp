@@ -1,5 +1,6 @@
 // quadrix fit POINTS -o model.qxm: SLIM surfaces from point clouds (issue 4, DESIGN §2).
 #include <iostream>
+#include <optional>
 #include <random>
 
 #include <fmt/format.h>
@@ -39,6 +40,10 @@ void add_fit(CLI::App& root, Commands& commands) {
                 "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
   app->add_flag("!--no-surface-check", a->options.check_surface,
                 "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
+  app->add_option("--repair-rounds", a->options.repair_rounds,
+                  "Rounds of verification and repair of the patches at fault")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
   app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)");
   app->add_flag("--sharp", a->options.sharp,
                 "Sharp features: a clip plane per patch whose normals split into two clusters");
@@ -46,7 +51,15 @@ void add_fit(CLI::App& root, Commands& commands) {
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
       ->check(CLI::Range(1.0, 179.0));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
-                        PointCloud cloud = read_surface_points(a->points);
+                        // A mesh's faces give the normals and the surface the fit is bounded against.
+                        std::optional<PolygonMesh> mesh;
+                        PointCloud cloud;
+                        if (detect_file_kind(a->points) == FileKind::mesh) {
+                          mesh = read_mesh(a->points);
+                          cloud = points_from_mesh(*mesh);
+                        } else {
+                          cloud = read_points(a->points);
+                        }
                         PointCloud held;
                         if (a->holdout > 0) {
                           // Fit on a random subset; measure the held-out rest afterwards.
@@ -63,7 +76,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                         SlimFitOptions o = a->options;
                         o.max_error = a->max_error_abs > 0 ? a->max_error_abs : a->max_error;
                         o.max_error_is_absolute = a->max_error_abs > 0;
-                        SlimFitResult r = fit_slim(cloud, o);
+                        SlimFitResult r = mesh ? fit_slim(cloud, *mesh, o) : fit_slim(cloud, o);
                         r.model.metadata["producer"] =
                             fmt::format("quadrix fit {}{}", a->points,
                                         o.sharp ? fmt::format(" --sharp --sharp-angle {:g}", o.sharp_angle_deg) : "");

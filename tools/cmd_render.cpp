@@ -12,6 +12,7 @@
 #include "core/mesh_io.h"
 #include "core/model_io.h"
 #include "core/reference.h"
+#include "core/slim.h"
 #include "core/shade.h"
 #include "render/context.h"
 #include "render/renderer.h"
@@ -26,7 +27,7 @@ struct RenderArgs {
   double azimuth = 30, elevation = 20, fov = 40;
   bool no_cull = false;
   int frames = 1;
-  double slim_offset = 0.5;
+  double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
 };
 
 double median(std::vector<double> v) {
@@ -70,6 +71,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   if (backend == "gl" && !gl_can_draw(model))
     throw InvalidInput(fmt::format("{}: holds glyphs, which only --backend cpu draws so far", a.model));
   j["backend"] = backend;
+  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
+  j["slim_offset"] = slim_offset;
 
   if (backend == "cpu") {
     if (mesh) throw InvalidInput("--mesh needs the GL backend");
@@ -78,7 +81,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     Progress progress("render", progress_allowed(common));
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
-    ro.trace.slim.offset = a.slim_offset;
+    ro.trace.slim.offset = slim_offset;
     ro.progress = progress.callback();
     const double t1 = report.elapsed();
     const ReferenceImage img = render_reference(scene, camera, ro);
@@ -100,7 +103,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   if (mesh) renderer.set_mesh(*mesh);
   render::RenderOptions ro;
   ro.cull = !a.no_cull;
-  ro.slim_offset = static_cast<float>(a.slim_offset);
+  ro.slim_offset = static_cast<float>(slim_offset);
   ro.shading = a.shading == "envmap" ? render::Shading::envmap
                : a.shading == "npr"  ? render::Shading::npr
                                      : render::Shading::phong;
@@ -154,7 +157,7 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
   app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
-  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius")
+  app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
       ->check(CLI::Range(0.0, 10.0));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_render(*a, c, r); }});
 }

@@ -184,24 +184,32 @@ PointCloud read_surface_points(const fs::path& path) {
   return cloud;
 }
 
-PointCloud points_from_mesh(const PolygonMesh& mesh) {
-  std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
+bool mesh_wound_inward(const PolygonMesh& mesh) {
   std::map<std::pair<int, int>, int> edges;  // undirected edge → number of faces using it
   double volume6 = 0;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();  // Newell: twice the area vector
     const Eigen::Vector3d& p0 = mesh.vertices[vs[0]];
     for (std::size_t k = 0; k < vs.size(); ++k) {
       const int a = vs[k], b = vs[(k + 1) % vs.size()];
-      n += mesh.vertices[a].cross(mesh.vertices[b]);
       ++edges[{std::min(a, b), std::max(a, b)}];
       if (k > 0 && k + 1 < vs.size()) volume6 += p0.dot(mesh.vertices[a].cross(mesh.vertices[b]));
     }
+  }
+  const auto open = static_cast<std::size_t>(
+      std::count_if(edges.begin(), edges.end(), [](const auto& e) { return e.second != 2; }));
+  return !edges.empty() && open * 20 <= edges.size() && volume6 < 0;
+}
+
+PointCloud points_from_mesh(const PolygonMesh& mesh) {
+  std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();  // Newell: twice the area vector
+    for (std::size_t k = 0; k < vs.size(); ++k) n += mesh.vertices[vs[k]].cross(mesh.vertices[vs[(k + 1) % vs.size()]]);
     for (const int v : vs) sum[v] += n;
   }
-  const bool closed = std::all_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 2; });
-  const double sign = closed && volume6 < 0 ? -1.0 : 1.0;
+  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
   PointCloud cloud;
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
     const double len = sum[v].norm();

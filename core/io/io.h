@@ -47,9 +47,13 @@ PointCloud read_points(const std::filesystem::path& path);
 /// its faces (points_from_mesh); any other file is read_points.
 PointCloud read_surface_points(const std::filesystem::path& path);
 
+/// Whether a closed or nearly closed mesh (at most 5 % of its edges not on exactly two faces:
+/// a scan with a few holes, like bunny.ply) encloses a negative signed volume, i.e. its faces
+/// are wound clockwise seen from outside. Open sheets: false (their winding is taken as it is).
+bool mesh_wound_inward(const PolygonMesh& mesh);
+
 /// The vertices used by some face, each with the unit area-weighted sum of its faces' normals
-/// (Newell's polygon normal); when every edge is shared by exactly two faces (a closed mesh)
-/// all normals are flipped if the enclosed signed volume is negative, so they point outward.
+/// (Newell's polygon normal), flipped when mesh_wound_inward, so they point outward.
 /// Vertices of no face, or whose face normals cancel, are left out.
 PointCloud points_from_mesh(const PolygonMesh& mesh);
 

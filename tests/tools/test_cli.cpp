@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 
@@ -177,4 +178,33 @@ TEST(Cli, RenderReportRecordsTheCameraThatReproducesTheView) {
     }
   ASSERT_GT(counted, 0);
   EXPECT_GE(double(agree) / counted, 0.98) << agree << " of " << counted << " pixels agree";
+}
+
+TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
+  // Two open sheets facing each other 3E apart, without repair rounds: the fit cannot keep its
+  // surface-side promise there (fins at the sheets' edges), says so, and still writes the model.
+  ScratchDir dir("cli-fit7");
+  const auto xyz = dir / "sheets.xyz";
+  {
+    std::ofstream out(xyz);
+    const double gap = 3e-3 * std::sqrt(2.0);
+    for (int i = 0; i < 60; ++i)
+      for (int j = 0; j < 60; ++j) {
+        const double x = (i + 0.5 * (j % 2)) / 60.0, y = j / 60.0;
+        out << x << ' ' << y << " 0 0 0 1\n" << x << ' ' << y << ' ' << gap << " 0 0 -1\n";
+      }
+  }
+  const auto model = dir / "sheets.qxm", report = dir / "r.json";
+  CmdResult r = quadrix_run("fit " + q(xyz) + " -o " + q(model) + " --max-error 1e-3 --repair-rounds 0 --report " + q(report));
+  EXPECT_EQ(r.code, 7) << r.out;
+  EXPECT_NE(r.out.find("finished outside the bound"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(xyz.string()), std::string::npos) << r.out;
+  ASSERT_TRUE(std::filesystem::exists(model));
+  EXPECT_FALSE(read_model(model).slims.empty());
+  const auto j = read_json(report);
+  EXPECT_EQ(j.at("exit_code").get<int>(), 7);
+  EXPECT_FALSE(j.at("fit").at("within_bound").get<bool>());
+  EXPECT_GT(j.at("fit").at("surface").at("samples_beyond_bound").get<int>(), 0);
+  r = quadrix_run("fit " + q(xyz) + " -o " + q(model) + " --max-error 1e-3 --repair-rounds 0 --allow-exceed");
+  EXPECT_EQ(r.code, 0) << r.out;
 }
