@@ -14,6 +14,31 @@
 #include "fit/normals.h"
 
 namespace quadrix {
+std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                                  double h, const DataSurface* surface) {
+  std::vector<double> out(points.size(), h);
+  if (!surface || !surface->has_faces()) return out;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 512), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      const Eigen::Vector3d n = normals[i].normalized();
+      // The next sheet facing back at the point (another part of the body); sheets crossed from
+      // behind (the point's own, when it lies a little inside the data) are passed through.
+      double from = 1e-3 * h;
+      for (int k = 0; k < 8 && from < 2.0 * h; ++k) {
+        bool front = false;
+        const auto t = surface->intersect(Ray{points[i], n}, from, &front);
+        if (!t || *t >= 2.0 * h) break;
+        if (front) {
+          out[i] = std::min(h, 0.5 * *t);
+          break;
+        }
+        from = *t * (1 + 1e-9) + 1e-12 * h;
+      }
+    }
+  });
+  return out;
+}
+
 std::size_t SlimError::count_above(double e) const {
   return std::size_t(std::count_if(per_point.begin(), per_point.end(), [e](double x) { return x > e; }));
 }
@@ -45,12 +70,14 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   TraceOptions trace;
   trace.slim.offset = slim_offset_of(model);
   const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> heights = probe_heights(cloud.points, normals, h, options.surface);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.points, 512), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       const Eigen::Vector3d n = normals[i].normalized();
-      const Ray ray{cloud.points[i] + h * n, -n};
+      const double hi = heights[i];
+      const Ray ray{cloud.points[i] + hi * n, -n};
       const auto hit = scene.trace(ray, 0.0, inf, trace);
-      out.per_point[i] = hit && hit->kind == PrimitiveKind::slim ? std::abs(hit->t - h) : inf;
+      out.per_point[i] = hit && hit->kind == PrimitiveKind::slim ? std::abs(hit->t - hi) : inf;
     }
   });
   double sum = 0;

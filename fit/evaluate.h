@@ -2,10 +2,12 @@
 /// Measured error of a SLIM model against points: the distance of each point to the blended
 /// surface the renderer shows (per-ray blend of core/slim.h), along the point's normal.
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include "core/model.h"
 #include "core/points_io.h"
+#include "fit/data_surface.h"
 
 namespace quadrix {
 
@@ -15,7 +17,15 @@ struct SlimErrorOptions {
   /// `max_error_abs` metadata, or 5e-3 × the points' bounding-box diagonal without it.
   double probe_height = 0;
   bool keep_per_point = false;  ///< fill SlimError::per_point
+  /// The data's surface (a mesh): each probe then starts at most halfway to the next sheet of it
+  /// above the point (probe_heights), not inside another part of the body.
+  const DataSurface* surface = nullptr;
 };
+
+/// Probe height per point: h, or half the distance along +n to the next sheet of surface when
+/// that is nearer (a finger touching another, the gap between legs). surface may be null (all h).
+std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                                  double h, const DataSurface* surface);
 
 struct SlimError {
   std::size_t points = 0;

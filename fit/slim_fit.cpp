@@ -21,6 +21,7 @@
 #include "core/reference.h"
 #include "core/slim.h"
 #include "fit/data_surface.h"
+#include "fit/evaluate.h"
 #include "fit/local_fit.h"
 #include "fit/normals.h"
 #include "fit/point_index.h"
@@ -500,6 +501,7 @@ private:
     index_ = std::make_unique<PointIndex>(P_);
     subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
     data_ = std::make_unique<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
+    probe_height_ = probe_heights(P_, N_, opt_.probe_factor * E_, surface_ ? data_.get() : nullptr);
     fitter_ = std::make_unique<BallFitter>(BallFitter{P_, N_, *index_, opt_, E_, opt_.probe_factor * E_});
     fitter_->subsamples = subsamples_.get();
     fitter_->data = data_.get();
@@ -642,7 +644,6 @@ private:
   std::size_t verify_points(const ReferenceScene& scene, const PointIndex& centres, std::vector<std::uint8_t>& at_fault) {
     const std::size_t n = P_.size();
     point_error_.assign(n, 0.0);
-    const double h = opt_.probe_factor * E_;
     const auto& slims = result_.model.slims;
     double max_radius = 0;
     for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
@@ -652,6 +653,7 @@ private:
       std::vector<SlimSample> blended;
       std::vector<Neighbour> near;
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const double h = probe_height_[i];
         const auto hit = scene.trace(Ray{P_[i] + h * N_[i], -N_[i]}, 0.0, kInf, trace, &blended);
         if (!hit) {
           point_error_[i] = kInf;
@@ -738,10 +740,6 @@ private:
       st_.surface_failures = opt_.check_surface ? verify_surface(scene, at_fault) : 0;
       const std::size_t failing = st_.blend_failures + st_.surface_failures;
       if (failing == 0 || round >= opt_.repair_rounds) break;
-      // Two rounds without progress: what is left is not what shrinking repairs.
-      stalled_ = failing >= last_failing_ ? stalled_ + 1 : 0;
-      last_failing_ = failing;
-      if (stalled_ >= 2) break;
       ++st_.repair_rounds;
       log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E", round + 1,
                  st_.blend_failures, st_.surface_failures, opt_.surface_factor);
@@ -877,6 +875,7 @@ private:
   std::vector<double> point_error_, surface_error_;
   std::vector<double> shrink_;                        // per chosen patch: radius factor on repair
   std::vector<double> patch_excess_;
+  std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
   std::size_t last_failing_ = std::numeric_limits<std::size_t>::max();
   int stalled_ = 0;                  // per candidate: zero_set_excess, −1 unknown
 };

@@ -285,7 +285,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
         const SlimFitOptions fo{.max_error = E};
         const SlimFitResult fit = d.mesh ? fit_slim(fit_cloud, *d.mesh, fo) : fit_slim(fit_cloud, fo);
-        const SlimError se = evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true});
+        const SlimError se =
+            evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = d.mesh ? &data : nullptr});
         if (a->keep_models) write_model(fit.model, out_dir / fmt::format("{}_{:g}.qxm", d.name, E));
         const double Eabs = fit.stats.max_error_abs;
         Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,

@@ -198,7 +198,7 @@ bool mesh_wound_inward(const PolygonMesh& mesh) {
   }
   const auto open = static_cast<std::size_t>(
       std::count_if(edges.begin(), edges.end(), [](const auto& e) { return e.second != 2; }));
-  return !edges.empty() && open * 20 <= edges.size() && volume6 < 0;
+  return !edges.empty() && open * 200 <= edges.size() && volume6 < 0;
 }
 
 PointCloud points_from_mesh(const PolygonMesh& mesh) {

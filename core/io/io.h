@@ -47,8 +47,8 @@ PointCloud read_points(const std::filesystem::path& path);
 /// its faces (points_from_mesh); any other file is read_points.
 PointCloud read_surface_points(const std::filesystem::path& path);
 
-/// Whether a closed or nearly closed mesh (at most 5 % of its edges not on exactly two faces:
-/// a scan with a few holes, like bunny.ply) encloses a negative signed volume, i.e. its faces
+/// Whether a closed or nearly closed mesh (at most 0.5 % of its edges not on exactly two faces:
+/// a scan with a few holes, like bunny.ply: 0.2 %) encloses a negative signed volume, i.e. its faces
 /// are wound clockwise seen from outside. Open sheets: false (their winding is taken as it is).
 bool mesh_wound_inward(const PolygonMesh& mesh);
 
