@@ -887,7 +887,25 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
 }
 
 SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options) {
-  return SlimFitter(cloud, options, &surface).run();
+  if (!options.cover_faces || !cloud.has_normals()) return SlimFitter(cloud, options, &surface).run();
+  // Each face's centroid joins the points with the face's normal (outward as points_from_mesh
+  // orients them), so coverage and the points side hold between the vertices too.
+  PointCloud all = cloud;
+  const double sign = mesh_wound_inward(surface) ? -1.0 : 1.0;
+  for (std::size_t f = 0; f < surface.face_count(); ++f) {
+    const auto vs = surface.face(f);
+    Eigen::Vector3d c = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < vs.size(); ++k) {
+      c += surface.vertices[vs[k]];
+      n += surface.vertices[vs[k]].cross(surface.vertices[vs[(k + 1) % vs.size()]]);
+    }
+    if (!(n.norm() > 0) || !n.allFinite()) continue;
+    all.points.push_back(c / double(vs.size()));
+    all.normals.push_back(sign * n.normalized());
+  }
+  SlimFitResult r = SlimFitter(all, options, &surface).run();
+  r.model.metadata["face_samples"] = std::to_string(all.points.size() - cloud.points.size());
+  return r;
 }
 
 }  // namespace quadrix
