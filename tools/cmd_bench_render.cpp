@@ -13,6 +13,7 @@
 #include "core/log.h"
 #include "core/mesh_io.h"
 #include "core/model_io.h"
+#include "core/slim.h"
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
@@ -28,9 +29,11 @@ struct Row {
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
-Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames) {
+Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
+            double slim_offset = SlimBlendOptions{}.offset) {
   render::RenderOptions o;
   o.cull = cull;
+  o.slim_offset = static_cast<float>(slim_offset);
   o.statistics = true;
   const auto st = r.draw(cam, o);
   const auto g = r.read_gbuffer();
@@ -102,8 +105,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         {
                           render::Renderer r(*context);
                           r.set_model(model);
-                          rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames));
-                          rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames));
+                          rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_offset_of(model)));
+                          rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
                         }
                         std::size_t triangles = 0;
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);

@@ -14,6 +14,7 @@
 #include "core/log.h"
 #include "core/mesh_io.h"
 #include "core/model_io.h"
+#include "core/slim.h"
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
@@ -86,6 +87,7 @@ void add_view(CLI::App& root, Commands& commands) {
                             "glfw", {.width = w, .height = h, .visible = true, .title = "quadrix " + a->model});
                         render::Renderer renderer(*context);
                         renderer.set_model(model);
+                        st.options.slim_offset = static_cast<float>(slim_offset_of(model));
                         if (mesh) renderer.set_mesh(*mesh);
                         auto* win = static_cast<GLFWwindow*>(context->native_window());
                         glfwSetWindowUserPointer(win, &st);
