@@ -895,11 +895,15 @@ SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, cons
   for (std::size_t f = 0; f < surface.face_count(); ++f) {
     const auto vs = surface.face(f);
     Eigen::Vector3d c = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    double edge2 = 0;
     for (std::size_t k = 0; k < vs.size(); ++k) {
-      c += surface.vertices[vs[k]];
-      n += surface.vertices[vs[k]].cross(surface.vertices[vs[(k + 1) % vs.size()]]);
+      const Eigen::Vector3d &a = surface.vertices[vs[k]], &b = surface.vertices[vs[(k + 1) % vs.size()]];
+      c += a;
+      n += (a - surface.vertices[vs[0]]).cross(b - surface.vertices[vs[0]]);
+      edge2 = std::max(edge2, (b - a).squaredNorm());
     }
-    if (!(n.norm() > 0) || !n.allFinite()) continue;
+    // Slivers (area at rounding level against their longest edge) have no normal worth the name.
+    if (!n.allFinite() || !(n.norm() > 1e-9 * edge2)) continue;
     all.points.push_back(c / double(vs.size()));
     all.normals.push_back(sign * n.normalized());
   }

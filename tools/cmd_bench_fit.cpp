@@ -165,7 +165,7 @@ constexpr Rgb kColours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 
 Image8 draw_plot(const std::vector<std::string>& models, const std::vector<Row>& rows) {
   PlotPanel time{"TIME (S) AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
   PlotPanel size{"PATCHES / TRIANGLES AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
-  PlotPanel surface{"SURFACE P99.9 DISTANCE TO DATA AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
+  PlotPanel surface{"SURFACE P99.9 TO DATA AGAINST MAX ERROR", "MAX ERROR / DIAGONAL", {}};
   for (std::size_t m = 0; m < models.size(); ++m) {
     const Rgb colour = kColours[m % std::size(kColours)];
     for (const auto& [method, style, label] :

@@ -201,9 +201,7 @@ TEST(FitSlimHard, UnevenDensity) {
                          },
                          1, 150}},
                        15000, 6, [](const Vec& p) { return p.x() > 0 ? 1.0 : 0.1; });
-  // The mesh is the truth here, not where the points came from: its face centroids stay out of
-  // the fit (with them, 58 centroids near the poles get no hit: left open, see the notes).
-  expect_two_sided(fit_and_measure(s, kE, {.cover_faces = false}));
+  expect_two_sided(fit_and_measure(s, kE));
 }
 
 TEST(FitSlimHard, UniformNoiseOfHalfE) {
@@ -217,9 +215,8 @@ TEST(FitSlimHard, UniformNoiseOfHalfE) {
   const double E = kE * s.box.diagonal();
   std::uniform_real_distribution<double> noise(-0.5 * E, 0.5 * E);
   for (std::size_t i = 0; i < s.cloud.points.size(); ++i) s.cloud.points[i] += noise(rng) * s.cloud.normals[i];
-  // E is relative to the noisy cloud's diagonal; the truth is the mesh of the exact sphere (its
-  // face centroids stay out of the fit, as above).
-  expect_two_sided(fit_and_measure(s, kE, {.cover_faces = false}));
+  // E is relative to the noisy cloud's diagonal; the truth is the mesh of the exact sphere.
+  expect_two_sided(fit_and_measure(s, kE));
 }
 
 TEST(FitSlimHard, NoNormalsEstimatedAndOriented) {
