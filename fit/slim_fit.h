@@ -96,7 +96,7 @@ struct SlimFitOptions {
   /// Verification also checks each patch alone (as while fitting) on a lattice of about
   /// verify_spacing·E in world units, at most verify_max_grid lines per side.
   double verify_spacing = 2.0;
-  int verify_max_grid = 32;
+  int verify_max_grid = 64;
   double surface_probe_factor = 2.0;
   /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
   /// the model as `slim_offset`, and renderers use it.
