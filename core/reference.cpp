@@ -189,25 +189,17 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
   if (!samples.empty()) {
     // Only patch hits in front of the nearest opaque surface take part (they share one depth test).
     std::erase_if(samples, [&](const SlimSample& s) { return s.hit.t >= best_t; });
-    if (const auto b = blend_slim_samples(samples, options.slim); b && b->t < best_t) {
+    if (const auto b = blend_slim_samples(samples, options.slim, blended); b && b->t < best_t) {
       out.t = b->t;
       out.point = b->point;
       out.normal = b->normal;
       out.kind = PrimitiveKind::slim;
       out.index = b->first_index;
-      if (blended) {
-        const double t_cut = [&] {
-          double c = kInf;
-          for (const auto& s : samples) c = std::min(c, s.hit.t + options.slim.offset * s.radius);
-          return c;
-        }();
-        for (const auto& s : samples)
-          if (s.hit.t <= t_cut && s.weight > 0.0) blended->push_back(s);
-      }
       const auto& colour = m.slims[b->first_index].colour;
       if (colour) out.colour = *colour;
       return out;
     }
+    if (blended) blended->clear();  // the blend lies behind an opaque surface
   }
   if (best_ref.kind == PrimitiveKind::none) return std::nullopt;
   out.t = best.t;

@@ -76,7 +76,9 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
   }
 }
 
-std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options) {
+std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options,
+                                            std::vector<SlimSample>* used) {
+  if (used) used->clear();
   double t_cut = std::numeric_limits<double>::infinity();
   for (const auto& s : samples) t_cut = std::min(t_cut, s.hit.t + options.offset * s.radius);
   SlimBlend b;
@@ -90,6 +92,7 @@ std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples,
     b.point += s.weight * s.hit.point;
     b.normal += (s.weight / g) * s.hit.gradient;
     ++b.count;
+    if (used) used->push_back(s);
     if (s.hit.t < t_first) {
       t_first = s.hit.t;
       b.first_index = s.index;

@@ -60,7 +60,9 @@ struct SlimBlend {
 
 /// Blends the samples of one ray (any order) the way the three GPU passes do:
 /// t_cut = minᵢ(tᵢ + offset·Rᵢ); blend all samples with tᵢ ≤ t_cut and weight > 0.
-/// Returns nothing when no sample has positive weight.
-std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options);
+/// Returns nothing when no sample has positive weight. With `used`, the samples blended are
+/// stored there (cleared first).
+std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options,
+                                            std::vector<SlimSample>* used = nullptr);
 
 }  // namespace quadrix

@@ -41,12 +41,11 @@ double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& 
 }
 
 struct DataSurface::Impl {
-  // Points: positions, normals, disc radii. Mesh: triangle corners and centroids.
+  // Points: positions, normals, disc radii, kd-tree. Mesh: triangle corners and their BVH.
   std::vector<Eigen::Vector3d> points, normals;
   std::vector<double> disc;
   std::vector<Eigen::Vector3d> inward;  // boundary points: unit tangent towards the data; else 0
   std::vector<std::array<Eigen::Vector3d, 3>> triangles;
-  double max_reach = 0;  // largest centroid–corner distance
   bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
   Bvh bvh;
@@ -113,16 +112,11 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
   m.wound_inward = mesh_wound_inward(mesh);
   std::vector<Box3> boxes;
   boxes.reserve(m.triangles.size());
-  m.points.reserve(m.triangles.size());
   for (const auto& t : m.triangles) {
-    const Eigen::Vector3d c = (t[0] + t[1] + t[2]) / 3.0;
-    m.points.push_back(c);
-    for (const auto& v : t) m.max_reach = std::max(m.max_reach, (v - c).norm());
     Box3 b;
     for (const auto& v : t) b.extend(v);
     boxes.push_back(b);
   }
-  m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
   m.bvh = Bvh(boxes);
   return s;
 }
@@ -134,10 +128,8 @@ double DataSurface::distance(const Eigen::Vector3d& x) const {
   const auto& m = *impl_;
   thread_local std::vector<Neighbour> nb;
   if (!m.triangles.empty()) {
-    m.index->nearest(x, 1, nb);
-    const auto& t0 = m.triangles[nb[0].first];
-    double best = point_triangle_distance(x, t0[0], t0[1], t0[2]);
     // BVH walk, nearest box first, pruning boxes farther than the best triangle so far.
+    double best = kInf;
     const auto& nodes = m.bvh.nodes();
     const auto& items = m.bvh.items();
     const auto box_distance = [&](const Bvh::Node& n) {

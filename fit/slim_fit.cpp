@@ -124,7 +124,6 @@ struct BallFitter {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> u, n, fu, fn;
     std::vector<double> fw, fe;
-    std::vector<SlimSurfaceSample> zero;
   };
   const Subsamples* subsamples = nullptr;
   const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
@@ -132,7 +131,7 @@ struct BallFitter {
   // The local form of the surface side: the patch's zero set inside its ball stays within
   // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
   // open boundary).
-  bool surface_ok(const Ball& b, Scratch&) const {
+  bool surface_ok(const Ball& b) const {
     return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, *data,
                            opt.local_surface_factor * E, opt.local_surface_grid, opt.local_surface_depth) == 0.0;
   }
@@ -143,12 +142,12 @@ struct BallFitter {
   std::optional<Ball> try_both_sides(std::uint32_t ci, double R, Scratch& s) const {
     auto b = try_ball(ci, R, s);
     if (!b) return std::nullopt;
-    if (surface_ok(*b, s)) return b;
+    if (surface_ok(*b)) return b;
     if (b->clip) return std::nullopt;  // try_ball already tried the clipped sheet (--sharp)
     // Both use the check points try_ball left in s.
-    if (auto c = try_boundary(*b, s); c && surface_ok(*c, s)) return c;
+    if (auto c = try_boundary(*b, s); c && surface_ok(*c)) return c;
     auto c = try_sharp(ci, R, s);
-    if (c && surface_ok(*c, s)) return c;
+    if (c && surface_ok(*c)) return c;
     return std::nullopt;
   }
 
@@ -177,7 +176,7 @@ struct BallFitter {
   // does, the smallest ball within E on the points side (verification reports the rest).
   Ball grow_checked(std::uint32_t ci, Scratch& s, double limit, double guess) const {
     Ball b = grow(ci, s, limit, guess);
-    if (!b.is_bounded || surface_ok(b, s)) return b;
+    if (!b.is_bounded || surface_ok(b)) return b;
     if (auto c = try_both_sides(ci, b.R, s)) return *c;
     double R = b.R;
     for (int k = 0; k < opt.shrink_steps; ++k) {
@@ -888,25 +887,12 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
 
 SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options) {
   if (!options.cover_faces || !cloud.has_normals()) return SlimFitter(cloud, options, &surface).run();
-  // Each face's centroid joins the points with the face's normal (outward as points_from_mesh
-  // orients them), so coverage and the points side hold between the vertices too.
+  // Each face's centroid joins the points with the face's normal, so coverage and the points
+  // side hold between the vertices too.
   PointCloud all = cloud;
-  const double sign = mesh_wound_inward(surface) ? -1.0 : 1.0;
-  for (std::size_t f = 0; f < surface.face_count(); ++f) {
-    const auto vs = surface.face(f);
-    Eigen::Vector3d c = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
-    double edge2 = 0;
-    for (std::size_t k = 0; k < vs.size(); ++k) {
-      const Eigen::Vector3d &a = surface.vertices[vs[k]], &b = surface.vertices[vs[(k + 1) % vs.size()]];
-      c += a;
-      n += (a - surface.vertices[vs[0]]).cross(b - surface.vertices[vs[0]]);
-      edge2 = std::max(edge2, (b - a).squaredNorm());
-    }
-    // Slivers (area at rounding level against their longest edge) have no normal worth the name.
-    if (!n.allFinite() || !(n.norm() > 1e-9 * edge2)) continue;
-    all.points.push_back(c / double(vs.size()));
-    all.normals.push_back(sign * n.normalized());
-  }
+  const PointCloud faces = face_centroids(surface);
+  all.points.insert(all.points.end(), faces.points.begin(), faces.points.end());
+  all.normals.insert(all.normals.end(), faces.normals.begin(), faces.normals.end());
   SlimFitResult r = SlimFitter(all, options, &surface).run();
   r.model.metadata["face_samples"] = std::to_string(all.points.size() - cloud.points.size());
   return r;

@@ -220,6 +220,26 @@ PointCloud points_from_mesh(const PolygonMesh& mesh) {
   return cloud;
 }
 
+PointCloud face_centroids(const PolygonMesh& mesh) {
+  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
+  PointCloud cloud;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    Eigen::Vector3d c = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    double edge2 = 0;
+    for (std::size_t k = 0; k < vs.size(); ++k) {
+      const Eigen::Vector3d &a = mesh.vertices[vs[k]], &b = mesh.vertices[vs[(k + 1) % vs.size()]];
+      c += a;
+      n += (a - mesh.vertices[vs[0]]).cross(b - mesh.vertices[vs[0]]);
+      edge2 = std::max(edge2, (b - a).squaredNorm());
+    }
+    if (!n.allFinite() || !(n.norm() > 1e-9 * edge2)) continue;
+    cloud.points.push_back(c / double(vs.size()));
+    cloud.normals.push_back(sign * n.normalized());
+  }
+  return cloud;
+}
+
 void write_points_xyz(const PointCloud& cloud, const fs::path& path) { io::write_xyz(cloud, path); }
 
 }  // namespace quadrix

@@ -57,6 +57,11 @@ bool mesh_wound_inward(const PolygonMesh& mesh);
 /// Vertices of no face, or whose face normals cancel, are left out.
 PointCloud points_from_mesh(const PolygonMesh& mesh);
 
+/// One sample per face: its centroid with its unit normal, oriented as points_from_mesh orients
+/// its vertex normals. Slivers (area at rounding level against their longest edge, whose normal is
+/// noise) are left out.
+PointCloud face_centroids(const PolygonMesh& mesh);
+
 /// Writes x y z [nx ny nz] lines (temporary file + rename).
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
 
