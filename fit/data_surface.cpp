@@ -18,26 +18,53 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double point_segment_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double l2 = ab.squaredNorm();
-  const double t = l2 > 0 ? std::clamp((x - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return (x - (a + t * ab)).norm();
+// Squared distance from x to triangle (a, b, c) by the Voronoi region of its closest point
+// (vertex, edge or face regions tested with dot products, as in Ericson's Real-Time Collision
+// Detection §5.1.5); degenerate triangles fall through to their edges.
+double point_triangle_distance2(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ax = x - a;
+  const double d1 = ab.dot(ax), d2 = ac.dot(ax);
+  if (d1 <= 0 && d2 <= 0) return ax.squaredNorm();
+  const Eigen::Vector3d bx = x - b;
+  const double d3 = ab.dot(bx), d4 = ac.dot(bx);
+  if (d3 >= 0 && d4 <= d3) return bx.squaredNorm();
+  const Eigen::Vector3d cx = x - c;
+  const double d5 = ab.dot(cx), d6 = ac.dot(cx);
+  if (d6 >= 0 && d5 <= d6) return cx.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double l = d1 - d3;
+    return l > 0 ? (ax - (d1 / l) * ab).squaredNorm() : ax.squaredNorm();
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double l = d2 - d6;
+    return l > 0 ? (ax - (d2 / l) * ac).squaredNorm() : ax.squaredNorm();
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double l = (d4 - d3) + (d5 - d6);
+    return l > 0 ? (bx - ((d4 - d3) / l) * (c - b)).squaredNorm() : bx.squaredNorm();
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) {  // degenerate: the nearest of the three edges
+    const auto seg = [](const Eigen::Vector3d& p, const Eigen::Vector3d& e) {
+      const double l2 = e.squaredNorm();
+      const double t = l2 > 0 ? std::clamp(p.dot(e) / l2, 0.0, 1.0) : 0.0;
+      return (p - t * e).squaredNorm();
+    };
+    return std::min({seg(ax, ab), seg(bx, c - b), seg(ax, ac)});
+  }
+  const double v = vb / sum, w = vc / sum;
+  return (ax - v * ab - w * ac).squaredNorm();
 }
 
 }  // namespace
 
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                const Eigen::Vector3d& c) {
-  const Eigen::Vector3d n = (b - a).cross(c - a);
-  const double n2 = n.squaredNorm();
-  if (n2 > 0) {
-    // Inside the prism over the triangle: the distance to its plane.
-    const Eigen::Vector3d p = x - n * ((x - a).dot(n) / n2);
-    const double u = (b - p).cross(c - p).dot(n), v = (c - p).cross(a - p).dot(n), w = (a - p).cross(b - p).dot(n);
-    if (u >= 0 && v >= 0 && w >= 0) return std::abs((x - a).dot(n)) / std::sqrt(n2);
-  }
-  return std::min({point_segment_distance(x, a, b), point_segment_distance(x, b, c), point_segment_distance(x, c, a)});
+  return std::sqrt(point_triangle_distance2(x, a, b, c));
 }
 
 struct DataSurface::Impl {
@@ -124,16 +151,18 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
 bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
 double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
 
-double DataSurface::distance(const Eigen::Vector3d& x) const {
+double DataSurface::distance(const Eigen::Vector3d& x, double cap) const {
   const auto& m = *impl_;
   thread_local std::vector<Neighbour> nb;
   if (!m.triangles.empty()) {
-    // BVH walk, nearest box first, pruning boxes farther than the best triangle so far.
-    double best = kInf;
+    // BVH walk in squared distances, nearest box first, pruning boxes farther than the best
+    // triangle so far (or than the cap).
+    const double cap2 = cap * cap * (1.0 + 1e-12);
+    double best = cap2;
     const auto& nodes = m.bvh.nodes();
     const auto& items = m.bvh.items();
     const auto box_distance = [&](const Bvh::Node& n) {
-      return (x - x.cwiseMax(n.min).cwiseMin(n.max)).norm();
+      return (x - x.cwiseMax(n.min).cwiseMin(n.max)).squaredNorm();
     };
     std::uint32_t stack[128];
     int sp = 0;
@@ -144,7 +173,7 @@ double DataSurface::distance(const Eigen::Vector3d& x) const {
       if (n.count > 0) {
         for (std::uint32_t k = 0; k < n.count; ++k) {
           const auto& t = m.triangles[items[n.first + k]];
-          best = std::min(best, point_triangle_distance(x, t[0], t[1], t[2]));
+          best = std::min(best, point_triangle_distance2(x, t[0], t[1], t[2]));
         }
         continue;
       }
@@ -158,7 +187,7 @@ double DataSurface::distance(const Eigen::Vector3d& x) const {
         if (dr < best) stack[sp++] = right;
       }
     }
-    return best;
+    return best < cap2 ? std::sqrt(best) : kInf;
   }
   m.index->nearest(x, m.options.candidates, nb);
   double best = kInf;
@@ -236,8 +265,9 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     for (int k = 0; k < roots.count; ++k) {
       const Eigen::Vector3d u = line.at(roots.t[k]);
       if (!(u.squaredNorm() < 1.0) || (patch.clip && !patch.clip->keeps(u))) continue;
-      const double d = data.distance(patch.centre + patch.radius * u);
-      if (!(d <= bound)) return std::isnan(d) ? kInf : d;
+      const Eigen::Vector3d x = patch.centre + patch.radius * u;
+      const double d = data.distance(x, bound);
+      if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
       const Eigen::Vector3d g = patch.local.gradient(u);
       const bool aligned = std::abs(g[c.axis]) >= kAligned * g.norm();
       if (aligned && d + reach > bound && reach > min_reach && c.depth < max_depth) split = true;

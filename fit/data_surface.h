@@ -4,6 +4,7 @@
 /// points read as the union of their tangent discs, each disc as wide as the local sample
 /// spacing ("the local surface of the points").
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -46,8 +47,9 @@ public:
   DataSurface& operator=(DataSurface&&) noexcept;
   ~DataSurface();
 
-  /// Distance from x to the data's surface, world units (thread-safe).
-  double distance(const Eigen::Vector3d& x) const;
+  /// Distance from x to the data's surface, world units (thread-safe). With a finite cap, any
+  /// distance beyond the cap comes back as +inf (faster: a mesh walk prunes what lies farther).
+  double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity()) const;
   /// Nearest intersection of the ray with the triangles (either side); nothing for points.
   /// front: whether that triangle faces the ray: counter-clockwise seen from the ray's origin, or
   /// clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).

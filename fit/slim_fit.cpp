@@ -640,9 +640,11 @@ private:
   // Points side: every point's probe against the blended surface (core/reference.h).
   // Culprits: patches whose own hit in the blend is farther than E, or whose ball holds a
   // point the blend misses.
-  std::size_t verify_points(const ReferenceScene& scene, const PointIndex& centres, std::vector<std::uint8_t>& at_fault) {
+  std::size_t verify_points(const ReferenceScene& scene, const PointIndex& centres, const std::vector<std::uint8_t>& stale,
+                            std::vector<std::uint8_t>& at_fault) {
     const std::size_t n = P_.size();
-    point_error_.assign(n, 0.0);
+    point_error_.resize(n, kInf);
+    point_reach_.resize(n, kInf);
     const auto& slims = result_.model.slims;
     double max_radius = 0;
     for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
@@ -652,16 +654,18 @@ private:
       std::vector<SlimSample> blended;
       std::vector<Neighbour> near;
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        if (!stale[i]) continue;
         const double h = probe_height_[i];
         const auto hit = scene.trace(Ray{P_[i] + h * N_[i], -N_[i]}, 0.0, kInf, trace, &blended);
         if (!hit) {
-          point_error_[i] = kInf;
+          point_error_[i] = point_reach_[i] = kInf;
           centres.radius(P_[i], max_radius, near);
           for (const auto& [k, d2] : near)
             if (d2 <= slims[k].radius * slims[k].radius) at_fault[k] = 1;  // benign race: all store 1
           continue;
         }
         point_error_[i] = std::abs(hit->t - h);
+        point_reach_[i] = blend_reach(blended);
         if (point_error_[i] > E_)
           for (const auto& s : blended)
             if (std::abs(s.hit.t - h) > E_) at_fault[static_cast<std::size_t>(s.index)] = 1;
@@ -672,22 +676,38 @@ private:
     return failing;
   }
 
+  // How far along a ray the blend looked: the cut t_cut = minᵢ(tᵢ + offset·Rᵢ) (core/slim.h) is
+  // at most this (the minimum over the blended samples). A patch whose ball misses the ray up to
+  // there cannot change that ray's blend.
+  double blend_reach(const std::vector<SlimSample>& blended) const {
+    double reach = kInf;
+    for (const auto& s : blended) reach = std::min(reach, s.hit.t + opt_.blend_offset * s.radius);
+    return reach;
+  }
+
   // Surface side: samples of every patch's zero set, each seen along its normal through the
   // blend; the blended point must lie within surface_factor·E of the data. Culprits: the
   // blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
-  std::size_t verify_surface(const ReferenceScene& scene, std::vector<std::uint8_t>& at_fault) {
+  std::size_t verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
+                             std::vector<std::uint8_t>& at_fault) {
     const auto& slims = result_.model.slims;
     const double bound = opt_.surface_factor * E_, local = opt_.local_surface_factor * E_;
     const double h = opt_.surface_probe_factor * E_;
     TraceOptions trace;
     trace.slim.offset = opt_.blend_offset;
-    std::vector<std::vector<double>> errors(slims.size());
     shrink_.assign(slims.size(), opt_.shrink_step);
     patch_excess_.resize(balls_.size(), -1.0);
+    patch_errors_.resize(balls_.size());
+    patch_reach_.resize(balls_.size(), kInf);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<SlimSurfaceSample> zero;
       std::vector<SlimSample> blended;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        if (!stale[k]) continue;
+        auto& errors = patch_errors_[chosen_[k]];
+        double& reach = patch_reach_[chosen_[k]];
+        errors.clear();
+        reach = 0;
         // The patch alone on a lattice fine in world units (≈ verify_spacing·E), so slivers
         // past a curved boundary are found on large balls too; a patch found d > bound away
         // shrinks by √(bound/d) (a sliver's sagitta goes with R²).
@@ -698,7 +718,8 @@ private:
         if (excess < 0) excess = zero_set_excess(slims[k], *data_, local, grid, 1);
         if (const double d = excess; d > 0) {
           at_fault[k] = 1;
-          errors[k].push_back(d);
+          errors.push_back(d);
+          reach = kInf;
           shrink_[k] = std::clamp(std::sqrt(local / d), 0.3, opt_.shrink_step);
           continue;
         }
@@ -707,41 +728,123 @@ private:
         for (const auto& z : zero) {
           const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
           if (!hit) continue;
-          const double d = data_->distance(hit->point);
-          errors[k].push_back(d);
+          reach = std::max(reach, blend_reach(blended));
+          double d = data_->distance(hit->point, bound);
+          if (!(d <= bound)) d = data_->distance(hit->point);
+          errors.push_back(d);
           if (d <= bound) continue;
+          reach = kInf;
           bool blamed = false;
           for (const auto& s : blended)
-            if (data_->distance(s.hit.point) > local) at_fault[static_cast<std::size_t>(s.index)] = 1, blamed = true;
+            if (data_->distance(s.hit.point, local) > local) at_fault[static_cast<std::size_t>(s.index)] = 1, blamed = true;
           if (!blamed)
             for (const auto& s : blended) at_fault[static_cast<std::size_t>(s.index)] = 1;
         }
       }
     });
     surface_error_.clear();
-    for (const auto& e : errors) surface_error_.insert(surface_error_.end(), e.begin(), e.end());
+    for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
     std::size_t failing = 0;
     for (const double e : surface_error_) failing += e > bound;
     return failing;
   }
 
+  // What a repair changed: the balls that left the model and those that joined it. Only the
+  // probes whose blend looked inside one of them need tracing again.
+  struct Changed {
+    std::vector<Eigen::Vector3d> centres;
+    std::vector<double> radii;
+    double max_radius = 0;
+    std::unique_ptr<PointIndex> index;
+
+    // Whether any changed ball meets the segment o + t·d, t ∈ [0, length] (d unit).
+    // Whether any changed ball meets the ball (c, r).
+    bool near_ball(const Eigen::Vector3d& c, double r, std::vector<Neighbour>& near) const {
+      if (centres.empty()) return false;
+      index->radius(c, r + max_radius, near);
+      for (const auto& [k, d2] : near)
+        if (d2 <= (r + radii[k]) * (r + radii[k])) return true;
+      return false;
+    }
+
+    bool meets(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double length, std::vector<Neighbour>& near) const {
+      if (centres.empty()) return false;
+      if (!std::isfinite(length)) return true;
+      index->radius(o + 0.5 * length * d, 0.5 * length + max_radius, near);
+      for (const auto& [c, d2] : near) {
+        const Eigen::Vector3d v = centres[c] - o;
+        const double t = std::clamp(v.dot(d), 0.0, length);
+        if ((v - t * d).squaredNorm() <= radii[c] * radii[c] * (1.0 + 1e-9)) return true;
+      }
+      return false;
+    }
+  };
+
+  Changed changed_since(const std::vector<std::uint32_t>& before) const {
+    std::vector<std::uint8_t> was(balls_.size(), 0), is(balls_.size(), 0);
+    for (const auto b : before) was[b] = 1;
+    for (const auto b : chosen_) is[b] = 1;
+    Changed c;
+    for (std::size_t b = 0; b < balls_.size(); ++b)
+      if (was[b] != is[b]) {
+        c.centres.push_back(P_[balls_[b].centre]);
+        c.radii.push_back(balls_[b].R);
+        c.max_radius = std::max(c.max_radius, balls_[b].R);
+      }
+    c.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(c.centres));
+    return c;
+  }
+
   // Rounds of verification (both sides); the patches at fault are removed, their centres come
   // back no larger than shrink_step·R, and the points they covered are covered again.
   void verify_and_repair() {
+    std::vector<std::uint32_t> before;  // the chosen balls of the last verified model
     for (int round = 0;; ++round) {
       const ReferenceScene scene(result_.model);
+      const auto& slims = result_.model.slims;
       std::vector<Eigen::Vector3d> centres;
-      for (const auto& s : result_.model.slims) centres.push_back(s.centre);
+      for (const auto& s : slims) centres.push_back(s.centre);
       const PointIndex centre_index{std::span<const Eigen::Vector3d>(centres)};
-      std::vector<std::uint8_t> at_fault(result_.model.slims.size(), 0);
-      st_.blend_failures = verify_points(scene, centre_index, at_fault);
+      std::vector<std::uint8_t> at_fault(slims.size(), 0);
+      // Which probes to trace: all in the first round; afterwards those that failed, and those
+      // whose blend may have changed (their ray meets a ball that left or joined the model).
+      std::vector<std::uint8_t> stale_points(P_.size(), 1), stale_patches(slims.size(), 1);
+      if (round > 0) {
+        const Changed changed = changed_since(before);
+        const double bound = opt_.surface_factor * E_, h = opt_.surface_probe_factor * E_;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P_.size(), 1024), [&](const auto& r) {
+          std::vector<Neighbour> near;
+          for (std::size_t i = r.begin(); i != r.end(); ++i)
+            stale_points[i] = !(point_error_[i] <= E_) ||
+                              changed.meets(P_[i] + probe_height_[i] * N_[i], -N_[i], point_reach_[i], near);
+        });
+        std::vector<std::uint8_t> was(balls_.size(), 0);
+        for (const auto b : before) was[b] = 1;
+        std::vector<Neighbour> near;
+        for (std::size_t k = 0; k < slims.size(); ++k) {
+          const auto b = chosen_[k];
+          if (!was[b] || !std::isfinite(patch_reach_[b])) continue;
+          bool failed = false;
+          for (const double e : patch_errors_[b]) failed |= e > bound;
+          if (failed) continue;
+          // Every probe of this patch starts within R + h of its centre and looks patch_reach along.
+          stale_patches[k] = changed.near_ball(slims[k].centre, slims[k].radius + h + patch_reach_[b], near);
+        }
+        std::size_t np = 0, nk = 0;
+        for (const auto v : stale_points) np += v;
+        for (const auto v : stale_patches) nk += v;
+        log::debug("fit_slim: round {}: {} balls changed; tracing {} of {} point probes, {} of {} patches", round + 1,
+                   changed.centres.size(), np, P_.size(), nk, slims.size());
+      }
+      st_.blend_failures = verify_points(scene, centre_index, stale_points, at_fault);
       shrink_.clear();
-      st_.surface_failures = opt_.check_surface ? verify_surface(scene, at_fault) : 0;
+      st_.surface_failures = opt_.check_surface ? verify_surface(scene, stale_patches, at_fault) : 0;
       const std::size_t failing = st_.blend_failures + st_.surface_failures;
       if (failing == 0 || round >= opt_.repair_rounds) break;
       ++st_.repair_rounds;
       log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E", round + 1,
                  st_.blend_failures, st_.surface_failures, opt_.surface_factor);
+      before = chosen_;
       repair(at_fault);
       prune();
       build_model();
@@ -873,10 +976,11 @@ private:
   std::vector<double> cap_;                           // radius cap per centre point (repair)
   std::vector<double> point_error_, surface_error_;
   std::vector<double> shrink_;                        // per chosen patch: radius factor on repair
-  std::vector<double> patch_excess_;
+  std::vector<double> patch_excess_;                 // per candidate: zero_set_excess, −1 unknown
+  std::vector<std::vector<double>> patch_errors_;    // per candidate: its last surface samples' distances
+  std::vector<double> patch_reach_;                  // per candidate: how far its probes' blends looked
+  std::vector<double> point_reach_;                  // per point: how far its probe's blend looked
   std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
-  std::size_t last_failing_ = std::numeric_limits<std::size_t>::max();
-  int stalled_ = 0;                  // per candidate: zero_set_excess, −1 unknown
 };
 
 }  // namespace

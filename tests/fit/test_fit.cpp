@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "core/mesh_io.h"
+#include "fit/data_surface.h"
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/slim_fit.h"
@@ -262,6 +263,32 @@ TEST(FitSlim, SharpCreasesOfFandisk) {
   EXPECT_LE(crms, 2.0 * srms);
   EXPECT_EQ(ec.misses, 0u);
   EXPECT_LE(ec.max, sharp.stats.max_error_abs * (1 + 1e-9));
+}
+
+// The closed-form point–triangle distance against the minimum over a fine barycentric lattice
+// (an upper bound that converges to the truth), on random, needle and collapsed triangles.
+TEST(PointTriangleDistance, MatchesDenseSamplingOnEveryRegion) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const auto rnd = [&] { return Eigen::Vector3d(g(rng), g(rng), g(rng)); };
+  for (int trial = 0; trial < 300; ++trial) {
+    Eigen::Vector3d a = rnd(), b = rnd(), c = rnd();
+    if (trial % 10 == 1) c = a + 1e-9 * rnd();            // needle
+    if (trial % 10 == 2) c = 0.3 * a + 0.7 * b;            // collapsed onto an edge
+    if (trial % 10 == 3) b = a, c = a;                     // a point
+    const Eigen::Vector3d x = 2.0 * rnd();
+    double brute = std::numeric_limits<double>::infinity();
+    constexpr int n = 400;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        const double u = double(i) / n, v = double(j) / n;
+        brute = std::min(brute, (x - (a + u * (b - a) + v * (c - a))).norm());
+      }
+    const double d = point_triangle_distance(x, a, b, c);
+    const double lattice = 2.0 * ((b - a).norm() + (c - a).norm()) / n;  // lattice spacing bound
+    EXPECT_LE(d, brute + 1e-12) << trial;
+    EXPECT_GE(d, brute - lattice) << trial;
+  }
 }
 
 TEST(EstimateNormals, OutwardOnSphereAndTorus) {
