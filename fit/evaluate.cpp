@@ -39,6 +39,35 @@ std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::
   return out;
 }
 
+double blend_reach(std::span<const SlimSample> blended, double offset) {
+  double reach = std::numeric_limits<double>::infinity();
+  for (const auto& s : blended) reach = std::min(reach, s.hit.t + offset * s.radius);
+  return reach;
+}
+
+PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                       const Eigen::Vector3d& n, double h, double E, std::vector<SlimSample>* blended) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const Ray ray{p + h * n, -n};
+  thread_local std::vector<SlimSample> samples;
+  PointProbe out;
+  if (blended) blended->clear();
+  double from = 0.0;
+  for (int k = 0; k < 5; ++k) {
+    const auto hit = scene.trace(ray, from, kInf, trace, &samples);
+    if (!hit || hit->kind != PrimitiveKind::slim) break;
+    const double reach = blend_reach(samples, trace.slim.offset);
+    out.reach = k == 0 ? reach : std::max(out.reach, reach);
+    if (const double e = std::abs(hit->t - h); !(e >= out.error)) {
+      out.error = e;
+      if (blended) *blended = samples;
+    }
+    if (hit->t >= h - E) break;  // at or below p + E·n: nothing nearer lies further down
+    from = hit->t * (1.0 + 1e-12) + 1e-9 * E;
+  }
+  return out;
+}
+
 std::size_t SlimError::count_above(double e) const {
   return std::size_t(std::count_if(per_point.begin(), per_point.end(), [e](double x) { return x > e; }));
 }
@@ -69,16 +98,14 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   const ReferenceScene scene(model);
   TraceOptions trace;
   trace.slim.offset = slim_offset_of(model);
-  const double inf = std::numeric_limits<double>::infinity();
   const std::vector<double> heights = probe_heights(cloud.points, normals, h, options.surface);
+  // Sheets crossed more than E above a point are passed (probe_point): the fit's E, else h/4.
+  double E = 0.25 * h;
+  if (auto it = model.metadata.find("max_error_abs"); it != model.metadata.end())
+    if (const double e = std::stod(it->second); e > 0 && e < h) E = e;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.points, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const Eigen::Vector3d n = normals[i].normalized();
-      const double hi = heights[i];
-      const Ray ray{cloud.points[i] + hi * n, -n};
-      const auto hit = scene.trace(ray, 0.0, inf, trace);
-      out.per_point[i] = hit && hit->kind == PrimitiveKind::slim ? std::abs(hit->t - hi) : inf;
-    }
+    for (std::size_t i = r.begin(); i != r.end(); ++i)
+      out.per_point[i] = probe_point(scene, trace, cloud.points[i], normals[i].normalized(), heights[i], E).error;
   });
   double sum = 0;
   std::size_t hits = 0;

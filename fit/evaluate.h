@@ -2,11 +2,13 @@
 /// Measured error of a SLIM model against points: the distance of each point to the blended
 /// surface the renderer shows (per-ray blend of core/slim.h), along the point's normal.
 #include <cstddef>
+#include <limits>
 #include <span>
 #include <vector>
 
 #include "core/model.h"
 #include "core/points_io.h"
+#include "core/reference.h"
 #include "fit/data_surface.h"
 
 namespace quadrix {
@@ -26,6 +28,24 @@ struct SlimErrorOptions {
 /// that is nearer (a finger touching another, the gap between legs). surface may be null (all h).
 std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
                                   double h, const DataSurface* surface);
+
+/// One point's probe against the blended surface: the ray from p + h·n along −n through the
+/// scene (core's per-ray blend). A front-facing sheet crossed more than E above p (a crease's
+/// far wall, another part of the body passing over the point) is passed: the probe goes on below
+/// it, up to 4 times, and the crossing nearest to p along the normal counts.
+struct PointProbe {
+  double error = std::numeric_limits<double>::infinity();  ///< |t − h| of the counted crossing; +inf: none
+  /// How far along the ray (from p + h·n) the blends looked: a patch whose ball misses the ray
+  /// up to there cannot change this probe. +inf when nothing was hit.
+  double reach = std::numeric_limits<double>::infinity();
+};
+/// How far along a ray its blend looked, given the samples it blended: the cut
+/// t_cut = minᵢ(tᵢ + offset·Rᵢ) (core/slim.h) is at most the minimum over those samples.
+double blend_reach(std::span<const SlimSample> blended, double offset);
+
+/// blended: the SLIM samples of the counted crossing (cleared first). n: unit.
+PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                       const Eigen::Vector3d& n, double h, double E, std::vector<SlimSample>* blended = nullptr);
 
 struct SlimError {
   std::size_t points = 0;

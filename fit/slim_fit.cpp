@@ -619,7 +619,8 @@ private:
     std::sort(chosen_.begin(), chosen_.end(), [&](auto a, auto b) { return covers_[a].size() < covers_[b].size(); });
     std::vector<std::uint32_t> kept;
     for (auto b : chosen_) {
-      const bool redundant = std::all_of(covers_[b].begin(), covers_[b].end(), [&](auto p) { return multiplicity[p] >= 2; });
+      const bool redundant = !(b < pinned_.size() && pinned_[b]) &&
+                             std::all_of(covers_[b].begin(), covers_[b].end(), [&](auto p) { return multiplicity[p] >= 2; });
       if (redundant) {
         for (auto p : covers_[b]) --multiplicity[p];
         chosen_flag_[b] = 0;
@@ -656,17 +657,16 @@ private:
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         if (!stale[i]) continue;
         const double h = probe_height_[i];
-        const auto hit = scene.trace(Ray{P_[i] + h * N_[i], -N_[i]}, 0.0, kInf, trace, &blended);
-        if (!hit) {
-          point_error_[i] = point_reach_[i] = kInf;
+        const PointProbe probe = probe_point(scene, trace, P_[i], N_[i], h, E_, &blended);
+        point_error_[i] = probe.error;
+        point_reach_[i] = probe.reach;
+        if (!std::isfinite(probe.error)) {
           centres.radius(P_[i], max_radius, near);
           for (const auto& [k, d2] : near)
             if (d2 <= slims[k].radius * slims[k].radius) at_fault[k] = 1;  // benign race: all store 1
           continue;
         }
-        point_error_[i] = std::abs(hit->t - h);
-        point_reach_[i] = blend_reach(blended);
-        if (point_error_[i] > E_)
+        if (probe.error > E_)
           for (const auto& s : blended)
             if (std::abs(s.hit.t - h) > E_) at_fault[static_cast<std::size_t>(s.index)] = 1;
       }
@@ -674,15 +674,6 @@ private:
     std::size_t failing = 0;
     for (const double e : point_error_) failing += !(e <= E_);
     return failing;
-  }
-
-  // How far along a ray the blend looked: the cut t_cut = minᵢ(tᵢ + offset·Rᵢ) (core/slim.h) is
-  // at most this (the minimum over the blended samples). A patch whose ball misses the ray up to
-  // there cannot change that ray's blend.
-  double blend_reach(const std::vector<SlimSample>& blended) const {
-    double reach = kInf;
-    for (const auto& s : blended) reach = std::min(reach, s.hit.t + opt_.blend_offset * s.radius);
-    return reach;
   }
 
   // Surface side: samples of every patch's zero set, each seen along its normal through the
@@ -728,7 +719,7 @@ private:
         for (const auto& z : zero) {
           const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
           if (!hit) continue;
-          reach = std::max(reach, blend_reach(blended));
+          reach = std::max(reach, blend_reach(blended, opt_.blend_offset));
           double d = data_->distance(hit->point, bound);
           if (!(d <= bound)) d = data_->distance(hit->point);
           errors.push_back(d);
@@ -883,6 +874,23 @@ private:
       if (!chosen_flag_[b] && balls_[b].R > cap_[balls_[b].centre]) covers_[b].clear();
     while (!heap_.empty()) heap_.pop();
     cover(&cap_);
+    // A point still beyond E although covered (a tip, a spike: it sits near the rims of the balls
+    // that cover it, where their weights vanish and farther patches dominate the blend) gets a
+    // ball of its own, centred on it and kept through pruning.
+    std::vector<std::uint32_t> stubborn;
+    std::vector<double> stubborn_caps;
+    for (std::size_t i = 0; i < P_.size(); ++i)
+      if (!(point_error_[i] <= E_) && covered_[i]) stubborn.push_back(std::uint32_t(i)), stubborn_caps.push_back(cap_[i]);
+    if (stubborn.empty() || stubborn.size() > P_.size() / 100) return;
+    const std::size_t first = balls_.size();
+    evaluate(stubborn, &stubborn_caps);
+    chosen_flag_.resize(balls_.size(), 0);
+    pinned_.resize(balls_.size(), 0);
+    for (std::size_t b = first; b < balls_.size(); ++b) {
+      cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
+      pinned_[b] = 1;
+      take(std::uint32_t(b));
+    }
   }
 
   void finish() {
@@ -970,6 +978,7 @@ private:
   std::vector<double> pilot_R_;
   std::unique_ptr<PointIndex> pilot_index_;
   std::vector<std::uint8_t> covered_, chosen_flag_;
+  std::vector<std::uint8_t> pinned_;                 // per candidate: kept through pruning (repair)
   std::size_t uncovered_ = 0;
   std::vector<std::uint32_t> chosen_;
   std::priority_queue<std::pair<std::size_t, std::uint32_t>> heap_;  // gain, candidate
