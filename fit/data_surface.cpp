@@ -76,6 +76,16 @@ struct DataSurface::Impl {
   bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
   Bvh bvh;
+  std::vector<DataSurface::BoundarySample> boundary;  // open-boundary samples
+  std::vector<Eigen::Vector3d> boundary_points;       // their positions (boundary_index's span)
+  std::unique_ptr<PointIndex> boundary_index;
+
+  void index_boundary() {
+    boundary_points.clear();
+    for (const auto& b : boundary) boundary_points.push_back(b.point);
+    if (!boundary_points.empty())
+      boundary_index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(boundary_points));
+  }
   DataSurfaceOptions options;
 };
 
@@ -124,6 +134,9 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       if (centroid.norm() > options.boundary_offset * mean) m.inward[i] = centroid.normalized();
     }
   });
+  for (std::size_t i = 0; i < m.points.size(); ++i)
+    if (m.inward[i].squaredNorm() > 0) m.boundary.push_back({m.points[i], m.inward[i]});
+  m.index_boundary();
   return s;
 }
 
@@ -136,6 +149,37 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
       m.triangles.push_back({mesh.vertices[vs[0]], mesh.vertices[vs[k]], mesh.vertices[vs[k + 1]]});
   }
   if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
+  // Open edges (used by one face): their vertices and midpoints, with the tangent into the face.
+  std::map<std::pair<int, int>, int> uses;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 0; k < vs.size(); ++k) ++uses[std::minmax(vs[k], vs[(k + 1) % vs.size()])];
+  }
+  std::map<int, Eigen::Vector3d> vertex_inward;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const int v : vs) centroid += mesh.vertices[v];
+    centroid /= double(vs.size());
+    for (std::size_t k = 0; k < vs.size(); ++k) {
+      const int a = vs[k], b = vs[(k + 1) % vs.size()];
+      if (uses[std::minmax(a, b)] != 1) continue;
+      const Eigen::Vector3d e = (mesh.vertices[b] - mesh.vertices[a]).normalized();
+      const Eigen::Vector3d mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
+      Eigen::Vector3d in = centroid - mid;
+      in -= in.dot(e) * e;
+      if (!(in.norm() > 0) || !e.allFinite()) continue;
+      in.normalize();
+      m.boundary.push_back({mid, in});
+      for (const int v : {a, b}) {
+        auto [it, fresh] = vertex_inward.try_emplace(v, Eigen::Vector3d::Zero());
+        it->second += in;
+      }
+    }
+  }
+  for (const auto& [v, in] : vertex_inward)
+    if (in.norm() > 0) m.boundary.push_back({mesh.vertices[v], in.normalized()});
+  m.index_boundary();
   m.wound_inward = mesh_wound_inward(mesh);
   std::vector<Box3> boxes;
   boxes.reserve(m.triangles.size());
@@ -150,6 +194,14 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
 
 bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
 double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
+void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const {
+  out.clear();
+  const auto& m = *impl_;
+  if (!m.boundary_index) return;
+  thread_local std::vector<Neighbour> nb;
+  m.boundary_index->radius(c, r, nb);
+  for (const auto& [i, d2] : nb) out.push_back(m.boundary[i]);
+}
 
 double DataSurface::distance(const Eigen::Vector3d& x, double cap) const {
   const auto& m = *impl_;

@@ -57,6 +57,13 @@ public:
   bool has_faces() const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
+  /// The data's open boundary near c: samples (position, unit tangent towards the data) within
+  /// r of c — boundary points of a cloud, or the vertices and edge midpoints of a mesh's open
+  /// edges (out is cleared first).
+  struct BoundarySample {
+    Eigen::Vector3d point, inward;
+  };
+  void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const;
 
 private:
   DataSurface();

@@ -151,21 +151,50 @@ struct BallFitter {
     return std::nullopt;
   }
 
-  // An open boundary inside the ball: the ball's points lie to one side (their tangential
-  // centroid is off the centre), so the patch is clipped by the plane across the sheet just
-  // beyond the outermost point, instead of extrapolating to the ball's rim.
+  // An open boundary inside the ball: the patch is clipped by a plane just beyond the outermost
+  // point, instead of extrapolating to the ball's rim. The plane is the one of the data's
+  // boundary points in the ball (DataSurface::boundary_inward) when they bend measurably (a
+  // curved boundary: a straight cut across the sheet would leave slivers past it), else across
+  // the sheet, facing the boundary points' inward tangent or the points' tangential centroid.
   std::optional<Ball> try_boundary(const Ball& b, const Scratch& s) const {
     if (s.u.size() < 3) return std::nullopt;
+    const Eigen::Vector3d& c0 = P[b.centre];
     Eigen::Vector3d nbar = Eigen::Vector3d::Zero(), centroid = Eigen::Vector3d::Zero();
     for (std::size_t j = 0; j < s.u.size(); ++j) nbar += s.n[j], centroid += s.u[j];
     if (!(nbar.norm() > 0)) return std::nullopt;
     nbar.normalize();
     centroid /= double(s.u.size());
     Eigen::Vector3d m = centroid - nbar.dot(centroid) * nbar;
-    if (m.norm() < opt.boundary_offset) return std::nullopt;
+    // The data's boundary in the ball, in local coordinates.
+    thread_local std::vector<DataSurface::BoundarySample> edge;
+    data->boundary_near(c0, b.R, edge);
+    Eigen::Vector3d inward = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
+    for (const auto& e : edge) inward += e.inward, mean += (e.point - c0) / b.R;
+    const double count = double(edge.size());
+    if (edge.size() >= 6 && inward.norm() > 0.5 * count) {
+      inward.normalize();
+      mean /= count;
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (const auto& e : edge) {
+        const Eigen::Vector3d v = (e.point - c0) / b.R - mean;
+        C += v * v.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C / count);
+      const Eigen::Vector3d line = es.eigenvectors().col(2);
+      const double bend = std::sqrt(std::max(0.0, es.eigenvalues()[1]));
+      Eigen::Vector3d across = es.eigenvectors().col(0);
+      if (across.dot(inward) < 0) across = -across;
+      // The arc's own plane when its bow is well above the error (and the plane leans into the
+      // data), else the plane through the boundary line across the sheet.
+      if (bend > E / b.R && across.dot(inward) > 0.3) m = across;
+      else m = inward - inward.dot(line) * line;
+    } else if (m.norm() < opt.boundary_offset) {
+      return std::nullopt;
+    }
+    if (!(m.norm() > 0)) return std::nullopt;
     m.normalize();
     double lo = std::numeric_limits<double>::infinity();
-    for (const auto& u : s.u) lo = std::min(lo, m.dot(u));
+    for (const auto& [id, d2] : s.nb) lo = std::min(lo, m.dot((P[id] - c0) / b.R));
     Ball c = b;
     c.clip = ClipPlane{m, -(lo - 0.5 * E / b.R)};
     if (!c.clip->keeps(Eigen::Vector3d::Zero())) return std::nullopt;  // must own its centre
