@@ -19,7 +19,10 @@ class GlContext;
 enum class Shading { phong, envmap, npr };
 
 struct RenderOptions {
-  bool cull = true;            ///< per-quadric (eq. 19) and per-fragment (eq. 14) backface culling
+  /// Per-quadric (eq. 18, 19) and per-fragment (eq. 14) backface culling, where it cannot change
+  /// the image (core/culling.h): SLIM always, tetrahedron patches and glyphs only when the model
+  /// is closed and lies beyond the near plane. Off: the same image, slower.
+  bool cull = true;
   Shading shading = Shading::phong;
   bool statistics = false;     ///< count culled/drawn primitives, fragments (costs a little)
   Rgb background{255, 255, 255};

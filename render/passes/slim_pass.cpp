@@ -90,7 +90,7 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   set_camera_uniforms(p, f.camera);
   p.set("u_offset", f.options.slim_offset);
   p.set("u_count_stats", count_stats);
-  p.set("u_cull", f.options.cull ? 1 : 0);
+  p.set("u_cull", f.slim_cull ? 1 : 0);
 }
 
 void SlimPass::run(const Frame& f) {
@@ -158,7 +158,7 @@ void SlimOutlinePass::run(const Frame& f) {
   glDisable(GL_CULL_FACE);
   set_camera_uniforms(program_, f.camera);
   program_.set("u_count_stats", 0);
-  program_.set("u_cull", f.options.cull ? 1 : 0);
+  program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
   glBindVertexArray(f.empty_vao);
