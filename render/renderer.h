@@ -36,6 +36,9 @@ struct RenderOptions {
   float slim_offset = 0.5f;
   /// SLIM accumulation targets: RGBA16F instead of RGBA32F (half the bandwidth; see the benchmark).
   bool slim_half_float = false;
+  /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,
+  /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
+  bool slim_tight_splats = true;
   /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
   bool slim_outlines = false;
 };

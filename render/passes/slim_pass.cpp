@@ -1,22 +1,33 @@
 #include "render/passes/slim_pass.h"
 
+#include <array>
+
 #include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/primitive.h"
+#include "core/slim.h"
 #include "render/shaders.h"
 
 namespace quadrix::render {
 namespace {
 
-// std430 layout of `Ball` in slim.vert (6 vec4 = 96 bytes).
+// std430 layout of `Ball` in slim.vert (7 vec4 = 112 bytes).
 struct GpuBall {
   float centre_hi[4];
   float centre_lo[4];
   float q0[4], q1[4], q2[4];
   float clip[4];
+  float slab[4];
 };
-static_assert(sizeof(GpuBall) == 96);
+static_assert(sizeof(GpuBall) == 112);
+
+// The octagonal prism's 28 triangles over its 16 corners (kProxyIndex in slim.vert).
+constexpr std::array<std::uint8_t, 84> kProxyIndex = {
+    0, 2, 1, 0, 3, 2, 0, 4, 3, 0, 5, 4, 0, 6, 5, 0, 7, 6,
+    8, 9, 10, 8, 10, 11, 8, 11, 12, 8, 12, 13, 8, 13, 14, 8, 14, 15,
+    0, 1, 9, 0, 9, 8, 1, 2, 10, 1, 10, 9, 2, 3, 11, 2, 11, 10, 3, 4, 12, 3, 12, 11,
+    4, 5, 13, 4, 13, 12, 5, 6, 14, 5, 14, 13, 6, 7, 15, 6, 15, 14, 7, 0, 8, 7, 8, 15};
 
 GpuBall pack(const SlimPatch& b, std::int32_t id) {
   GpuBall g{};
@@ -33,6 +44,11 @@ GpuBall pack(const SlimPatch& b, std::int32_t id) {
   g.q0[0] = float(A(0, 0)), g.q0[1] = float(A(1, 1)), g.q0[2] = float(A(2, 2)), g.q0[3] = float(A(0, 1));
   g.q1[0] = float(A(1, 2)), g.q1[1] = float(A(0, 2)), g.q1[2] = float(q.b.x()), g.q1[3] = float(q.b.y());
   g.q2[0] = float(q.b.z()), g.q2[1] = float(q.c), g.q2[2] = bits_float(static_cast<std::uint32_t>(id));
+  // The slab of the surface piece (computed once, here at load time); s0 > s1: the whole ball.
+  const SlimSlab slab = slim_patch_slab(b);
+  for (int i = 0; i < 3; ++i) g.slab[i] = float(slab.axis[i]);
+  g.slab[3] = slab.tight ? float(slab.s0) : 1.0f;
+  g.q2[3] = slab.tight ? float(slab.s1) : -1.0f;
   if (b.clip) {
     const double n = b.clip->n.norm();
     if (n > 0)
@@ -65,6 +81,11 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
     data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i)));
   balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
   count_ = data.size();
+  if (!proxy_indices_) {
+    proxy_indices_ = gl::make_buffer(sizeof kProxyIndex, kProxyIndex.data());
+    proxy_vao_ = gl::make_vertex_array();
+    glVertexArrayElementBuffer(proxy_vao_.id(), proxy_indices_.id());
+  }
 }
 
 void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
@@ -91,18 +112,36 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   p.set("u_offset", f.options.slim_offset);
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
+  p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);
+  // The statistics frame draws unindexed, so each ball's corner 0 runs (and counts) once.
+  p.set("u_indexed", count_stats != 0 || f.options.statistics ? 0 : 1);
+}
+
+void SlimPass::draw_proxies(const Frame& f) const {
+  if (f.options.statistics) {
+    glBindVertexArray(f.empty_vao);
+    glDrawArraysInstanced(GL_TRIANGLES, 0, static_cast<GLsizei>(kProxyIndex.size()), static_cast<GLsizei>(count_));
+  } else {
+    glBindVertexArray(proxy_vao_.id());
+    glDrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(kProxyIndex.size()), GL_UNSIGNED_BYTE, nullptr,
+                            static_cast<GLsizei>(count_));
+  }
 }
 
 void SlimPass::run(const Frame& f) {
   ensure_accumulation(f.targets, f.options.slim_half_float);
   glEnable(GL_DEPTH_TEST);
-  glDisable(GL_CULL_FACE);
+  // The prisms' back faces: every pixel of a splat is covered once (pass 2 adds it up).
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CCW);
   glDisable(GL_BLEND);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, balls_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
-  glBindVertexArray(f.empty_vao);
   visibility(f);
   accumulate(f);
+  glDisable(GL_CULL_FACE);
+  glBindVertexArray(f.empty_vao);
   resolve(f);
 }
 
@@ -114,7 +153,7 @@ void SlimPass::visibility(const Frame& f) {
   glDepthMask(GL_TRUE);
   set_uniforms(visibility_, f, f.options.statistics ? 1 : 0);
   visibility_.use();
-  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  draw_proxies(f);
   set_colour_writes(GL_TRUE);
 }
 
@@ -130,7 +169,7 @@ void SlimPass::accumulate(const Frame& f) {
   glBlendFunc(GL_ONE, GL_ONE);
   set_uniforms(accumulate_, f, 0);
   accumulate_.use();
-  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  draw_proxies(f);
   glDisable(GL_BLEND);
 }
 
@@ -159,6 +198,8 @@ void SlimOutlinePass::run(const Frame& f) {
   set_camera_uniforms(program_, f.camera);
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
+  program_.set("u_tight", 0);
+  program_.set("u_indexed", 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
   glBindVertexArray(f.empty_vao);
