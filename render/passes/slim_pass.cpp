@@ -1,7 +1,5 @@
 #include "render/passes/slim_pass.h"
 
-#include <array>
-
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -21,13 +19,6 @@ struct GpuBall {
   float slab[4];
 };
 static_assert(sizeof(GpuBall) == 112);
-
-// The octagonal prism's 28 triangles over its 16 corners (kProxyIndex in slim.vert).
-constexpr std::array<std::uint8_t, 84> kProxyIndex = {
-    0, 2, 1, 0, 3, 2, 0, 4, 3, 0, 5, 4, 0, 6, 5, 0, 7, 6,
-    8, 9, 10, 8, 10, 11, 8, 11, 12, 8, 12, 13, 8, 13, 14, 8, 14, 15,
-    0, 1, 9, 0, 9, 8, 1, 2, 10, 1, 10, 9, 2, 3, 11, 2, 11, 10, 3, 4, 12, 3, 12, 11,
-    4, 5, 13, 4, 13, 12, 5, 6, 14, 5, 14, 13, 6, 7, 15, 6, 15, 14, 7, 0, 8, 7, 8, 15};
 
 GpuBall pack(const SlimPatch& b, std::int32_t id) {
   GpuBall g{};
@@ -81,11 +72,6 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
     data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i)));
   balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
   count_ = data.size();
-  if (!proxy_indices_) {
-    proxy_indices_ = gl::make_buffer(sizeof kProxyIndex, kProxyIndex.data());
-    proxy_vao_ = gl::make_vertex_array();
-    glVertexArrayElementBuffer(proxy_vao_.id(), proxy_indices_.id());
-  }
 }
 
 void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
@@ -113,35 +99,18 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
   p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);
-  // The statistics frame draws unindexed, so each ball's corner 0 runs (and counts) once.
-  p.set("u_indexed", count_stats != 0 || f.options.statistics ? 0 : 1);
-}
-
-void SlimPass::draw_proxies(const Frame& f) const {
-  if (f.options.statistics) {
-    glBindVertexArray(f.empty_vao);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, static_cast<GLsizei>(kProxyIndex.size()), static_cast<GLsizei>(count_));
-  } else {
-    glBindVertexArray(proxy_vao_.id());
-    glDrawElementsInstanced(GL_TRIANGLES, static_cast<GLsizei>(kProxyIndex.size()), GL_UNSIGNED_BYTE, nullptr,
-                            static_cast<GLsizei>(count_));
-  }
 }
 
 void SlimPass::run(const Frame& f) {
   ensure_accumulation(f.targets, f.options.slim_half_float);
   glEnable(GL_DEPTH_TEST);
-  // The prisms' back faces: every pixel of a splat is covered once (pass 2 adds it up).
-  glEnable(GL_CULL_FACE);
-  glCullFace(GL_BACK);
-  glFrontFace(GL_CCW);
+  glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, balls_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
+  glBindVertexArray(f.empty_vao);
   visibility(f);
   accumulate(f);
-  glDisable(GL_CULL_FACE);
-  glBindVertexArray(f.empty_vao);
   resolve(f);
 }
 
@@ -153,7 +122,7 @@ void SlimPass::visibility(const Frame& f) {
   glDepthMask(GL_TRUE);
   set_uniforms(visibility_, f, f.options.statistics ? 1 : 0);
   visibility_.use();
-  draw_proxies(f);
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
   set_colour_writes(GL_TRUE);
 }
 
@@ -169,7 +138,7 @@ void SlimPass::accumulate(const Frame& f) {
   glBlendFunc(GL_ONE, GL_ONE);
   set_uniforms(accumulate_, f, 0);
   accumulate_.use();
-  draw_proxies(f);
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
   glDisable(GL_BLEND);
 }
 
@@ -199,7 +168,6 @@ void SlimOutlinePass::run(const Frame& f) {
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.set("u_tight", 0);
-  program_.set("u_indexed", 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
   glBindVertexArray(f.empty_vao);

@@ -25,15 +25,11 @@ private:
   void accumulate(const Frame& frame);
   void resolve(const Frame& frame);
   void set_uniforms(const gl::Program& program, const Frame& frame, int count_stats) const;
-  /// One instanced draw of every ball's proxy prism (slim.vert).
-  void draw_proxies(const Frame& frame) const;
   /// (Re)makes the accumulation targets; they share the G-buffer's depth texture.
   void ensure_accumulation(const FrameTargets& targets, bool half);
 
   gl::Program visibility_, accumulate_, resolve_;
   gl::Buffer balls_;
-  gl::Buffer proxy_indices_;  // the prism's 84 corner indices
-  gl::VertexArray proxy_vao_;
   std::size_t count_ = 0;
   gl::Texture acc_normal_weight_, acc_depth_colour_;
   gl::Framebuffer acc_fbo_;

@@ -1,16 +1,17 @@
-// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5). Per ball one instance of an
-// octagonal prism (16 corners, 28 triangles, outward counter-clockwise; back faces culled by GL so
-// each pixel is covered once) that bounds the patch's surface piece, not the ball: the slab
-// s0 ≤ axisᵀu ≤ s1 of its zero set (core/slim.h slim_patch_slab) cut by the ball, drawn in 3D with
-// perspective, so its outline is the convex hull of the projected prism. Also the patch quadric
-// rotated into eye axes (flat) and the per-quadric backface test for spheres ([Stoll06] eq. 18).
-// Balls without a tight slab get the tight screen rectangle of the ball (the prism's bottom cap
-// flattened onto it, w = 1); balls whose prism holds the eye or straddles the near plane get the
-// whole viewport: never clipped.
+// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced quad per ball
+// that bounds the patch's surface piece, not the ball. The piece lies in the slab
+// s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
+// load); the quad is the screen rectangle oriented along the projected axis that holds the
+// projected octagonal prism about that slab (16 corners) — the projected slab's quad: thin where
+// the piece is seen edge-on. Balls without a tight slab get the ball's axis-aligned tight screen
+// rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
+// never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
+// test for spheres ([Stoll06] eq. 18).
 //
-// The fragment stage re-starts each ray at an interpolated point of it in local units of R
-// (v_local: on the prism face, or in the centre's view plane for the screen rectangle), so nothing
-// large cancels even when the eye is far away; v_dir is the ray's eye-space direction.
+// With w = 1 the quad is affine in screen space, so the eye-space ray direction (x/P00, y/P11, −1)
+// and the ray's point in the plane through the centre (perpendicular to the view axis) are
+// interpolated exactly; the fragment stage re-starts each ray there (local units of R), so
+// nothing large cancels even when the eye is far away.
 
 struct Ball {
   vec4 centre_hi;  // xyz: centre (float part), w: radius R
@@ -32,19 +33,12 @@ uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
-uniform int u_indexed;  // 1: drawn with the prism's element buffer; 0: gl_VertexID runs over kProxyIndex
-uniform int u_tight;    // 1: tight slab prisms; 0: the ball's screen rectangle for every ball
+uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
 
 const float kOctagonOut = 1.0823922;  // 1/cos(22.5°): the octagon about a unit circle
-// The prism's 28 triangles: bottom cap (0–7, facing −axis), top cap (8–15), 8 side walls.
-const int kProxyIndex[84] = int[84](
-    0, 2, 1, 0, 3, 2, 0, 4, 3, 0, 5, 4, 0, 6, 5, 0, 7, 6,
-    8, 9, 10, 8, 10, 11, 8, 11, 12, 8, 12, 13, 8, 13, 14, 8, 14, 15,
-    0, 1, 9, 0, 9, 8, 1, 2, 10, 1, 10, 9, 2, 3, 11, 2, 11, 10, 3, 4, 12, 3, 12, 11,
-    4, 5, 13, 4, 13, 12, 5, 6, 14, 5, 14, 13, 6, 7, 15, 6, 15, 14, 7, 0, 8, 7, 8, 15);
 
-out vec3 v_dir;      // eye-space ray direction through the pixel
-out vec3 v_offset;   // a point of the ray relative to the centre, units of R, eye axes
+out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
+out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
 flat out vec3 v_centre_eye;
 flat out float v_radius;
 flat out vec3 v_A0;  // rows of A′ = R A Rᵀ
@@ -86,11 +80,10 @@ void main() {
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
     return;
   }
-  int vid = u_indexed != 0 ? gl_VertexID : kProxyIndex[gl_VertexID];  // prism corner 0..15
+  int vid = gl_VertexID;
 #endif
 
-  // The prism: octagon of inradius ρ (the slab's disc) about the axis, caps at s0 (corners 0–7)
-  // and s1 (8–15); corner k at angle (k + ½)·45° in the frame (t1, t2, axis), right-handed.
+  // The prism about the slab: an octagon about its disc of radius ρ, caps at s0 and s1.
   bool tight = ball.slab.w <= ball.q2.w && u_tight != 0;
   float s0 = ball.slab.w, s1 = ball.q2.w;
   float rho = (s0 <= 0.0 && s1 >= 0.0) ? 1.0 : sqrt(max(0.0, 1.0 - min(s0 * s0, s1 * s1)));
@@ -98,51 +91,62 @@ void main() {
   float Rp = R * reach;  // a sphere about the centre that holds the proxy
   bool inside_or_near = dot(C, C) <= Rp * Rp * 1.0001 || C.z + Rp > -u_near;
   vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
-  if (tight && !inside_or_near) {
-    vec3 axis = u_view_rot * ball.slab.xyz;
-    vec3 t1 = normalize(abs(axis.x) < 0.9 ? cross(axis, vec3(1.0, 0.0, 0.0)) : cross(axis, vec3(0.0, 1.0, 0.0)));
-    vec3 t2 = cross(axis, t1);
-    int k = vid & 7;
-    float angle = (float(k) + 0.5) * 0.78539816;
-    vec3 u = rho * kOctagonOut * (cos(angle) * t1 + sin(angle) * t2) + (vid < 8 ? s0 : s1) * axis;
-    vec3 p = C + R * u;
-    gl_Position = u_proj * vec4(p, 1.0);
-    v_dir = p;
-    v_offset = u;
+  vec2 corner;
+  float ndc_z = -1.0;
+  if (inside_or_near) {
+    corner = vec2((vid & 1) != 0 ? 1.0 : -1.0, (vid & 2) != 0 ? 1.0 : -1.0);
   } else {
-    // The ball's tight screen rectangle ([Sigg06] eq. 5 for a sphere: tangent lines from the eye
-    // in the xz and yz planes give the silhouette slopes k = x/(−z), ndc = P·k), or the viewport;
-    // corners 0–7 trace it with decreasing angle (the bottom cap's front winding), 8–15 repeat
-    // them (the top cap then faces away, the side walls have no area).
-    vec2 lo = vec2(-1.0), hi = vec2(1.0);
-    float ndc_z = -1.0;
-    if (!inside_or_near) {
+    float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
+    ndc_z = (u_proj[2][2] * zn + u_proj[3][2]) / -zn;
+    if (tight) {
+      // Screen slopes k = xy/(−z) of the 16 corners, extents along the projected axis a and a⊥.
+      vec3 axis = u_view_rot * ball.slab.xyz;
+      vec3 t1 = normalize(abs(axis.x) < 0.9 ? cross(axis, vec3(1.0, 0.0, 0.0)) : cross(axis, vec3(0.0, 1.0, 0.0)));
+      vec3 t2 = cross(axis, t1);
+      vec2 kc = C.xy / -C.z;
+      vec3 ahead = C + R * axis;
+      vec2 a = ahead.xy / -ahead.z - kc;
+      a = dot(a, a) > 1e-20 * dot(kc, kc) + 1e-30 ? normalize(a) : vec2(1.0, 0.0);
+      vec2 ap = vec2(-a.y, a.x);
+      vec2 lo = vec2(1e30), hi = vec2(-1e30);
+      for (int k = 0; k < 8; ++k) {
+        float angle = (float(k) + 0.5) * 0.78539816;
+        vec3 ring = rho * kOctagonOut * (cos(angle) * t1 + sin(angle) * t2);
+        for (int cap = 0; cap < 2; ++cap) {
+          vec3 p = C + R * (ring + (cap == 0 ? s0 : s1) * axis);
+          vec2 kp = p.xy / -p.z - kc;  // relative to the centre's slope: no large cancellation
+          vec2 e = vec2(dot(kp, a), dot(kp, ap));
+          lo = min(lo, e);
+          hi = max(hi, e);
+        }
+      }
+      // Widen by a float ulp of the slopes so rounding never trims a covered pixel.
+      vec2 pad = vec2(2e-6 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
+      lo -= pad;
+      hi += pad;
+      vec2 e = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
+      corner = (kc + e.x * a + e.y * ap) * scale;
+    } else {
+      // The ball's tight screen rectangle ([Sigg06] eq. 5 for a sphere): the tangent lines from
+      // the eye in the xz and yz planes give the slopes k = x/(−z) of the silhouette, ndc = P·k.
       float zz = C.z * C.z - R * R;
       vec2 k_lo, k_hi;
-      for (int a = 0; a < 2; ++a) {
-        float ca = C[a];
-        float root = R * sqrt(max(ca * ca + zz, 0.0));
-        float k0 = (-ca * C.z - root) / zz, k1 = (-ca * C.z + root) / zz;
-        k_lo[a] = min(k0, k1);
-        k_hi[a] = max(k0, k1);
+      for (int i = 0; i < 2; ++i) {
+        float ci = C[i];
+        float root = R * sqrt(max(ci * ci + zz, 0.0));
+        float k0 = (-ci * C.z - root) / zz, k1 = (-ci * C.z + root) / zz;
+        k_lo[i] = min(k0, k1);
+        k_hi[i] = max(k0, k1);
       }
-      lo = clamp(k_lo * scale, -1.0, 1.0);
-      hi = clamp(k_hi * scale, -1.0, 1.0);
-      float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
-      ndc_z = (u_proj[2][2] * zn + u_proj[3][2]) / -zn;
+      vec2 lo = clamp(k_lo * scale, -1.0, 1.0), hi = clamp(k_hi * scale, -1.0, 1.0);
+      corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
     }
-#ifdef SLIM_OUTLINE
-    vec2 corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
-#else
-    int q = (vid & 7) >> 1;  // 0: (hi, lo), 1: (lo, lo), 2: (lo, hi), 3: (hi, hi)
-    vec2 corner = vec2(q == 0 || q == 3 ? hi.x : lo.x, q >= 2 ? hi.y : lo.y);
-#endif
-    gl_Position = vec4(corner, ndc_z, 1.0);
-    vec2 k = corner / scale;
-    v_dir = vec3(k, -1.0);
-    // The ray meets the plane z = C.z at −C.z·(k, −1); relative to the centre, in units of R.
-    v_offset = vec3(k * -C.z - C.xy, 0.0) / R;
   }
+  gl_Position = vec4(corner, ndc_z, 1.0);
+  vec2 k = corner / scale;
+  v_dir = vec3(k, -1.0);
+  // The ray meets the plane z = C.z at −C.z·(k, −1); relative to the centre, in units of R.
+  v_offset = vec3(k * -C.z - C.xy, 0.0) / R;
   v_centre_eye = C;
   v_radius = R;
   v_A0 = Ae[0];  // columns of a symmetric matrix are its rows
