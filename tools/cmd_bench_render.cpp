@@ -1,5 +1,6 @@
 // quadrix bench render INPUT: frame time and fragment work of the GL renderer, side by side in
-// one run: quadrics with per-quadric culling, without it, and (for a quad mesh input) the same
+// one run: quadrics with per-quadric culling, without it, SLIM with ball splats (the baseline of
+// the tight ones), and (for a quad mesh input) the same
 // mesh drawn as flat triangles by the same renderer ([Stoll06] Table 2; issue 3 benchmark).
 #include <algorithm>
 #include <filesystem>
@@ -69,7 +70,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
 }  // namespace
 
 void add_bench_render(CLI::App& bench, Commands& commands) {
-  auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, and quads vs flat triangles");
+  auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, SLIM tight vs ball splats, quads vs flat triangles");
   struct Args {
     std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline;
     int frames = 10;
