@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 #include <span>
 
@@ -12,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/bounds.h"
+#include "core/culling.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -357,6 +359,29 @@ FaceResult convert_face(const PolygonMesh& mesh, std::size_t f, const QuadConver
   return r;
 }
 
+
+// A closed, consistently oriented surface with outward normals: every directed edge (a, b) is
+// used once and its reverse once (no boundary, no non-manifold or flipped edge), and the
+// enclosed signed volume is positive. Back sides of such a surface are never seen from outside.
+bool is_closed_outward(const PolygonMesh& mesh) {
+  std::map<std::pair<int, int>, int> directed;
+  double volume6 = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto face = mesh.face(f);
+    if (face.size() < 3) return false;
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      const int a = face[i], b = face[(i + 1) % face.size()];
+      if (a == b || ++directed[{a, b}] > 1) return false;
+    }
+    const Vector3d& p0 = mesh.vertices[face[0]];
+    for (std::size_t i = 1; i + 1 < face.size(); ++i)
+      volume6 += p0.dot(mesh.vertices[face[i]].cross(mesh.vertices[face[i + 1]]));
+  }
+  for (const auto& [edge, count] : directed)
+    if (!directed.contains({edge.second, edge.first})) return false;
+  return !directed.empty() && volume6 > 0.0;
+}
+
 }  // namespace
 
 QuadConversion convert_quads(const PolygonMesh& mesh, const QuadConvertOptions& options) {
@@ -398,6 +423,7 @@ QuadConversion convert_quads(const PolygonMesh& mesh, const QuadConvertOptions& 
   if (c.polygons_triangulated > polygons_logged)
     log::warn("{}: {} faces with more than four sides triangulated in all", options.source, c.polygons_triangulated);
   if (c.degenerate_skipped > 0) log::warn("{}: {} zero-area faces skipped", options.source, c.degenerate_skipped);
+  if (c.degenerate_skipped == 0 && is_closed_outward(mesh)) out.model.metadata[kClosedKey] = "1";
   return out;
 }
 

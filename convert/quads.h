@@ -67,7 +67,9 @@ struct QuadConversionCounts {
 };
 
 struct QuadConversion {
-  Model model;  ///< tet patches only; metadata left to the caller
+  /// Tet patches only. Metadata left to the caller, except `closed` = 1 (core/culling.h) when the
+  /// mesh is closed, consistently oriented and its faces point outward (backface culling exact).
+  Model model;
   QuadConversionCounts counts;
   /// Face f became model.tets[tet_offsets[f] .. tet_offsets[f+1]).
   std::vector<std::size_t> tet_offsets;

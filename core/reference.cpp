@@ -8,6 +8,7 @@
 
 #include "core/bounds.h"
 #include "core/bvh.h"
+#include "core/culling.h"
 #include "core/error.h"
 
 namespace quadrix {
@@ -230,12 +231,15 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
   img.primitive.assign(n, -1);
   img.albedo.assign(n, Rgb{0, 0, 0});
   const Eigen::Vector3d fwd = camera.forward();
+  // Back sides are culled only where no ray from the eye can see them (core/culling.h).
+  TraceOptions trace = options.trace;
+  trace.cull_backfaces = trace.cull_backfaces && backface_culling_is_exact(scene.model(), camera);
   std::atomic<int> rows_done{0};
   tbb::parallel_for(tbb::blocked_range<int>(0, img.height, 4), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
       for (int x = 0; x < img.width; ++x) {
         const Ray ray = camera.pixel_ray(x + 0.5, y + 0.5);
-        const auto hit = scene.trace(ray, 0.0, kInf, options.trace);
+        const auto hit = scene.trace(ray, 0.0, kInf, trace);
         if (!hit) continue;
         const std::size_t i = static_cast<std::size_t>(y) * img.width + x;
         img.coverage[i] = 1;

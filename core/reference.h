@@ -26,7 +26,9 @@ struct SurfaceHit {
 };
 
 struct TraceOptions {
-  bool cull_backfaces = true;  ///< per-fragment culling: front-facing roots only ([Stoll06] eq. 14)
+  /// Per-fragment culling: front-facing roots only ([Stoll06] eq. 14). render_reference applies
+  /// it only where it cannot change the image (core/culling.h); trace() applies it as asked.
+  bool cull_backfaces = true;
   SlimBlendOptions slim;
 };
 

@@ -1,7 +1,11 @@
 #include "core/slim.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
 
 namespace quadrix {
 
@@ -34,6 +38,70 @@ bool intersect_slim_patch(const SlimPatch& patch, const Ray& ray, double tmin, d
   hit.gradient = h.gradient * inv_r;
   hit.front_facing = true;
   return true;
+}
+
+double SlimSlab::disc_radius() const {
+  if (s0 <= 0.0 && s1 >= 0.0) return 1.0;
+  const double m = std::min(s0 * s0, s1 * s1);
+  return std::sqrt(std::max(0.0, 1.0 - m));
+}
+
+SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
+  SlimSlab slab;
+  const Quadric& q = patch.local;
+  const double bn = q.b.norm();
+  if (!(bn > 0.0) || !q.A.allFinite() || !std::isfinite(q.c)) return slab;
+  // Frame (t1, t2, e), e = b/‖b‖: u = s·e + w, g = c + 2‖b‖s + a·s² + 2s·mᵀw + wᵀA⊥w with
+  // a = eᵀAe, m = A⊥e (the coupling), A⊥ the 2×2 block, ‖w‖ ≤ ρ(s) = √(1 − s²).
+  const Eigen::Vector3d e = q.b / bn;
+  const Eigen::Vector3d t1 =
+      (std::abs(e.x()) < 0.9 ? e.cross(Eigen::Vector3d::UnitX()) : e.cross(Eigen::Vector3d::UnitY())).normalized();
+  const Eigen::Vector3d t2 = e.cross(t1);
+  const double a = e.dot(q.A * e);
+  const double m = std::hypot(t1.dot(q.A * e), t2.dot(q.A * e));
+  Eigen::Matrix2d P;
+  P << t1.dot(q.A * t1), t1.dot(q.A * t2), t2.dot(q.A * t1), t2.dot(q.A * t2);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(P, Eigen::EigenvaluesOnly);
+  const double mu_lo = std::min(eig.eigenvalues()(0), 0.0), mu_hi = std::max(eig.eigenvalues()(1), 0.0);
+  // Interval test per bin of s: can g vanish there? Bins where it cannot are outside the slab.
+  // Every term is bounded from above and below over the bin, so the test is conservative; a
+  // relative margin covers the rounding of the GPU's float copy.
+  constexpr int kBins = 64;
+  const double scale = std::abs(q.c) + 2.0 * bn + std::abs(a) + 2.0 * m + mu_hi - mu_lo;
+  const double margin = 1e-6 * scale;
+  int first = -1, last = -1;
+  for (int i = 0; i < kBins; ++i) {
+    const double sa = -1.0 + 2.0 * i / kBins, sb = -1.0 + 2.0 * (i + 1) / kBins;
+    const double s_abs = std::max(std::abs(sa), std::abs(sb));
+    const double s_min_abs = (sa <= 0.0 && sb >= 0.0) ? 0.0 : std::min(std::abs(sa), std::abs(sb));
+    const double rho2 = std::max(0.0, 1.0 - s_min_abs * s_min_abs);
+    // c + 2‖b‖s + a s² over [sa, sb]: a quadratic, extremes at the ends or its vertex.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    const auto h = [&](double s) { return q.c + 2.0 * bn * s + a * s * s; };
+    for (const double s : {sa, sb}) lo = std::min(lo, h(s)), hi = std::max(hi, h(s));
+    if (a != 0.0) {
+      const double sv = -bn / a;
+      if (sv > sa && sv < sb) lo = std::min(lo, h(sv)), hi = std::max(hi, h(sv));
+    }
+    const double coupling = 2.0 * s_abs * m * std::sqrt(rho2);
+    lo += -coupling + mu_lo * rho2 - margin;
+    hi += coupling + mu_hi * rho2 + margin;
+    if (lo <= 0.0 && hi >= 0.0) {
+      if (first < 0) first = i;
+      last = i;
+    }
+  }
+  slab.axis = e;
+  if (first < 0) {  // the zero set misses the ball: nothing to draw, the thinnest slab will do
+    slab.s0 = slab.s1 = std::clamp(-q.c / (2.0 * bn), -1.0, 1.0);
+    slab.tight = true;
+    return slab;
+  }
+  slab.s0 = -1.0 + 2.0 * first / kBins;
+  slab.s1 = -1.0 + 2.0 * (last + 1) / kBins;
+  slab.tight = slab.s1 - slab.s0 < max_thickness;
+  if (!slab.tight) slab = SlimSlab{};
+  return slab;
 }
 
 double slim_offset_of(const Model& model) {

@@ -27,6 +27,21 @@ struct SlimBlendOptions {
 /// by the fitter), else SlimBlendOptions{}.offset. Renderers use it unless told otherwise.
 double slim_offset_of(const Model& model);
 
+/// A slab that holds a patch's zero set inside its ball, in local units (ball radius 1): every
+/// u with g(u) = 0 and ‖u‖ ≤ 1 has s0 ≤ axisᵀu ≤ s1. With axis = b/‖b‖ (the gradient's direction
+/// at the centre), g(u) = 0 gives axisᵀu = −(c + uᵀAu)/(2‖b‖), and uᵀAu lies between min(λ_min, 0)
+/// and max(λ_max, 0) in the unit ball (A's eigenvalues). The splat of a tight slab bounds the
+/// surface piece, not the ball ([Toledo04] waste); `tight` is false (the slab is the whole ball)
+/// when b = 0 or the slab is no thinner than max_thickness.
+struct SlimSlab {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit, local (world-aligned) axes
+  double s0 = -1, s1 = 1;                           ///< extent along axis, −1 ≤ s0 ≤ s1 ≤ 1
+  bool tight = false;
+  /// Radius of the slab's cross-section with the ball: 1 when s0 ≤ 0 ≤ s1, else √(1 − min s²).
+  double disc_radius() const;
+};
+SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness = 1.5);
+
 /// A point of a patch's zero set inside its ball (and clip plane).
 struct SlimSurfaceSample {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< world units

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/culling.h"
 #include "core/error.h"
 #include "render/context.h"
 #include "render/gl/objects.h"
@@ -36,6 +37,8 @@ struct Renderer::Impl {
   SlimPass slim;
   ShadePass shade;
   SlimOutlinePass slim_outline{slim};
+  Box3 box;            // of the model's primitives
+  bool closed = true;  // its tetrahedron patches and glyphs bound solids (core/culling.h)
 
   /// A pass and the FrameStats figure its time adds to (time_passes only).
   struct Step {
@@ -61,6 +64,8 @@ void Renderer::set_model(const Model& model) {
     throw InvalidInput("the GL renderer does not draw glyphs yet: use --backend cpu");
   impl_->tet.upload(model.tets);
   impl_->slim.upload(model.slims);
+  impl_->box = bounds(model);
+  impl_->closed = surfaces_are_closed(model);
 }
 
 void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) { impl_->mesh.upload(mesh, colour); }
@@ -72,7 +77,10 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   FrameStats st;
   st.primitives = I.tet.count() + I.slim.count();
   const CameraUniforms camera_uniforms(camera);
-  const Frame frame{camera_uniforms, o, I.targets, I.statistics.buffer(), I.empty_vao.id()};
+  // Back sides are culled only where no ray from the eye can see them (core/culling.h).
+  RenderOptions exact = o;
+  exact.cull = o.cull && backface_culling_is_exact(I.box, I.closed, camera);
+  const Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
 
   glViewport(0, 0, I.targets.width, I.targets.height);
   glBindFramebuffer(GL_FRAMEBUFFER, I.targets.gbuffer.id());

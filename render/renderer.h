@@ -19,7 +19,10 @@ class GlContext;
 enum class Shading { phong, envmap, npr };
 
 struct RenderOptions {
-  bool cull = true;            ///< per-quadric (eq. 19) and per-fragment (eq. 14) backface culling
+  /// Per-quadric (eq. 18, 19) and per-fragment (eq. 14) backface culling, where it cannot change
+  /// the image (core/culling.h): SLIM always, tetrahedron patches and glyphs only when the model
+  /// is closed and lies beyond the near plane. Off: the same image, slower.
+  bool cull = true;
   Shading shading = Shading::phong;
   bool statistics = false;     ///< count culled/drawn primitives, fragments (costs a little)
   Rgb background{255, 255, 255};
@@ -33,6 +36,9 @@ struct RenderOptions {
   float slim_offset = 0.5f;
   /// SLIM accumulation targets: RGBA16F instead of RGBA32F (half the bandwidth; see the benchmark).
   bool slim_half_float = false;
+  /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,
+  /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
+  bool slim_tight_splats = true;
   /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
   bool slim_outlines = false;
 };

@@ -1,5 +1,6 @@
 // quadrix bench render INPUT: frame time and fragment work of the GL renderer, side by side in
-// one run: quadrics with per-quadric culling, without it, and (for a quad mesh input) the same
+// one run: quadrics with per-quadric culling, without it, SLIM with ball splats (the baseline of
+// the tight ones), and (for a quad mesh input) the same
 // mesh drawn as flat triangles by the same renderer ([Stoll06] Table 2; issue 3 benchmark).
 #include <algorithm>
 #include <filesystem>
@@ -30,9 +31,10 @@ struct Row {
 };
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
-            double slim_offset = SlimBlendOptions{}.offset) {
+            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true) {
   render::RenderOptions o;
   o.cull = cull;
+  o.slim_tight_splats = tight_splats;
   o.slim_offset = static_cast<float>(slim_offset);
   o.statistics = true;
   const auto st = r.draw(cam, o);
@@ -68,7 +70,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
 }  // namespace
 
 void add_bench_render(CLI::App& bench, Commands& commands) {
-  auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, and quads vs flat triangles");
+  auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, SLIM tight vs ball splats, quads vs flat triangles");
   struct Args {
     std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline;
     int frames = 10;
@@ -107,6 +109,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           r.set_model(model);
                           rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_offset_of(model)));
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
+                          if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
+                            rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
+                                                   slim_offset_of(model), false));
                         }
                         std::size_t triangles = 0;
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);
@@ -121,8 +126,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                             {"frames", a->frames}, {"context", context->description()},
                                             {"primitives", model.size()}, {"baseline_triangles", triangles},
                                             {"camera", camera_json(cam)}};
-                        std::string csv = "configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
-                                          "covered_pixels,invocations_per_covered_pixel\n";
+                        const std::string model_name = std::filesystem::path(a->input).stem().string();
+                        std::string csv = "model,configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
+                                          "covered_pixels,invocations_per_covered_pixel,slim_splat_waste\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
@@ -133,18 +139,28 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"covered_pixels", r.covered},
                                                {"invocations_per_covered_pixel", r.invocations_per_covered()},
                                                {"slim_splat_waste", r.slim_waste}});
-                          csv += fmt::format("{},{:.3f},{:.3f},{},{},{},{},{:.3f}\n", r.name, r.ms_median, r.ms_min,
-                                             r.primitives, r.culled, r.fragments, r.covered,
-                                             r.invocations_per_covered());
+                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f}\n", model_name, r.name,
+                                             r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments, r.covered,
+                                             r.invocations_per_covered(), r.slim_waste);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
-                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px\n",
+                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px  waste %.1f %%\n",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
-                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
+                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered(),
+                                      100.0 * r.slim_waste);
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
-                        if (rows.size() > 2) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / rows[2].ms_median;
+                        const auto row_named = [&](std::string_view n) -> const Row* {
+                          for (const auto& r : rows)
+                            if (r.name == n) return &r;
+                          return nullptr;
+                        };
+                        const Row* tri = row_named(a->baseline.empty() ? "flat triangles" : "baseline mesh");
+                        const Row* ball = row_named("quadrics, ball splats");
+                        if (tri) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / tri->ms_median;
+                        if (ball) j["ratio_ball_over_tight_splats"] = ball->ms_median / rows[0].ms_median;
                         std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
-                        if (rows.size() > 2) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / rows[2].ms_median);
+                        if (tri) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / tri->ms_median);
+                        if (ball) std::printf(", ball/tight splats %.2f", ball->ms_median / rows[0].ms_median);
                         std::printf("\n");
                         std::filesystem::create_directories(a->out);
                         write_file_atomically(std::filesystem::path(a->out) / "bench_render.json",

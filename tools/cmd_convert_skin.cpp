@@ -5,6 +5,7 @@
 
 #include "convert/pdb.h"
 #include "convert/skin.h"
+#include "core/culling.h"
 #include "core/log.h"
 #include "core/model_io.h"
 #include "tools/cli.h"
@@ -56,6 +57,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                                                        a->input, a->out, a->shrink, a->radii, a->radius_scale,
                                                        a->tetrahedra, a->no_water ? " --no-water" : "");
                         meta["source"] = a->input;
+                        meta[kClosedKey] = "1";  // a skin bounds the union of its balls: cull exactly
                         meta["balls"] = fmt::format("{}", balls.size());
                         meta["shrink"] = fmt::format("{:g}", a->shrink);
                         meta["mixed_cells"] = fmt::format("{}", conv.mixed_cells);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/culling.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/log.h"
@@ -123,6 +124,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j["context"] = context->description();
   j["frames"] = a.frames;
   j["culling"] = ro.cull;
+  // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
+  j["backface_culling_exact"] = backface_culling_is_exact(model, camera);
   j["shading"] = a.shading;
   j["primitives_drawn"] = stats.primitives - stats.culled;
   j["primitives_culled"] = stats.culled;

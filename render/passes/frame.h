@@ -50,10 +50,14 @@ struct FrameTargets {
 /// One frame's shared inputs.
 struct Frame {
   const CameraUniforms& camera;
+  /// The caller's options, except that `cull` (back sides of tetrahedron patches and glyphs) is
+  /// on only where it cannot change the image (core/culling.h).
   const RenderOptions& options;
   const FrameTargets& targets;
   GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit fragment counts
   GLuint empty_vao;
+  /// Per-quadric SLIM culling as the caller asked: always exact (SLIM patches are one-sided).
+  bool slim_cull = true;
 };
 
 /// One step of a frame. Each pass owns its programs and the GPU data of its primitives, and

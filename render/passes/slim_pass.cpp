@@ -4,19 +4,21 @@
 
 #include "core/error.h"
 #include "core/primitive.h"
+#include "core/slim.h"
 #include "render/shaders.h"
 
 namespace quadrix::render {
 namespace {
 
-// std430 layout of `Ball` in slim.vert (6 vec4 = 96 bytes).
+// std430 layout of `Ball` in slim.vert (7 vec4 = 112 bytes).
 struct GpuBall {
   float centre_hi[4];
   float centre_lo[4];
   float q0[4], q1[4], q2[4];
   float clip[4];
+  float slab[4];
 };
-static_assert(sizeof(GpuBall) == 96);
+static_assert(sizeof(GpuBall) == 112);
 
 GpuBall pack(const SlimPatch& b, std::int32_t id) {
   GpuBall g{};
@@ -33,6 +35,11 @@ GpuBall pack(const SlimPatch& b, std::int32_t id) {
   g.q0[0] = float(A(0, 0)), g.q0[1] = float(A(1, 1)), g.q0[2] = float(A(2, 2)), g.q0[3] = float(A(0, 1));
   g.q1[0] = float(A(1, 2)), g.q1[1] = float(A(0, 2)), g.q1[2] = float(q.b.x()), g.q1[3] = float(q.b.y());
   g.q2[0] = float(q.b.z()), g.q2[1] = float(q.c), g.q2[2] = bits_float(static_cast<std::uint32_t>(id));
+  // The slab of the surface piece (computed once, here at load time); s0 > s1: the whole ball.
+  const SlimSlab slab = slim_patch_slab(b);
+  for (int i = 0; i < 3; ++i) g.slab[i] = float(slab.axis[i]);
+  g.slab[3] = slab.tight ? float(slab.s0) : 1.0f;
+  g.q2[3] = slab.tight ? float(slab.s1) : -1.0f;
   if (b.clip) {
     const double n = b.clip->n.norm();
     if (n > 0)
@@ -90,7 +97,8 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   set_camera_uniforms(p, f.camera);
   p.set("u_offset", f.options.slim_offset);
   p.set("u_count_stats", count_stats);
-  p.set("u_cull", f.options.cull ? 1 : 0);
+  p.set("u_cull", f.slim_cull ? 1 : 0);
+  p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);
 }
 
 void SlimPass::run(const Frame& f) {
@@ -158,7 +166,8 @@ void SlimOutlinePass::run(const Frame& f) {
   glDisable(GL_CULL_FACE);
   set_camera_uniforms(program_, f.camera);
   program_.set("u_count_stats", 0);
-  program_.set("u_cull", f.options.cull ? 1 : 0);
+  program_.set("u_cull", f.slim_cull ? 1 : 0);
+  program_.set("u_tight", 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
   glBindVertexArray(f.empty_vao);

@@ -1,7 +1,12 @@
-// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced quad per ball with
-// the tight screen bound of the ball, the patch quadric rotated into eye axes (flat), and the
-// per-quadric backface test for spheres ([Stoll06] eq. 18). Balls the camera is in, or that
-// straddle the near plane, get the whole viewport: never clipped.
+// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced quad per ball
+// that bounds the patch's surface piece, not the ball. The piece lies in the slab
+// s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
+// load); the quad is the screen rectangle oriented along the projected axis that holds the
+// projected octagonal prism about that slab (16 corners) — the projected slab's quad: thin where
+// the piece is seen edge-on. Balls without a tight slab get the ball's axis-aligned tight screen
+// rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
+// never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
+// test for spheres ([Stoll06] eq. 18).
 //
 // With w = 1 the quad is affine in screen space, so the eye-space ray direction (x/P00, y/P11, −1)
 // and the ray's point in the plane through the centre (perpendicular to the view axis) are
@@ -13,8 +18,9 @@ struct Ball {
   vec4 centre_lo;  // xyz: centre − float(centre), w: colour bits
   vec4 q0;         // A00 A11 A22 A01   (g(u), u = (x − c)/R, world axes)
   vec4 q1;         // A12 A02 b0 b1
-  vec4 q2;         // b2 c, primitive index bits, —
+  vec4 q2;         // b2 c, primitive index bits, slab s1
   vec4 clip;       // n (local, world axes), d; n = 0: no clip plane
+  vec4 slab;       // xyz: unit axis (world axes), w: s0; q2.w: s1; s0 > s1: no tight slab
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
@@ -27,6 +33,9 @@ uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
+uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
+
+const float kOctagonOut = 1.0823922;  // 1/cos(22.5°): the octagon about a unit circle
 
 out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
@@ -74,30 +83,67 @@ void main() {
   int vid = gl_VertexID;
 #endif
 
-  // Tight bound ([Sigg06] eq. 5 for a sphere): the tangent lines from the eye in the xz and yz
-  // planes give the slopes k = x/(−z) of the silhouette, ndc = P·k.
-  vec2 lo = vec2(-1.0), hi = vec2(1.0);
+  // The prism about the slab: an octagon about its disc of radius ρ, caps at s0 and s1.
+  bool tight = ball.slab.w <= ball.q2.w && u_tight != 0;
+  float s0 = ball.slab.w, s1 = ball.q2.w;
+  float rho = (s0 <= 0.0 && s1 >= 0.0) ? 1.0 : sqrt(max(0.0, 1.0 - min(s0 * s0, s1 * s1)));
+  float reach = tight ? sqrt(rho * rho * kOctagonOut * kOctagonOut + max(s0 * s0, s1 * s1)) : 1.0;
+  float Rp = R * reach;  // a sphere about the centre that holds the proxy
+  bool inside_or_near = dot(C, C) <= Rp * Rp * 1.0001 || C.z + Rp > -u_near;
+  vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
+  vec2 corner;
   float ndc_z = -1.0;
-  bool inside_or_near = dot(C, C) <= R * R * 1.0001 || C.z + R > -u_near;
-  if (!inside_or_near) {
-    float zz = C.z * C.z - R * R;
-    vec2 k_lo, k_hi;
-    for (int a = 0; a < 2; ++a) {
-      float ca = C[a];
-      float root = R * sqrt(max(ca * ca + zz, 0.0));
-      float k0 = (-ca * C.z - root) / zz, k1 = (-ca * C.z + root) / zz;
-      k_lo[a] = min(k0, k1);
-      k_hi[a] = max(k0, k1);
-    }
-    vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
-    lo = clamp(k_lo * scale, -1.0, 1.0);
-    hi = clamp(k_hi * scale, -1.0, 1.0);
+  if (inside_or_near) {
+    corner = vec2((vid & 1) != 0 ? 1.0 : -1.0, (vid & 2) != 0 ? 1.0 : -1.0);
+  } else {
     float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
     ndc_z = (u_proj[2][2] * zn + u_proj[3][2]) / -zn;
+    if (tight) {
+      // Screen slopes k = xy/(−z) of the 16 corners, extents along the projected axis a and a⊥.
+      vec3 axis = u_view_rot * ball.slab.xyz;
+      vec3 t1 = normalize(abs(axis.x) < 0.9 ? cross(axis, vec3(1.0, 0.0, 0.0)) : cross(axis, vec3(0.0, 1.0, 0.0)));
+      vec3 t2 = cross(axis, t1);
+      vec2 kc = C.xy / -C.z;
+      vec3 ahead = C + R * axis;
+      vec2 a = ahead.xy / -ahead.z - kc;
+      a = dot(a, a) > 1e-20 * dot(kc, kc) + 1e-30 ? normalize(a) : vec2(1.0, 0.0);
+      vec2 ap = vec2(-a.y, a.x);
+      vec2 lo = vec2(1e30), hi = vec2(-1e30);
+      for (int k = 0; k < 8; ++k) {
+        float angle = (float(k) + 0.5) * 0.78539816;
+        vec3 ring = rho * kOctagonOut * (cos(angle) * t1 + sin(angle) * t2);
+        for (int cap = 0; cap < 2; ++cap) {
+          vec3 p = C + R * (ring + (cap == 0 ? s0 : s1) * axis);
+          vec2 kp = p.xy / -p.z - kc;  // relative to the centre's slope: no large cancellation
+          vec2 e = vec2(dot(kp, a), dot(kp, ap));
+          lo = min(lo, e);
+          hi = max(hi, e);
+        }
+      }
+      // Widen by a float ulp of the slopes so rounding never trims a covered pixel.
+      vec2 pad = vec2(2e-6 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
+      lo -= pad;
+      hi += pad;
+      vec2 e = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
+      corner = (kc + e.x * a + e.y * ap) * scale;
+    } else {
+      // The ball's tight screen rectangle ([Sigg06] eq. 5 for a sphere): the tangent lines from
+      // the eye in the xz and yz planes give the slopes k = x/(−z) of the silhouette, ndc = P·k.
+      float zz = C.z * C.z - R * R;
+      vec2 k_lo, k_hi;
+      for (int i = 0; i < 2; ++i) {
+        float ci = C[i];
+        float root = R * sqrt(max(ci * ci + zz, 0.0));
+        float k0 = (-ci * C.z - root) / zz, k1 = (-ci * C.z + root) / zz;
+        k_lo[i] = min(k0, k1);
+        k_hi[i] = max(k0, k1);
+      }
+      vec2 lo = clamp(k_lo * scale, -1.0, 1.0), hi = clamp(k_hi * scale, -1.0, 1.0);
+      corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
+    }
   }
-  vec2 corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
   gl_Position = vec4(corner, ndc_z, 1.0);
-  vec2 k = corner / vec2(u_proj[0][0], u_proj[1][1]);
+  vec2 k = corner / scale;
   v_dir = vec3(k, -1.0);
   // The ray meets the plane z = C.z at −C.z·(k, −1); relative to the centre, in units of R.
   v_offset = vec3(k * -C.z - C.xy, 0.0) / R;
