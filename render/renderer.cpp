@@ -11,6 +11,7 @@
 #include "render/context.h"
 #include "render/gl/objects.h"
 #include "render/passes/frame.h"
+#include "render/passes/glyph_pass.h"
 #include "render/passes/mesh_pass.h"
 #include "render/passes/shade_pass.h"
 #include "render/passes/slim_pass.h"
@@ -32,6 +33,7 @@ struct Renderer::Impl {
   FrameStatistics statistics;
   gl::VertexArray empty_vao = gl::make_vertex_array();
   TetPass tet;
+  GlyphPass glyph;
   MeshPass mesh;
   SlimPass slim;
   ShadePass shade;
@@ -43,7 +45,8 @@ struct Renderer::Impl {
     double FrameStats::*ms;
   };
   // Passes that fill the G-buffer (inside the statistics queries), then those that make the image.
-  std::array<Step, 3> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+  std::array<Step, 4> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+                                     {&glyph, &FrameStats::ms_geometry},
                                      {&mesh, &FrameStats::ms_geometry},
                                      {&slim, &FrameStats::ms_slim}}};
   std::array<Step, 2> image_steps{{{&shade, &FrameStats::ms_shading}, {&slim_outline, &FrameStats::ms_shading}}};
@@ -57,9 +60,8 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
 Renderer::~Renderer() = default;
 
 void Renderer::set_model(const Model& model) {
-  if (!model.glyphs.empty())
-    throw InvalidInput("the GL renderer does not draw glyphs yet: use --backend cpu");
   impl_->tet.upload(model.tets);
+  impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model.slims);
 }
 
@@ -70,7 +72,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   const auto start = Clock::now();
   I.targets.resize(camera.width, camera.height);
   FrameStats st;
-  st.primitives = I.tet.count() + I.slim.count();
+  st.primitives = I.tet.count() + I.glyph.count() + I.slim.count();
   const CameraUniforms camera_uniforms(camera);
   const Frame frame{camera_uniforms, o, I.targets, I.statistics.buffer(), I.empty_vao.id()};
 

@@ -36,8 +36,6 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-bool gl_can_draw(const Model& m) { return m.glyphs.empty(); }
-
 FloatImage depth_of(const render::GBuffer& g) { return {g.width, g.height, 1, g.depth}; }
 FloatImage normals_of(const render::GBuffer& g) {
   FloatImage f{g.width, g.height, 3, {}};
@@ -66,10 +64,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)}};
 
   std::string backend = a.backend;
-  if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";
+  if (backend == "auto") backend = "gl";
   if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
-  if (backend == "gl" && !gl_can_draw(model))
-    throw InvalidInput(fmt::format("{}: holds glyphs, which only --backend cpu draws so far", a.model));
   j["backend"] = backend;
   const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
   j["slim_offset"] = slim_offset;
@@ -142,7 +138,7 @@ void add_render(CLI::App& root, Commands& commands) {
   auto a = std::make_shared<RenderArgs>();
   app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles")->required();
   app->add_option("-o,--out", a->out, "Output PNG")->required();
-  app->add_option("--backend", a->backend, "auto (gl where it draws every kind, else cpu), gl, or cpu (the reference)")
+  app->add_option("--backend", a->backend, "auto (gl), gl, or cpu (the reference)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));

@@ -52,7 +52,7 @@ struct Frame {
   const CameraUniforms& camera;
   const RenderOptions& options;
   const FrameTargets& targets;
-  GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit fragment counts
+  GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit, glyph proxy and hit fragment counts
   GLuint empty_vao;
 };
 
