@@ -26,6 +26,7 @@ struct Row {
   double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
   double slim_waste = 0;
+  double glyph_waste = 0;  // glyph proxy fragments outside their glyph over those run
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
@@ -42,6 +43,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.culled = st.culled;
   row.fragments = st.fragments;
   row.slim_waste = st.slim_waste();
+  row.glyph_waste = st.glyph_waste();
   row.covered = std::count(g.coverage.begin(), g.coverage.end(), 1);
   o.statistics = false;
   r.draw(cam, o);  // warm-up
@@ -122,7 +124,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                             {"primitives", model.size()}, {"baseline_triangles", triangles},
                                             {"camera", camera_json(cam)}};
                         std::string csv = "configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
-                                          "covered_pixels,invocations_per_covered_pixel\n";
+                                          "covered_pixels,invocations_per_covered_pixel,glyph_proxy_waste\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
@@ -132,14 +134,17 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"culled", r.culled}, {"fragment_invocations", r.fragments},
                                                {"covered_pixels", r.covered},
                                                {"invocations_per_covered_pixel", r.invocations_per_covered()},
-                                               {"slim_splat_waste", r.slim_waste}});
-                          csv += fmt::format("{},{:.3f},{:.3f},{},{},{},{},{:.3f}\n", r.name, r.ms_median, r.ms_min,
-                                             r.primitives, r.culled, r.fragments, r.covered,
-                                             r.invocations_per_covered());
+                                               {"slim_splat_waste", r.slim_waste},
+                                               {"glyph_proxy_waste", r.glyph_waste}});
+                          csv += fmt::format("{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f}\n", r.name, r.ms_median,
+                                             r.ms_min, r.primitives, r.culled, r.fragments, r.covered,
+                                             r.invocations_per_covered(), r.glyph_waste);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
-                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px\n",
+                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
                                       r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
+                          if (model.glyphs.size()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
+                          std::printf("\n");
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
                         if (rows.size() > 2) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / rows[2].ms_median;

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "convert/molecule.h"
+#include "convert/molecule_glyphs.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/log.h"
@@ -46,8 +48,10 @@ FloatImage normals_of(const render::GBuffer& g) {
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   const auto [w, h] = parse_size(a.size);
   // A mesh file as MODEL draws just that mesh as flat triangles (the baseline of the benchmarks).
-  const bool model_is_mesh = detect_file_kind(a.model) == FileKind::mesh;
-  const Model model = model_is_mesh ? Model{} : read_model(a.model);
+  // A molecule file (PDB, mmCIF) is converted to glyphs on the fly (convert/molecule_glyphs.h).
+  const bool model_is_molecule = is_molecule_file(a.model);
+  const bool model_is_mesh = !model_is_molecule && detect_file_kind(a.model) == FileKind::mesh;
+  const Model model = model_is_mesh ? Model{} : model_is_molecule ? read_molecule_glyphs(a.model) : read_model(a.model);
   std::optional<PolygonMesh> mesh;
   if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
   if (model_is_mesh) {
