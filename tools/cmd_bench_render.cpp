@@ -1,7 +1,10 @@
 // quadrix bench render INPUT: frame time and fragment work of the GL renderer, side by side in
 // one run: quadrics with per-quadric culling, without it, and (for a quad mesh input) the same
-// mesh drawn as flat triangles by the same renderer ([Stoll06] Table 2; issue 3 benchmark).
+// mesh drawn as flat triangles by the same renderer ([Stoll06] Table 2; issue 3 benchmark); for
+// glyphs, the same glyphs tessellated finely enough that silhouettes stay within half a pixel.
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 
@@ -67,6 +70,75 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   return row;
 }
 
+// Glyphs as triangles whose silhouettes deviate at most `max_px` pixels from the true ones in
+// this view: per glyph n segments around with R(1 − cos(π/n)) ≤ max_px, R its projected radius
+// in pixels at its nearest point (UV spheres and ellipsoids with n/2 rings; cylinders with caps).
+PolygonMesh tessellate_glyphs(const Model& m, const Camera& cam, double max_px, std::size_t& triangles) {
+  PolygonMesh mesh;
+  const double focal = 0.5 * cam.height / std::tan(0.5 * cam.fov_y_deg * std::numbers::pi / 180.0);
+  const double pi = std::numbers::pi;
+  triangles = 0;
+  for (const Glyph& g : m.glyphs) {
+    Eigen::Matrix3d M;
+    if (g.kind == GlyphKind::sphere) M = g.radius * Eigen::Matrix3d::Identity();
+    else if (g.kind == GlyphKind::ellipsoid) M = g.axes;
+    else {
+      const Eigen::Vector3d a = g.axes.col(0), an = a.normalized();
+      const Eigen::Vector3d e1 = an.cross(std::abs(an.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).normalized();
+      M.col(0) = g.radius * e1, M.col(1) = g.radius * an.cross(e1), M.col(2) = a;
+    }
+    const double size = g.kind == GlyphKind::cylinder ? g.radius : M.colwise().norm().maxCoeff();
+    const double reach = M.colwise().norm().sum();
+    const double dist = std::max((g.centre - cam.eye).norm() - reach, cam.near_plane);
+    const double r_px = size * focal / dist;
+    int n = r_px <= max_px ? 6 : static_cast<int>(std::ceil(pi / std::acos(1.0 - max_px / r_px)));
+    n = std::clamp(n + (n & 1), 6, 512);
+    const int base = static_cast<int>(mesh.vertices.size());
+    if (g.kind != GlyphKind::cylinder) {
+      const int rings = n / 2;
+      mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(0, 0, -1));
+      for (int i = 1; i < rings; ++i) {
+        const double th = pi * i / rings - pi / 2;
+        for (int j = 0; j < n; ++j) {
+          const double ph = 2 * pi * j / n;
+          mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(std::cos(th) * std::cos(ph), std::cos(th) * std::sin(ph), std::sin(th)));
+        }
+      }
+      mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(0, 0, 1));
+      const int top = static_cast<int>(mesh.vertices.size()) - 1;
+      const auto v = [&](int ring, int j) { return base + 1 + (ring - 1) * n + (j % n); };
+      for (int j = 0; j < n; ++j) {
+        const int bottom_tri[3] = {base, v(1, j + 1), v(1, j)};
+        mesh.add_face(bottom_tri);
+        const int top_tri[3] = {top, v(rings - 1, j), v(rings - 1, j + 1)};
+        mesh.add_face(top_tri);
+        for (int i = 1; i + 1 < rings; ++i) {
+          const int quad[4] = {v(i, j), v(i, j + 1), v(i + 1, j + 1), v(i + 1, j)};
+          mesh.add_face(quad);
+        }
+      }
+      triangles += 2 * n * (rings - 1);
+    } else {
+      for (const double z : {-1.0, 1.0})
+        for (int j = 0; j < n; ++j) {
+          const double ph = 2 * pi * j / n;
+          mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(std::cos(ph), std::sin(ph), z));
+        }
+      std::vector<int> bottom(n), top(n);
+      for (int j = 0; j < n; ++j) {
+        const int quad[4] = {base + j, base + (j + 1) % n, base + n + (j + 1) % n, base + n + j};
+        mesh.add_face(quad);
+        bottom[n - 1 - j] = base + j;
+        top[j] = base + n + j;
+      }
+      mesh.add_face(bottom);
+      mesh.add_face(top);
+      triangles += 2 * n + 2 * (n - 2);
+    }
+  }
+  return mesh;
+}
+
 }  // namespace
 
 void add_bench_render(CLI::App& bench, Commands& commands) {
@@ -111,6 +183,14 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
                         }
                         std::size_t triangles = 0;
+                        if (!model.glyphs.empty() && !mesh && a->baseline.empty()) {
+                          // The baseline of glyphs: the same glyphs as triangles, silhouettes within 0.5 px.
+                          mesh = tessellate_glyphs(model, cam, 0.5, triangles);
+                          render::Renderer r(*context);
+                          r.set_mesh(*mesh);
+                          rows.push_back(measure("tessellated glyphs", r, cam, false, a->frames));
+                          mesh.reset();
+                        }
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);
                         if (mesh) {
                           render::Renderer r(*context);

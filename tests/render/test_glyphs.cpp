@@ -7,6 +7,10 @@
 #include <cstdio>
 #include <random>
 
+#include <filesystem>
+
+#include "convert/molecule.h"
+#include "convert/molecule_glyphs.h"
 #include "core/primitive.h"
 #include "core/reference.h"
 #include "core/synth.h"
@@ -274,4 +278,17 @@ TEST_F(GlGlyphs, StressHundredThousandGlyphsTinyAndHugeAcrossTheNearPlane) {
   EXPECT_GE(c.coverage_agreement, 0.995);
   EXPECT_LE(c.depth_p99, 1e-4);
   EXPECT_LE(c.normal_median_deg, 0.1);
+}
+
+TEST_F(GlGlyphs, MoleculesInEveryStyleMatchTheCpuReference) {
+  const auto path = std::filesystem::path(QUADRIX_DATASETS) / "molecules" / "4lfq.pdb";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+  const Molecule mol = read_molecule(path);
+  for (const auto style : {MoleculeStyle::spacefill, MoleculeStyle::balls_sticks, MoleculeStyle::licorice}) {
+    SCOPED_TRACE(int(style));
+    const Model m = molecule_glyphs(mol, {.style = style}).model;
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 256, .height = 256});
+    const Comparison c = run(m, cam, true);
+    expect_accurate(c, 4000);
+  }
 }
