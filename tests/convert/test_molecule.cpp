@@ -9,6 +9,7 @@
 #include <string>
 
 #include "convert/balls.h"
+#include "convert/ellipsoids_csv.h"
 #include "convert/molecule.h"
 #include "convert/molecule_glyphs.h"
 #include "core/error.h"
@@ -169,4 +170,35 @@ TEST_F(Molecules, ConvertGlyphsAndRenderAMoleculeFileOnTheCommandLine) {
   EXPECT_TRUE(fs::exists(png));
   r = test_support::run_command(QUADRIX_BINARY, "convert glyphs " + pdb.string() + " --style cartoon -o " + out.string());
   EXPECT_NE(r.code, 0);
+}
+
+TEST_F(Molecules, EllipsoidsFromCsv) {
+  const Model m = read_ellipsoids_csv(write("e.csv",
+                                            "cx,cy,cz,a1x,a1y,a1z,a2x,a2y,a2z,a3x,a3y,a3z,r,g,b\n"
+                                            "1,2,3, 2,0,0, 0,1,0, 0,0,0.5, 255,0,10\n"
+                                            "# a comment\n"
+                                            "0,0,0, 1,1,0, -1,1,0, 0,0,1\n"));
+  ASSERT_EQ(m.glyphs.size(), 2u);
+  EXPECT_EQ(m.glyphs[0].kind, GlyphKind::ellipsoid);
+  EXPECT_EQ(m.glyphs[0].centre, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(m.glyphs[0].axes.col(2), Eigen::Vector3d(0, 0, 0.5));
+  EXPECT_EQ(m.glyphs[0].colour, (std::optional<Rgb>(Rgb{255, 0, 10})));
+  EXPECT_FALSE(m.glyphs[1].colour);
+  const auto expect_format = [&](const std::string& text, const std::string& needle) {
+    try {
+      read_ellipsoids_csv(write("bad.csv", text));
+      ADD_FAILURE() << "no FormatError for " << text;
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_format("0,0,0, 1,0,0, 0,1,0\n", "bad.csv:1:");
+  expect_format("0,0,0, 1,0,0, 0,1,0, 0,0,x\n", "'x' is not a finite number");
+  expect_format("0,0,0, 1,0,0, 2,0,0, 0,0,1\n", "singular");
+  expect_format("0,0,0, 1,0,0, 0,1,0, 0,0,1, 256,0,0\n", "0..255");
+  const fs::path out = dir_ / "e.qxm";
+  const auto r = test_support::run_command(QUADRIX_BINARY, "convert glyphs --ellipsoids " + (dir_ / "e.csv").string() +
+                                                               " -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(read_model(out).glyphs.size(), 2u);
 }
