@@ -1,7 +1,7 @@
 #pragma once
 /// Glyphs ([Sigg06] §3, DESIGN §6 glyphs): spheres, ellipsoids and capped cylinders, one
-/// instanced octagon each around the exact projected outline, ray-cast in the glyph's parameter
-/// space into the G-buffer.
+/// instanced polygon each around the exact projected outline (octagons around ellipses,
+/// 12-gons around cylinders), ray-cast in the glyph's parameter space into the G-buffer.
 #include <span>
 
 #include "core/model.h"
@@ -21,8 +21,9 @@ public:
 
 private:
   gl::Program program_;
-  gl::Buffer glyphs_;
+  gl::Buffer glyphs_;      // spheres and ellipsoids first, then cylinders (ids keep the model's order)
   std::size_t count_ = 0;
+  std::size_t cylinders_ = 0;
 };
 
 }  // namespace quadrix::render

@@ -1,12 +1,12 @@
 // Glyph pass, vertex stage ([Sigg06] §3): spheres, ellipsoids and capped cylinders, each drawn
-// as one instance of an 8-vertex polygon around its exact projected outline.
+// as one instance of a convex polygon (u_sides vertices) around its exact projected outline.
 //
 // A sphere or an ellipsoid is x = C + M u, ‖u‖ ≤ 1; its outline on screen is the ellipse of the
 // projected dual quadric P Q* Pᵀ ([Sigg06] eq. 5, where the bounding box is read from the same
 // conic). The proxy is the regular octagon circumscribing the unit circle mapped onto that
 // ellipse: 5.2 % of its area lies outside ([Toledo04]; a square wastes 21.5 %). A capped
 // cylinder is the convex hull of its two end discs (degenerate ellipsoids): the proxy is the
-// octagon of 8 support lines of the two cap ellipses, aligned with the projected axis.
+// polygon of u_sides support lines of the two cap ellipses, the first along the projected axis.
 // Glyphs reaching the near plane, or around the eye, get the whole viewport; glyphs behind the
 // eye get nothing.
 //
@@ -33,6 +33,8 @@ uniform vec3 u_target_lo;
 uniform float u_target_distance;
 uniform float u_near;
 uniform vec2 u_viewport;
+uniform int u_sides;  // polygon vertices per glyph (one draw per kind group)
+uniform int u_first;  // index of this draw's first glyph
 
 out vec3 v_dir;     // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;  // ray point in the centre's view plane, relative to the centre (eye axes)
@@ -44,8 +46,8 @@ flat out uint v_kind;
 flat out uint v_colour;
 flat out int v_id;
 
-// Triangle strip order over a convex octagon's vertices 0..7.
-const int kStrip[8] = int[8](0, 1, 7, 2, 6, 3, 5, 4);
+// Triangle strip order over a convex polygon's vertices: 0, 1, N−1, 2, N−2, …
+int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 : n - i / 2; }
 
 // The projected ellipse (NDC) of x = C + M u (eye space), S = M Mᵀ: centre c and shape S2 =
 // L Lᵀ. From the dual conic D = P Q* Pᵀ normalised by −D₃₃ = C_z² − S_zz; the C Cᵀ terms of
@@ -66,7 +68,7 @@ void project_ellipse(vec3 C, mat3 S, out vec2 c, out mat2 S2) {
 float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 * n), 0.0)); }
 
 void main() {
-  Glyph g = glyphs[gl_InstanceID];
+  Glyph g = glyphs[u_first + gl_InstanceID];
   uint kind = uint(g.centre_hi.w);
   vec3 C = u_view_rot * camera_relative(g.centre_hi.xyz, g.centre_lo.xyz, u_target_hi, u_target_lo) +
            vec3(0.0, 0.0, -u_target_distance);
@@ -81,19 +83,20 @@ void main() {
   // Half a hundredth of a pixel of slack (NDC), so rounding never cuts a silhouette pixel.
   vec2 pad = 0.01 / u_viewport;
 
-  int k = kStrip[gl_VertexID];
+  int k = strip_vertex(gl_VertexID, u_sides);
+  float step = radians(360.0) / float(u_sides);
   vec2 corner;
   float ndc_z = -1.0;
   if (C.z - reach >= 0.0) {
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // wholly behind the eye
     return;
   } else if (z_near > -u_near * 1.0001) {
-    // Around the eye or reaching the near plane: the whole viewport (4 corners, some repeated).
-    const vec2 kFull[8] = vec2[8](vec2(-1, -1), vec2(1, -1), vec2(1, -1), vec2(1, 1), vec2(1, 1), vec2(-1, 1),
-                                  vec2(-1, 1), vec2(-1, -1));
-    corner = kFull[k];
+    // Around the eye or reaching the near plane: the whole viewport (each polygon vertex moved to
+    // the corner of its quadrant, so the polygon becomes the square).
+    float ang = step * (float(k) + 0.5);  // never a multiple of 90° (u_sides is a multiple of 4)
+    corner = vec2(cos(ang) > 0.0 ? 1.0 : -1.0, sin(ang) > 0.0 ? 1.0 : -1.0);
   } else {
-    float kc = 1.0 / cos(radians(22.5));  // circumradius of the octagon around the unit circle
+    float kc = 1.0 / cos(0.5 * step);  // circumradius of the polygon around the unit circle
     if (kind != 2u) {
       vec2 c;
       mat2 S2;
@@ -103,7 +106,7 @@ void main() {
       float l00 = sqrt(max(S2[0][0], 1e-30));
       float l10 = S2[0][1] / l00;
       float l11 = sqrt(max(S2[1][1] - l10 * l10, 0.0));
-      float ang = radians(45.0) * (float(k) + 0.5);
+      float ang = step * (float(k) + 0.5);
       vec2 u = kc * vec2(cos(ang), sin(ang));
       corner = c + vec2(l00 * u.x, l10 * u.x + l11 * u.y);
     } else {
@@ -116,8 +119,8 @@ void main() {
       vec2 d = c0 - c1;
       float len = length(d);
       d = len > 1e-12 ? d / len : vec2(1.0, 0.0);
-      // Lines nᵢ·x = hᵢ at 45° steps from the projected axis; vertex k joins lines k and k + 1.
-      float ang0 = radians(45.0) * float(k), ang1 = radians(45.0) * float(k + 1);
+      // Lines nᵢ·x = hᵢ at equal steps from the projected axis; vertex k joins lines k and k + 1.
+      float ang0 = step * float(k), ang1 = step * float(k + 1);
       mat2 R0 = mat2(cos(ang0), sin(ang0), -sin(ang0), cos(ang0));
       mat2 R1 = mat2(cos(ang1), sin(ang1), -sin(ang1), cos(ang1));
       vec2 n0 = R0 * d, n1 = R1 * d;
