@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "convert/pdb.h"
+#include "convert/balls.h"
 #include "core/model.h"
 
 namespace quadrix {

@@ -12,6 +12,7 @@
 #include "render/context.h"
 #include "render/gl/objects.h"
 #include "render/passes/frame.h"
+#include "render/passes/glyph_pass.h"
 #include "render/passes/mesh_pass.h"
 #include "render/passes/shade_pass.h"
 #include "render/passes/slim_pass.h"
@@ -33,6 +34,7 @@ struct Renderer::Impl {
   FrameStatistics statistics;
   gl::VertexArray empty_vao = gl::make_vertex_array();
   TetPass tet;
+  GlyphPass glyph;
   MeshPass mesh;
   SlimPass slim;
   ShadePass shade;
@@ -46,7 +48,8 @@ struct Renderer::Impl {
     double FrameStats::*ms;
   };
   // Passes that fill the G-buffer (inside the statistics queries), then those that make the image.
-  std::array<Step, 3> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+  std::array<Step, 4> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+                                     {&glyph, &FrameStats::ms_geometry},
                                      {&mesh, &FrameStats::ms_geometry},
                                      {&slim, &FrameStats::ms_slim}}};
   std::array<Step, 2> image_steps{{{&shade, &FrameStats::ms_shading}, {&slim_outline, &FrameStats::ms_shading}}};
@@ -60,9 +63,8 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
 Renderer::~Renderer() = default;
 
 void Renderer::set_model(const Model& model) {
-  if (!model.glyphs.empty())
-    throw InvalidInput("the GL renderer does not draw glyphs yet: use --backend cpu");
   impl_->tet.upload(model.tets);
+  impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model.slims);
   impl_->box = bounds(model);
   impl_->closed = surfaces_are_closed(model);
@@ -75,7 +77,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   const auto start = Clock::now();
   I.targets.resize(camera.width, camera.height);
   FrameStats st;
-  st.primitives = I.tet.count() + I.slim.count();
+  st.primitives = I.tet.count() + I.glyph.count() + I.slim.count();
   const CameraUniforms camera_uniforms(camera);
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).
   RenderOptions exact = o;

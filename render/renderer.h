@@ -41,11 +41,13 @@ struct RenderOptions {
   bool slim_tight_splats = true;
   /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
   bool slim_outlines = false;
+  /// Debug: glyphs write every fragment of their proxy polygon, flat, without ray casting.
+  bool glyph_proxies = false;
 };
 
 /// Measured figures of one frame.
 struct FrameStats {
-  std::uint64_t primitives = 0;        ///< tetrahedron patches and SLIM balls submitted
+  std::uint64_t primitives = 0;        ///< tetrahedron patches, SLIM balls and glyphs submitted
   std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
@@ -54,6 +56,12 @@ struct FrameStats {
   /// [Toledo04] Waste = (A_RTA − A_obj)/A_RTA of the SLIM splats (statistics only).
   double slim_waste() const {
     return slim_splat_fragments ? double(slim_splat_fragments - slim_hit_fragments) / slim_splat_fragments : 0.0;
+  }
+  std::uint64_t glyph_proxy_fragments = 0;  ///< glyph fragments run (proxy area past early-Z)
+  std::uint64_t glyph_hit_fragments = 0;    ///< of those, rays that met their glyph
+  /// [Toledo04] Waste of the glyph proxies, (run − hit)/run (statistics only).
+  double glyph_waste() const {
+    return glyph_proxy_fragments ? double(glyph_proxy_fragments - glyph_hit_fragments) / glyph_proxy_fragments : 0.0;
   }
   double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
   double ms_geometry = 0;              ///< G-buffer passes (time_passes only)

@@ -1,8 +1,11 @@
 // quadrix bench render INPUT: frame time and fragment work of the GL renderer, side by side in
 // one run: quadrics with per-quadric culling, without it, SLIM with ball splats (the baseline of
-// the tight ones), and (for a quad mesh input) the same
-// mesh drawn as flat triangles by the same renderer ([Stoll06] Table 2; issue 3 benchmark).
+// the tight ones), and (for a quad mesh input) the same mesh drawn as flat triangles by the same
+// renderer ([Stoll06] Table 2); for glyphs, the same glyphs tessellated finely enough that
+// silhouettes stay within half a pixel.
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 
@@ -27,6 +30,7 @@ struct Row {
   double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
   double slim_waste = 0;
+  double glyph_waste = 0;  // glyph proxy fragments outside their glyph over those run
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
@@ -44,6 +48,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.culled = st.culled;
   row.fragments = st.fragments;
   row.slim_waste = st.slim_waste();
+  row.glyph_waste = st.glyph_waste();
   row.covered = std::count(g.coverage.begin(), g.coverage.end(), 1);
   o.statistics = false;
   r.draw(cam, o);  // warm-up
@@ -65,6 +70,75 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   };
   row.ms_clear = med(c), row.ms_geometry = med(geo), row.ms_slim = med(sl), row.ms_shading = med(s);
   return row;
+}
+
+// Glyphs as triangles whose silhouettes deviate at most `max_px` pixels from the true ones in
+// this view: per glyph n segments around with R(1 − cos(π/n)) ≤ max_px, R its projected radius
+// in pixels at its nearest point (UV spheres and ellipsoids with n/2 rings; cylinders with caps).
+PolygonMesh tessellate_glyphs(const Model& m, const Camera& cam, double max_px, std::size_t& triangles) {
+  PolygonMesh mesh;
+  const double focal = 0.5 * cam.height / std::tan(0.5 * cam.fov_y_deg * std::numbers::pi / 180.0);
+  const double pi = std::numbers::pi;
+  triangles = 0;
+  for (const Glyph& g : m.glyphs) {
+    Eigen::Matrix3d M;
+    if (g.kind == GlyphKind::sphere) M = g.radius * Eigen::Matrix3d::Identity();
+    else if (g.kind == GlyphKind::ellipsoid) M = g.axes;
+    else {
+      const Eigen::Vector3d a = g.axes.col(0), an = a.normalized();
+      const Eigen::Vector3d e1 = an.cross(std::abs(an.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY()).normalized();
+      M.col(0) = g.radius * e1, M.col(1) = g.radius * an.cross(e1), M.col(2) = a;
+    }
+    const double size = g.kind == GlyphKind::cylinder ? g.radius : M.colwise().norm().maxCoeff();
+    const double reach = M.colwise().norm().sum();
+    const double dist = std::max((g.centre - cam.eye).norm() - reach, cam.near_plane);
+    const double r_px = size * focal / dist;
+    int n = r_px <= max_px ? 6 : static_cast<int>(std::ceil(pi / std::acos(1.0 - max_px / r_px)));
+    n = std::clamp(n + (n & 1), 6, 512);
+    const int base = static_cast<int>(mesh.vertices.size());
+    if (g.kind != GlyphKind::cylinder) {
+      const int rings = n / 2;
+      mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(0, 0, -1));
+      for (int i = 1; i < rings; ++i) {
+        const double th = pi * i / rings - pi / 2;
+        for (int j = 0; j < n; ++j) {
+          const double ph = 2 * pi * j / n;
+          mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(std::cos(th) * std::cos(ph), std::cos(th) * std::sin(ph), std::sin(th)));
+        }
+      }
+      mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(0, 0, 1));
+      const int top = static_cast<int>(mesh.vertices.size()) - 1;
+      const auto v = [&](int ring, int j) { return base + 1 + (ring - 1) * n + (j % n); };
+      for (int j = 0; j < n; ++j) {
+        const int bottom_tri[3] = {base, v(1, j + 1), v(1, j)};
+        mesh.add_face(bottom_tri);
+        const int top_tri[3] = {top, v(rings - 1, j), v(rings - 1, j + 1)};
+        mesh.add_face(top_tri);
+        for (int i = 1; i + 1 < rings; ++i) {
+          const int quad[4] = {v(i, j), v(i, j + 1), v(i + 1, j + 1), v(i + 1, j)};
+          mesh.add_face(quad);
+        }
+      }
+      triangles += 2 * n * (rings - 1);
+    } else {
+      for (const double z : {-1.0, 1.0})
+        for (int j = 0; j < n; ++j) {
+          const double ph = 2 * pi * j / n;
+          mesh.vertices.push_back(g.centre + M * Eigen::Vector3d(std::cos(ph), std::sin(ph), z));
+        }
+      std::vector<int> bottom(n), top(n);
+      for (int j = 0; j < n; ++j) {
+        const int quad[4] = {base + j, base + (j + 1) % n, base + n + (j + 1) % n, base + n + j};
+        mesh.add_face(quad);
+        bottom[n - 1 - j] = base + j;
+        top[j] = base + n + j;
+      }
+      mesh.add_face(bottom);
+      mesh.add_face(top);
+      triangles += 2 * n + 2 * (n - 2);
+    }
+  }
+  return mesh;
 }
 
 }  // namespace
@@ -114,6 +188,14 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                    slim_offset_of(model), false));
                         }
                         std::size_t triangles = 0;
+                        if (!model.glyphs.empty() && !mesh && a->baseline.empty()) {
+                          // The baseline of glyphs: the same glyphs as triangles, silhouettes within 0.5 px.
+                          mesh = tessellate_glyphs(model, cam, 0.5, triangles);
+                          render::Renderer r(*context);
+                          r.set_mesh(*mesh);
+                          rows.push_back(measure("tessellated glyphs", r, cam, false, a->frames));
+                          mesh.reset();
+                        }
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);
                         if (mesh) {
                           render::Renderer r(*context);
@@ -128,7 +210,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                             {"camera", camera_json(cam)}};
                         const std::string model_name = std::filesystem::path(a->input).stem().string();
                         std::string csv = "model,configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
-                                          "covered_pixels,invocations_per_covered_pixel,slim_splat_waste\n";
+                                          "covered_pixels,invocations_per_covered_pixel,slim_splat_waste,glyph_proxy_waste\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
@@ -138,15 +220,18 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"culled", r.culled}, {"fragment_invocations", r.fragments},
                                                {"covered_pixels", r.covered},
                                                {"invocations_per_covered_pixel", r.invocations_per_covered()},
-                                               {"slim_splat_waste", r.slim_waste}});
-                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f}\n", model_name, r.name,
+                                               {"slim_splat_waste", r.slim_waste},
+                                               {"glyph_proxy_waste", r.glyph_waste}});
+                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f}\n", model_name, r.name,
                                              r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments, r.covered,
-                                             r.invocations_per_covered(), r.slim_waste);
+                                             r.invocations_per_covered(), r.slim_waste, r.glyph_waste);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
-                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px  waste %.1f %%\n",
+                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
-                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered(),
-                                      100.0 * r.slim_waste);
+                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
+                          if (!model.slims.empty()) std::printf("  waste %.1f %%", 100.0 * r.slim_waste);
+                          if (!model.glyphs.empty()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
+                          std::printf("\n");
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
                         const auto row_named = [&](std::string_view n) -> const Row* {

@@ -3,7 +3,7 @@
 // add_convert_skin (called from tools/cmd_convert.cpp).
 #include <fmt/format.h>
 
-#include "convert/pdb.h"
+#include "convert/balls.h"
 #include "convert/skin.h"
 #include "core/culling.h"
 #include "core/log.h"

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "convert/molecule.h"
+#include "convert/molecule_glyphs.h"
 #include "core/culling.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -37,8 +39,6 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-bool gl_can_draw(const Model& m) { return m.glyphs.empty(); }
-
 FloatImage depth_of(const render::GBuffer& g) { return {g.width, g.height, 1, g.depth}; }
 FloatImage normals_of(const render::GBuffer& g) {
   FloatImage f{g.width, g.height, 3, {}};
@@ -49,8 +49,10 @@ FloatImage normals_of(const render::GBuffer& g) {
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   const auto [w, h] = parse_size(a.size);
   // A mesh file as MODEL draws just that mesh as flat triangles (the baseline of the benchmarks).
-  const bool model_is_mesh = detect_file_kind(a.model) == FileKind::mesh;
-  const Model model = model_is_mesh ? Model{} : read_model(a.model);
+  // A molecule file (PDB, mmCIF) is converted to glyphs on the fly (convert/molecule_glyphs.h).
+  const bool model_is_molecule = is_molecule_file(a.model);
+  const bool model_is_mesh = !model_is_molecule && detect_file_kind(a.model) == FileKind::mesh;
+  const Model model = model_is_mesh ? Model{} : model_is_molecule ? read_molecule_glyphs(a.model) : read_model(a.model);
   std::optional<PolygonMesh> mesh;
   if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
   if (model_is_mesh) {
@@ -67,10 +69,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)}};
 
   std::string backend = a.backend;
-  if (backend == "auto") backend = gl_can_draw(model) ? "gl" : "cpu";
+  if (backend == "auto") backend = "gl";
   if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
-  if (backend == "gl" && !gl_can_draw(model))
-    throw InvalidInput(fmt::format("{}: holds glyphs, which only --backend cpu draws so far", a.model));
   j["backend"] = backend;
   const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
   j["slim_offset"] = slim_offset;
@@ -145,7 +145,7 @@ void add_render(CLI::App& root, Commands& commands) {
   auto a = std::make_shared<RenderArgs>();
   app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles")->required();
   app->add_option("-o,--out", a->out, "Output PNG")->required();
-  app->add_option("--backend", a->backend, "auto (gl where it draws every kind, else cpu), gl, or cpu (the reference)")
+  app->add_option("--backend", a->backend, "auto (gl), gl, or cpu (the reference)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));

@@ -9,6 +9,8 @@
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
 
+#include "convert/molecule.h"
+#include "convert/molecule_glyphs.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/log.h"
@@ -70,7 +72,8 @@ void add_view(CLI::App& root, Commands& commands) {
   app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const auto [w, h] = parse_size(a->size);
-                        const Model model = read_model(a->model);
+                        const Model model =
+                            is_molecule_file(a->model) ? read_molecule_glyphs(a->model) : read_model(a->model);
                         std::optional<PolygonMesh> mesh;
                         if (!a->mesh.empty()) mesh = read_mesh(a->mesh);
                         ViewState st;

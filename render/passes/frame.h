@@ -54,7 +54,7 @@ struct Frame {
   /// on only where it cannot change the image (core/culling.h).
   const RenderOptions& options;
   const FrameTargets& targets;
-  GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit fragment counts
+  GLuint stats_buffer;  ///< SSBO binding 1: culled, -, splat and hit, glyph proxy and hit fragment counts
   GLuint empty_vao;
   /// Per-quadric SLIM culling as the caller asked: always exact (SLIM patches are one-sided).
   bool slim_cull = true;

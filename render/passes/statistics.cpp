@@ -7,6 +7,10 @@
 #endif
 
 namespace quadrix::render {
+namespace {
+// culled, drawn, SLIM splat and hit fragments, glyph proxy and hit fragments.
+constexpr int kCounters = 6;
+}  // namespace
 
 bool has_pipeline_statistics() {
   GLint n = 0;
@@ -19,7 +23,7 @@ bool has_pipeline_statistics() {
 }
 
 FrameStatistics::FrameStatistics()
-    : counters_(gl::make_buffer(4 * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT)),
+    : counters_(gl::make_buffer(kCounters * sizeof(GLuint), nullptr, GL_DYNAMIC_STORAGE_BIT | GL_MAP_READ_BIT)),
       samples_(gl::make_query(GL_SAMPLES_PASSED)),
       has_invocations_(has_pipeline_statistics()) {
   if (has_invocations_) invocations_ = gl::make_query(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
@@ -28,7 +32,7 @@ FrameStatistics::FrameStatistics()
 void FrameStatistics::begin() {
   glBeginQuery(GL_SAMPLES_PASSED, samples_.id());
   if (has_invocations_) glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, invocations_.id());
-  const GLuint z[4] = {0, 0, 0, 0};
+  const GLuint z[kCounters] = {};
   glNamedBufferSubData(counters_.id(), 0, sizeof(z), z);
 }
 
@@ -47,11 +51,13 @@ void FrameStatistics::read(FrameStats& st) const {
   } else {
     st.fragments = static_cast<std::uint64_t>(-1);
   }
-  GLuint counts[4] = {0, 0, 0, 0};
+  GLuint counts[kCounters] = {};
   glGetNamedBufferSubData(counters_.id(), 0, sizeof(counts), counts);
   st.culled = counts[0];
   st.slim_splat_fragments = counts[2];
   st.slim_hit_fragments = counts[3];
+  st.glyph_proxy_fragments = counts[4];
+  st.glyph_hit_fragments = counts[5];
 }
 
 }  // namespace quadrix::render

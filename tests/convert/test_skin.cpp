@@ -17,7 +17,7 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
-#include "convert/pdb.h"
+#include "convert/balls.h"
 #include "convert/skin.h"
 #include "convert/tetrahedralize.h"
 #include "core/camera.h"
@@ -79,7 +79,7 @@ TEST_F(BallIo, MalformedRecordsAreFormatErrorsWithLineNumbers) {
   expect_format("a.pdb", "HEADER x\n" + ok + "ATOM      2  CA  GLY D   1      42.7x4 -10.253  18.851  1.00 41.67           C\n",
                 "a.pdb:3: x (columns 31-38)");
   expect_format("b.pdb", ok + "ATOM      2  CA  GLY D   1      42.704 -10.253\n", "b.pdb:2: ATOM   record has");
-  expect_format("c.pdb", ok + ok, "lines 1 and 2: duplicate ball");
+  expect_format("c.pdb", ok + ok, "atoms with serial numbers 1 and 1: duplicate ball");
   expect_format("d.pdb", "HEADER nothing\n", "no atoms");
   expect_format("e.cin", "0 0 0 1\n1 0 0 0\n", "e.cin:2: weight (squared radius) 0 must be > 0");
   expect_format("f.xyzr", "0 0 0 1\n# c\n1 0 0 -2\n", "f.xyzr:3: radius -2 must be > 0");

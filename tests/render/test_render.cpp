@@ -10,7 +10,7 @@
 
 #include <filesystem>
 
-#include "convert/pdb.h"
+#include "convert/balls.h"
 #include "convert/quads.h"
 #include "convert/skin.h"
 #include "convert/volume.h"

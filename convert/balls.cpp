@@ -1,5 +1,5 @@
-// PDB, .cin and .xyzr ball sets with element radii and CPK colours.
-#include "convert/pdb.h"
+// Ball sets with element radii and CPK colours: molecules (read_molecule), .cin and .xyzr.
+#include "convert/balls.h"
 
 #include <algorithm>
 #include <array>
@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include "convert/molecule.h"
 #include "core/error.h"
 #include "core/log.h"
 
@@ -46,80 +47,24 @@ const Element* find_element(std::string_view e) {
   return nullptr;
 }
 
-std::string upper_trim(std::string_view s) {
-  std::string out;
-  for (const char c : s)
-    if (!std::isspace(static_cast<unsigned char>(c))) out.push_back(static_cast<char>(std::toupper(static_cast<unsigned char>(c))));
-  return out;
-}
-
-double parse_field(std::string_view line, std::size_t first, std::size_t width, const std::string& where,
-                   const char* name) {
-  const std::string text = upper_trim(line.substr(first, width));
-  double v = 0;
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
-    throw FormatError(fmt::format("{}: {} (columns {}-{}) '{}' is not a number", where, name, first + 1,
-                                  first + width, line.substr(first, width)));
-  return v;
-}
-
-// Element of a PDB atom: columns 77-78, else from the atom name (columns 13-16).
-std::string pdb_element(std::string_view line) {
-  if (line.size() >= 78) {
-    std::string e = upper_trim(line.substr(76, 2));
-    e.erase(std::remove_if(e.begin(), e.end(), [](char c) { return !std::isalpha(static_cast<unsigned char>(c)); }),
-            e.end());
-    if (!e.empty()) return e;
-  }
-  const std::string name(line.substr(12, 4));
-  // Column 13 blank (or a digit): a one-letter element in column 14; otherwise two letters.
-  if (name[0] == ' ' || std::isdigit(static_cast<unsigned char>(name[0]))) {
-    return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(name[1]))));
-  }
-  std::string two = upper_trim(name.substr(0, 2));
-  if (find_element(two)) return two;
-  return std::string(1, static_cast<char>(std::toupper(static_cast<unsigned char>(name[0]))));
-}
-
-std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::vector<int>& lines) {
-  std::ifstream in(path);
-  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
+std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::vector<int>& serials) {
+  const Molecule mol = read_molecule(path, {.water = o.water});
   std::vector<Ball> balls;
+  balls.reserve(mol.atoms.size());
   std::map<std::string, int> unknown;
-  int line_no = 0;
-  std::size_t waters = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.rfind("ENDMDL", 0) == 0) break;  // first model only
-    if (line.rfind("ATOM  ", 0) != 0 && line.rfind("HETATM", 0) != 0) continue;
-    const std::string where = fmt::format("{}:{}", path.string(), line_no);
-    if (line.size() < 54)
-      throw FormatError(fmt::format("{}: {} record has {} columns, coordinates need 54", where, line.substr(0, 6),
-                                    line.size()));
-    const char alt = line[16];
-    if (alt != ' ' && alt != 'A') continue;
-    if (!o.water) {
-      const std::string residue = upper_trim(line.substr(17, 3));
-      if (residue == "HOH" || residue == "WAT" || residue == "DOD" || residue == "H2O") {
-        ++waters;
-        continue;
-      }
-    }
+  for (const Atom& a : mol.atoms) {
     Ball b;
-    b.centre = {parse_field(line, 30, 8, where, "x"), parse_field(line, 38, 8, where, "y"),
-                parse_field(line, 46, 8, where, "z")};
-    b.element = pdb_element(line);
+    b.centre = a.position;
+    b.element = a.element;
     if (!find_element(b.element)) ++unknown[b.element];
     b.radius = element_radius(b.element, o.radii) * o.radius_scale;
     b.colour = cpk_colour(b.element);
     balls.push_back(std::move(b));
-    lines.push_back(line_no);
+    serials.push_back(a.serial);
   }
   for (const auto& [e, n] : unknown)
     log::warn("{}: {} atoms of unknown element '{}' get the default radius", path.string(), n, e);
-  if (waters > 0) log::info("{}: {} water atoms left out", path.string(), waters);
+  if (mol.waters_left_out > 0) log::info("{}: {} water atoms left out", path.string(), mol.waters_left_out);
   return balls;
 }
 
@@ -214,15 +159,17 @@ std::vector<Ball> read_balls(const fs::path& path, const BallReadOptions& option
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (!(options.radius_scale > 0) || !std::isfinite(options.radius_scale))
     throw InvalidInput(fmt::format("radius scale {} must be finite and > 0", options.radius_scale));
-  std::vector<int> lines;
+  std::vector<int> lines;  // per ball: the line (.cin, .xyzr) or the atom serial number (molecules)
   std::vector<Ball> balls;
-  if (ext == ".pdb" || ext == ".ent") balls = read_pdb(path, options, lines);
+  const bool molecule = is_molecule_file(path);
+  if (molecule) balls = read_pdb(path, options, lines);
   else if (ext == ".cin") balls = read_columns(path, options, true, lines);
   else if (ext == ".xyzr") balls = read_columns(path, options, false, lines);
-  else throw InvalidInput(fmt::format("'{}': unknown ball file type (.pdb, .ent, .cin, .xyzr)", path.string()));
+  else throw InvalidInput(fmt::format("'{}': unknown ball file type (.pdb, .ent, .cif, .mmcif, .cin, .xyzr)", path.string()));
   if (balls.empty()) throw FormatError(fmt::format("{}: no atoms or balls found", path.string()));
   if (const auto d = find_duplicate(balls, 1e-6 * extent(balls)))
-    throw FormatError(fmt::format("{}: lines {} and {}: duplicate ball at ({}, {}, {})", path.string(), lines[d->first],
+    throw FormatError(fmt::format("{}: {} {} and {}: duplicate ball at ({}, {}, {})", path.string(),
+                                  molecule ? "atoms with serial numbers" : "lines", lines[d->first],
                                   lines[d->second], balls[d->first].centre.x(), balls[d->first].centre.y(),
                                   balls[d->first].centre.z()));
   return balls;

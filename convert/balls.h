@@ -1,7 +1,7 @@
 #pragma once
-/// Ball sets for skin surfaces: PDB atoms (ATOM/HETATM fixed columns) with element radii and CPK
-/// colours, CGAL weighted-point files (`.cin`: x y z w, w the squared radius) and `.xyzr`
-/// (x y z r). Coordinates in the file's units (Å for PDB).
+/// Ball sets for skin surfaces: the atoms of PDB and mmCIF files (convert/molecule.h) with element
+/// radii and CPK colours, CGAL weighted-point files (`.cin`: x y z w, w the squared radius) and
+/// `.xyzr` (x y z r). Coordinates in the file's units (Å for molecules).
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -31,9 +31,9 @@ enum class RadiusTable {
 RadiusTable parse_radius_table(std::string_view name);
 
 struct BallReadOptions {
-  RadiusTable radii = RadiusTable::vdw;  ///< PDB only
+  RadiusTable radii = RadiusTable::vdw;  ///< molecules only
   double radius_scale = 1.0;             ///< multiplies every radius (PDB, .cin, .xyzr)
-  bool water = true;                     ///< PDB: keep water molecules (residues HOH, WAT, DOD, H2O)
+  bool water = true;                     ///< molecules: keep water molecules (residues HOH, WAT, DOD, H2O)
 };
 
 /// Radius and CPK colour of an element (upper-case symbol); unknown elements get the table's
@@ -41,10 +41,12 @@ struct BallReadOptions {
 double element_radius(std::string_view element, RadiusTable table);
 Rgb cpk_colour(std::string_view element);
 
-/// Reads `.pdb`/`.ent` (first model; altLoc blank or 'A'), `.cin` or `.xyzr` by extension.
+/// Reads a molecule (read_molecule: `.pdb`, `.ent`, `.cif`, `.mmcif`, optionally gzipped; first
+/// model, first alternate location), `.cin` or `.xyzr` by extension.
 /// \throws FormatError naming the file and line for a malformed record (short line, coordinates
 ///         that are not numbers, a non-finite value), a zero or negative radius or weight, and for
-///         duplicate balls (two centres closer than 1e-6 of the set's extent; both lines named);
+///         duplicate balls (two centres closer than 1e-6 of the set's extent; both lines, or both
+///         atoms' serial numbers, named);
 ///         InvalidInput for an empty set or an unknown extension; IoError when unreadable.
 std::vector<Ball> read_balls(const std::filesystem::path& path, const BallReadOptions& options = {});
 

@@ -1,0 +1,58 @@
+#include "convert/ellipsoids_csv.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "core/error.h"
+#include "core/io/file.h"
+#include "core/io/text_reader.h"
+
+namespace quadrix {
+
+Model read_ellipsoids_csv(const std::filesystem::path& path) {
+  std::string text = io::read_file(path);
+  std::replace(text.begin(), text.end(), ',', ' ');  // commas as blanks: columns keep their place
+  io::TextReader in(text, path);
+  Model m;
+  bool first = true;
+  while (in.next_line()) {
+    std::string_view tok = in.token();
+    double v = 0;
+    if (first && !io::TextReader::parse(tok, v)) {  // a header row
+      first = false;
+      continue;
+    }
+    first = false;
+    double x[15];
+    int count = 0;
+    const std::size_t row = m.glyphs.size();
+    for (; !tok.empty() && count < 15; tok = in.token(), ++count) {
+      if (!io::TextReader::parse(tok, x[count]) || !std::isfinite(x[count]))
+        in.fail("ellipsoid {} value {}: '{}' is not a finite number", row, count + 1, io::echo(tok));
+    }
+    if (!tok.empty()) in.fail("ellipsoid {}: more than 15 values", row);
+    if (count != 12 && count != 15)
+      in.fail("ellipsoid {}: {} values; expected 12 (centre, three axes) or 15 (and r, g, b)", row, count);
+    Glyph g;
+    g.kind = GlyphKind::ellipsoid;
+    g.centre = {x[0], x[1], x[2]};
+    for (int k = 0; k < 3; ++k) g.axes.col(k) = Eigen::Vector3d(x[3 + 3 * k], x[4 + 3 * k], x[5 + 3 * k]);
+    if (!(std::abs(g.axes.determinant()) > 0)) in.fail("ellipsoid {}: its axes are singular (no volume)", row);
+    if (count == 15) {
+      Rgb c;
+      for (int k = 0; k < 3; ++k) {
+        if (!(x[12 + k] >= 0 && x[12 + k] <= 255 && x[12 + k] == std::floor(x[12 + k])))
+          in.fail("ellipsoid {}: colour {} is not an integer in 0..255", row, x[12 + k]);
+        c[k] = static_cast<std::uint8_t>(x[12 + k]);
+      }
+      g.colour = c;
+    }
+    m.glyphs.push_back(g);
+  }
+  if (m.glyphs.empty()) throw FormatError(path.string() + ": no ellipsoids");
+  return m;
+}
+
+}  // namespace quadrix

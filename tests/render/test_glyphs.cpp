@@ -1,0 +1,294 @@
+// The GL glyph pass ([Sigg06]) against the CPU reference: coverage, depth and normals for every
+// glyph kind, random views, stress scenes, and the property that no glyph pixel lies outside
+// its proxy polygon.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <filesystem>
+
+#include "convert/molecule.h"
+#include "convert/molecule_glyphs.h"
+#include "core/primitive.h"
+#include "core/reference.h"
+#include "core/synth.h"
+#include "render/context.h"
+#include "render/renderer.h"
+#include "tests/render/gl_compare.h"
+
+using namespace quadrix;
+using quadrix::testing_gl::Comparison;
+
+namespace {
+
+class GlGlyphs : public ::testing::Test {
+protected:
+  void SetUp() override {
+    try {
+      context_ = render::create_context("auto");
+    } catch (const std::exception& e) {
+      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
+    }
+    renderer_ = std::make_unique<render::Renderer>(*context_);
+  }
+  render::GBuffer draw(const Model& m, const Camera& cam, render::RenderOptions o = {}) {
+    renderer_->set_model(m);
+    last_stats_ = renderer_->draw(cam, o);
+    return renderer_->read_gbuffer();
+  }
+  static ReferenceImage reference(const Model& m, const Camera& cam, bool cull = true) {
+    const ReferenceScene scene(m);
+    ReferenceRenderOptions ro;
+    ro.trace.cull_backfaces = cull;
+    return render_reference(scene, cam, ro);
+  }
+  Comparison run(const Model& m, const Camera& cam, bool cull = true) {
+    render::RenderOptions o;
+    o.cull = cull;
+    const Comparison c = testing_gl::compare(reference(m, cam, cull), draw(m, cam, o));
+    std::printf("coverage %.5f depth p99 %.3g normal median %.4f p99 %.3f deg (%d covered)\n", c.coverage_agreement,
+                c.depth_p99, c.normal_median_deg, c.normal_p99_deg, c.covered);
+    return c;
+  }
+  std::unique_ptr<render::GlContext> context_;
+  std::unique_ptr<render::Renderer> renderer_;
+  render::FrameStats last_stats_;
+};
+
+void expect_accurate(const Comparison& c, int min_covered) {
+  EXPECT_GT(c.covered, min_covered);
+  EXPECT_GE(c.coverage_agreement, 0.999);
+  EXPECT_LE(c.depth_p99, 1e-5);
+  EXPECT_LE(c.normal_median_deg, 0.05);
+  EXPECT_LE(c.normal_p99_deg, 0.5);
+}
+
+Eigen::Matrix3d random_rotation(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+}
+
+// A random glyph of `kind` at the origin, sizes about 1.
+Glyph random_glyph(GlyphKind kind, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Glyph g;
+  g.kind = kind;
+  g.colour = Rgb{200, 100, 50};
+  const Eigen::Matrix3d R = random_rotation(rng);
+  switch (kind) {
+    case GlyphKind::sphere: g.radius = 0.5 + u(rng); break;
+    case GlyphKind::ellipsoid:
+      g.axes = R * Eigen::Vector3d(0.2 + u(rng), 0.2 + u(rng), 0.05 + u(rng)).asDiagonal();
+      break;
+    case GlyphKind::cylinder:
+      g.radius = 0.1 + 0.6 * u(rng);
+      g.axes = Eigen::Matrix3d::Zero();
+      g.axes.col(0) = R.col(0) * (0.05 + 1.5 * u(rng));
+      break;
+  }
+  return g;
+}
+
+// A camera looking at the origin from a random direction and distance.
+Camera random_view(std::mt19937_64& rng, double min_distance, double max_distance, int size) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Camera cam;
+  cam.eye = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * (min_distance + (max_distance - min_distance) * u(rng));
+  // Look a little off the glyph so it lands anywhere in the image, perspective included.
+  cam.target = Eigen::Vector3d(n(rng), n(rng), n(rng)) * 0.5;
+  cam.up = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  cam.fov_y_deg = 30 + 60 * u(rng);
+  cam.width = size;
+  cam.height = size * 3 / 4;
+  cam.near_plane = 0.01;
+  cam.far_plane = 100;
+  return cam;
+}
+
+}  // namespace
+
+TEST_F(GlGlyphs, EachKindMatchesTheCpuReference) {
+  for (const char* kind : {"sphere", "ellipsoid", "cylinder"})
+    for (const bool cull : {true, false})
+      for (const double az : {0.0, 50.0, 160.0}) {
+        SCOPED_TRACE(testing::Message() << kind << " cull=" << cull << " azimuth=" << az);
+        const Model m = synth_model(kind);
+        const Camera cam =
+            frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 35, .width = 200, .height = 160});
+        const Comparison c = run(m, cam, cull);
+        expect_accurate(c, 4000);
+      }
+}
+
+TEST_F(GlGlyphs, RandomViewsOfRandomGlyphs) {
+  std::mt19937_64 rng(7);
+  int covered = 0;
+  for (int i = 0; i < 24; ++i) {
+    const auto kind = static_cast<GlyphKind>(i % 3);
+    Model m;
+    m.glyphs.push_back(random_glyph(kind, rng));
+    const Camera cam = random_view(rng, 3.0, 8.0, 160);
+    SCOPED_TRACE(testing::Message() << "view " << i << " kind " << int(kind));
+    const Comparison c = run(m, cam, true);
+    expect_accurate(c, 0);
+    covered += c.covered;
+  }
+  EXPECT_GT(covered, 10000);
+}
+
+TEST_F(GlGlyphs, MoleculeLikeCloudFromSeveralViews) {
+  const Model m = synth_model("glyphs", {.count = 400, .seed = 3});
+  for (const double az : {10.0, 100.0, 250.0}) {
+    SCOPED_TRACE(az);
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 20, .width = 240, .height = 200});
+    const Comparison c = run(m, cam, true);
+    expect_accurate(c, 5000);
+  }
+}
+
+TEST_F(GlGlyphs, IdsNameTheNearestGlyph) {
+  const Model m = synth_model("glyphs", {.count = 300, .seed = 5});
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 40, .elevation_deg = 30, .width = 200, .height = 200});
+  const auto gl = draw(m, cam);
+  const auto ref = reference(m, cam);
+  int both = 0, same = 0;
+  for (std::size_t i = 0; i < ref.primitive.size(); ++i) {
+    if (ref.primitive[i] < 0 || gl.primitive[i] < 0) continue;
+    ++both;
+    same += ref.primitive[i] == gl.primitive[i];
+    EXPECT_EQ(primitive_kind(gl.primitive[i]), PrimitiveKind::glyph);
+  }
+  EXPECT_GT(both, 5000);
+  EXPECT_GE(double(same) / both, 0.99);  // the rest: ties where two glyphs meet
+}
+
+TEST_F(GlGlyphs, NoGlyphPixelLiesOutsideItsProxy) {
+  // Property over random glyphs and views, near ones included: every pixel the reference covers
+  // is a fragment of the proxy (drawn flat with glyph_proxies). The proxies' waste is printed.
+  std::mt19937_64 rng(11);
+  render::RenderOptions proxies;
+  proxies.glyph_proxies = true;
+  proxies.cull = false;
+  double proxy_area[3] = {0, 0, 0}, glyph_area[3] = {0, 0, 0};
+  for (int i = 0; i < 90; ++i) {
+    const auto kind = static_cast<GlyphKind>(i % 3);
+    Model m;
+    m.glyphs.push_back(random_glyph(kind, rng));
+    // Every sixth view close enough to reach the near plane or to stand inside the glyph.
+    const Camera cam = i % 6 == 5 ? random_view(rng, 0.3, 1.5, 96) : random_view(rng, 2.0, 12.0, 96);
+    const auto proxy = draw(m, cam, proxies);
+    const auto ref = reference(m, cam, false);
+    int outside = 0, in_proxy = 0, in_glyph = 0;
+    for (std::size_t p = 0; p < ref.coverage.size(); ++p) {
+      outside += ref.coverage[p] && !proxy.coverage[p];
+      in_proxy += proxy.coverage[p];
+      in_glyph += ref.coverage[p];
+    }
+    EXPECT_EQ(outside, 0) << "view " << i << " kind " << int(kind);
+    if (i % 6 != 5 && in_glyph > 200 && in_proxy < int(ref.coverage.size())) {
+      proxy_area[int(kind)] += in_proxy;
+      glyph_area[int(kind)] += in_glyph;
+    }
+  }
+  const char* names[] = {"sphere", "ellipsoid", "cylinder"};
+  for (int k = 0; k < 3; ++k) {
+    const double waste = 1.0 - glyph_area[k] / proxy_area[k];
+    std::printf("%s proxy waste %.1f %% (area of the proxies outside the glyphs)\n", names[k], 100 * waste);
+    EXPECT_GE(waste, 0.0);
+    // A circumscribed octagon leaves 5.2 % of its area outside an ellipse, plus pixel rounding.
+    if (k != 2) {
+      EXPECT_LE(waste, 0.09);
+    }
+  }
+}
+
+TEST_F(GlGlyphs, StatisticsMeasureTheWaste) {
+  if (!render::has_pipeline_statistics()) GTEST_SKIP() << "no GL_ARB_pipeline_statistics_query";
+  Model m;
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  for (int i = 0; i < 60; ++i)
+    m.glyphs.push_back({GlyphKind::sphere, {u(rng), u(rng), u(rng)}, 0.6, Eigen::Matrix3d::Identity(), Rgb{90, 90, 200}});
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 20, .elevation_deg = 10, .width = 256, .height = 256});
+  render::RenderOptions o;
+  o.statistics = true;
+  draw(m, cam, o);
+  const auto& st = last_stats_;
+  std::printf("glyph fragments %llu hit %llu waste %.2f %%\n", (unsigned long long)st.glyph_proxy_fragments,
+              (unsigned long long)st.glyph_hit_fragments, 100 * st.glyph_waste());
+  EXPECT_EQ(st.primitives, 60u);
+  EXPECT_GT(st.glyph_hit_fragments, 1000u);
+  EXPECT_GT(st.glyph_proxy_fragments, st.glyph_hit_fragments);
+  EXPECT_LE(st.glyph_waste(), 0.10);
+}
+
+TEST_F(GlGlyphs, FarCameraNarrowFieldOfView) {
+  // Small spheres seen from 10⁵ sizes away through a narrow lens: float keeps their shape.
+  Model m;
+  for (int i = 0; i < 5; ++i)
+    m.glyphs.push_back({GlyphKind::sphere, {1000.0 + 2.5 * i, -300.0, 50.0}, 1.0, Eigen::Matrix3d::Identity(), {}});
+  std::mt19937_64 rng(4);
+  m.glyphs.push_back(random_glyph(GlyphKind::cylinder, rng));
+  m.glyphs.back().centre = {1005.0, -297.0, 50.0};
+  Camera cam;
+  cam.target = {1005.0, -298.5, 50.0};
+  cam.eye = cam.target + Eigen::Vector3d(0.3, 0.2, 1.0).normalized() * 1e5;
+  cam.fov_y_deg = 0.01;
+  cam.near_plane = 1e4;
+  cam.far_plane = 2e5;
+  cam.width = 240;
+  cam.height = 160;
+  const Comparison c = run(m, cam);
+  EXPECT_GT(c.covered, 1000);
+  EXPECT_GE(c.coverage_agreement, 0.999);
+  EXPECT_LE(c.normal_median_deg, 0.05);
+  // The G-buffer stores eye depth as float: 10⁵ has a step of 0.0078, 8e-5 of the depth scale
+  // compare() uses here (10⁻³ of the depth).
+  EXPECT_LE(c.depth_p99, 2e-4);
+}
+
+TEST_F(GlGlyphs, StressHundredThousandGlyphsTinyAndHugeAcrossTheNearPlane) {
+  // 10⁵ glyphs of every kind with radii from 10⁻³ to 10 (log-uniform), the eye inside the cloud
+  // so glyphs straddle the near plane, wrap the eye and lie behind it.
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Model m;
+  m.glyphs.reserve(100'000);
+  for (int i = 0; i < 100'000; ++i) {
+    Glyph g = random_glyph(static_cast<GlyphKind>(i % 3), rng);
+    const double s = std::pow(10.0, -3.0 + 4.0 * u(rng) * u(rng));  // most small, a few up to 10
+    g.radius *= s;
+    g.axes *= s;
+    g.centre = Eigen::Vector3d(u(rng), u(rng), u(rng)) * 200.0 - Eigen::Vector3d::Constant(100.0);
+    m.glyphs.push_back(g);
+  }
+  Camera cam;
+  cam.eye = {3.0, 2.0, 1.0};
+  cam.target = {0.0, 0.0, -40.0};
+  cam.fov_y_deg = 70;
+  cam.near_plane = 0.05;
+  cam.far_plane = 500;
+  cam.width = 256;
+  cam.height = 192;
+  const Comparison c = run(m, cam, true);
+  EXPECT_GT(c.covered, 5000);
+  EXPECT_GE(c.coverage_agreement, 0.995);
+  EXPECT_LE(c.depth_p99, 1e-4);
+  EXPECT_LE(c.normal_median_deg, 0.1);
+}
+
+TEST_F(GlGlyphs, MoleculesInEveryStyleMatchTheCpuReference) {
+  const auto path = std::filesystem::path(QUADRIX_DATASETS) / "molecules" / "4lfq.pdb";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+  const Molecule mol = read_molecule(path);
+  for (const auto style : {MoleculeStyle::spacefill, MoleculeStyle::balls_sticks, MoleculeStyle::licorice}) {
+    SCOPED_TRACE(int(style));
+    const Model m = molecule_glyphs(mol, {.style = style}).model;
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 256, .height = 256});
+    const Comparison c = run(m, cam, true);
+    expect_accurate(c, 4000);
+  }
+}
