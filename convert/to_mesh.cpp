@@ -360,11 +360,28 @@ std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m) {
   return n;
 }
 
-/// The drawn surface seen along −n from p + reach·n: the signed offset of its hit from p.
+/// The drawn surface seen along −n from p + reach·n, within 2·reach: the first hit.
 std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceOptions& trace,
                                        const Eigen::Vector3d& p, const Eigen::Vector3d& n, double reach) {
   const Ray ray{p + reach * n, -n};
   return scene.trace(ray, 0.0, 2.0 * reach, trace);
+}
+
+/// Distance along the line p + s·n (|s| ≤ reach) to the nearest of up to four surfaces it meets
+/// (a glyph buried in another is met behind the one covering it), or −1 when it meets none.
+double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& n, double reach) {
+  const Ray ray{p + reach * n, -n};
+  double best = -1.0, tmin = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
+    if (!hit) break;
+    const double d = std::abs(hit->t - reach);
+    if (best < 0 || d < best) best = d;
+    if (hit->t >= reach) break;  // later hits are farther from p
+    tmin = hit->t + 1e-9 * reach;
+  }
+  return best;
 }
 
 /// Moves each SLIM-made vertex onto the drawn surface along its normal.
@@ -412,20 +429,15 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size()), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const auto& [p, n] = samples[i];
-      if (const auto hit = along_normal(scene, trace, p, n, reach)) {
-        d[i] = std::abs(hit->t - reach);
-        continue;
-      }
-      d[i] = -1.0;
+      d[i] = line_distance(scene, trace, p, n, reach);
+      if (d[i] >= 0) continue;
       const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
       for (const double eps : {1e-3 * reach, 1e-2 * reach, 0.05 * reach, 0.2 * reach}) {
         for (int k = 0; k < 8; ++k) {
           const double a = k * std::numbers::pi / 4;
           const Eigen::Vector3d q = p + eps * (std::cos(a) * e1 + std::sin(a) * e2);
-          if (const auto hit = along_normal(scene, trace, q, n, reach)) {
-            const double bound = std::abs(hit->t - reach) + eps;
-            d[i] = d[i] < 0 ? bound : std::min(d[i], bound);
-          }
+          if (const double dq = line_distance(scene, trace, q, n, reach); dq >= 0)
+            d[i] = d[i] < 0 ? dq + eps : std::min(d[i], dq + eps);
         }
         if (d[i] >= 0) break;
       }
@@ -506,7 +518,13 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   const ReferenceScene scene(model);
   TraceOptions trace;
   trace.slim.offset = o.slim_offset >= 0 ? o.slim_offset : slim_offset_of(model);
-  const double slim_h0 = model.slims.empty() ? 0 : median_radius(model) / 4.0;
+  // SLIM grid: a chord of length h sits about h²κ/8 off a surface of curvature κ; patches bend
+  // over their radius R at most, so h = sqrt(8·bound·R)/2 starts near the bound. At most 256 cells
+  // along the diagonal at first; refinements halve it.
+  const double slim_h0 = model.slims.empty()
+                             ? 0
+                             : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
+                                        diagonal / 256.0);
 
   ToMeshResult best;
   for (int level = 0; level <= o.max_refinements; ++level) {
