@@ -4,7 +4,10 @@
 
 #include "tests/support.h"
 
+#include <cmath>
 #include <fstream>
+
+#include <Eigen/Geometry>
 
 #include <nlohmann/json.hpp>
 
@@ -97,9 +100,10 @@ TEST_F(CliCamera, UpAxisTurnsTheImage) {
 TEST_F(CliCamera, FovAndZoomMagnifyWithoutMovingTheCamera) {
   const auto model = dir_ / "s.qxm";
   ASSERT_EQ(quadrix_run("synth ellipsoid -o " + q(model)).code, 0);
-  const auto [a, ja] = render(model, "", "a");
-  const auto [b, jb] = render(model, "--fov 20", "b");
-  const auto [c, jc] = render(model, "--zoom 0.5", "c");
+  // A small fill, so the magnified view stays inside the frame.
+  const auto [a, ja] = render(model, "--fill 0.3", "a");
+  const auto [b, jb] = render(model, "--fill 0.3 --fov 20", "b");
+  const auto [c, jc] = render(model, "--fill 0.3 --zoom 0.5", "c");
   EXPECT_TRUE(vec(ja["camera"]["eye"]).isApprox(vec(jb["camera"]["eye"])));
   EXPECT_TRUE(vec(ja["camera"]["eye"]).isApprox(vec(jc["camera"]["eye"])));
   // tan(20°/2)/tan(40°/2) ≈ 0.48: about 4.3× the area; zoom ½: a quarter.
