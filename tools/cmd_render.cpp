@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <cmath>
+#include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -26,8 +28,8 @@ namespace {
 
 struct RenderArgs {
   std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
-  std::string shading = "phong", mesh;
-  double azimuth = 30, elevation = 20, fov = 40;
+  std::string shading = "phong", mesh, up = "+y", view, background = "255,255,255";
+  double azimuth = 30, elevation = 20, fov = 40, zoom = 1, fill = 0.9;
   bool no_cull = false;
   int frames = 1;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
@@ -63,10 +65,52 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   Box3 box = bounds(model);
   if (mesh)
     for (const auto& v : mesh->vertices) box.extend(v);
-  const Camera camera = frame_box(
-      box, {.azimuth_deg = a.azimuth, .elevation_deg = a.elevation, .fov_y_deg = a.fov, .width = w, .height = h});
+  // The view: about the chosen up axis, distance fitted for a 40° lens on the visible geometry
+  // (a low-resolution CPU pass, or the mesh's vertices), then --fov and --zoom as the lens.
+  double azimuth = a.azimuth, elevation = a.elevation;
+  if (a.view == "front") azimuth = 0, elevation = 0;
+  else if (a.view == "side") azimuth = 90, elevation = 0;
+  else if (a.view == "top") azimuth = 0, elevation = 90;
+  else if (a.view == "iso") azimuth = 45, elevation = 35.264389682754654;
+  constexpr double kFitFov = 40.0;
+  Camera camera = frame_view(box, {.up = parse_axis(a.up), .azimuth_deg = azimuth, .elevation_deg = elevation,
+                                   .fov_y_deg = kFitFov, .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05,
+                                   .width = w, .height = h});
+  if (a.fill > 0) {
+    std::vector<Eigen::Vector3d> visible;
+    if (!model.empty()) {
+      const ReferenceScene scene(model);
+      Camera probe = camera;
+      const double s = 160.0 / std::max(w, h);
+      probe.width = std::max(8, static_cast<int>(std::lround(w * s)));
+      probe.height = std::max(8, static_cast<int>(std::lround(h * s)));
+      ReferenceRenderOptions po;
+      po.trace.cull_backfaces = !a.no_cull;
+      po.trace.slim.offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
+      const ReferenceImage img = render_reference(scene, probe, po);
+      for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+          if (const std::size_t i = std::size_t(y) * img.width + x; img.coverage[i]) {
+            // Pixel corners too, so the bounds are those of the covered pixels, not their centres.
+            for (const double dx : {0.0, 1.0})
+              for (const double dy : {0.0, 1.0})
+                visible.push_back(probe.pixel_ray(x + dx, y + dy).at(img.distance[i]));
+          }
+    }
+    if (mesh) {
+      const std::size_t step = std::max<std::size_t>(1, mesh->vertices.size() / 200000);
+      for (std::size_t v = 0; v < mesh->vertices.size(); v += step) visible.push_back(mesh->vertices[v]);
+    }
+    camera = fit_points(camera, visible, a.fill);
+  }
+  camera.fov_y_deg = 2.0 * std::atan(std::tan(a.fov * std::numbers::pi / 360.0) / a.zoom) * 180.0 / std::numbers::pi;
+  const Rgb background = a.background == "none" ? Rgb{255, 255, 255} : parse_rgb(a.background, "--background");
+  const bool transparent = a.background == "none";
   nlohmann::json& j = report.json["render"];
-  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)}};
+  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)},
+       {"framing", {{"up", a.up}, {"view", a.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view)},
+                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.fill}, {"zoom", a.zoom}}},
+       {"background", a.background}};
 
   std::string backend = a.backend;
   if (backend == "auto") backend = "gl";
@@ -87,7 +131,10 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     const double t1 = report.elapsed();
     const ReferenceImage img = render_reference(scene, camera, ro);
     const double t2 = report.elapsed();
-    write_png(shade_phong(img, camera), a.out);
+    Image8 colour = shade_phong(img, camera, {.background = background});
+    if (transparent)
+      for (std::size_t i = 0; i < img.coverage.size(); ++i) colour.rgba[4 * i + 3] = img.coverage[i] ? 255 : 0;
+    write_png(colour, a.out);
     if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
     if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
     j["covered_pixels"] = std::count(img.coverage.begin(), img.coverage.end(), 1);
@@ -114,9 +161,19 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   ro.statistics = false;
   std::vector<double> total;
   for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
-  write_png(renderer.read_colour(), a.out);
+  Image8 colour = renderer.read_colour();
+  std::optional<render::GBuffer> gbuffer;
+  if (transparent || a.background != "255,255,255") gbuffer = renderer.read_gbuffer();
+  if (gbuffer)
+    for (std::size_t i = 0; i < gbuffer->coverage.size(); ++i)
+      if (!gbuffer->coverage[i]) {
+        std::uint8_t* p = colour.rgba.data() + 4 * i;
+        p[0] = background[0], p[1] = background[1], p[2] = background[2];
+        p[3] = transparent ? 0 : 255;
+      }
+  write_png(colour, a.out);
   if (!a.depth_out.empty() || !a.normal_out.empty()) {
-    const render::GBuffer g = renderer.read_gbuffer();
+    const render::GBuffer g = gbuffer ? *gbuffer : renderer.read_gbuffer();
     if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
     if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
   }
@@ -150,9 +207,27 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
-  app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about +y");
-  app->add_option("--elevation", a->elevation, "Camera elevation in degrees")->check(CLI::Range(-89.9, 89.9));
-  app->add_option("--fov", a->fov, "Vertical field of view in degrees")->check(CLI::Range(0.001, 179.0));
+  app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about the up axis, from the front")
+      ->check(CLI::Range(-3600.0, 3600.0))
+      ->capture_default_str();
+  app->add_option("--elevation", a->elevation, "Camera elevation in degrees above the plane normal to up")
+      ->check(CLI::Range(-90.0, 90.0))
+      ->capture_default_str();
+  app->add_option("--up", a->up, "World up axis: +x -x +y -y +z -z")
+      ->check(CLI::IsMember({"+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"}))
+      ->capture_default_str();
+  app->add_option("--view", a->view, "Named view (overrides --azimuth/--elevation): front, side, top, iso")
+      ->check(CLI::IsMember({"front", "side", "top", "iso"}));
+  app->add_option("--fov", a->fov, "Vertical field of view in degrees: the lens (the distance is fitted for 40, so a "
+                                   "narrower lens zooms in)")
+      ->check(CLI::Range(0.001, 179.0))
+      ->capture_default_str();
+  app->add_option("--zoom", a->zoom, "Magnification of the framed view")->check(CLI::Range(0.01, 1000.0))->capture_default_str();
+  app->add_option("--fill", a->fill, "Fraction of the smaller image side the visible geometry fills (0: frame the "
+                                     "bounding sphere instead)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app->add_option("--background", a->background, "Background R,G,B, or none (transparent PNG)")->capture_default_str();
   app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}));
   app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");

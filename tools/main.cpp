@@ -17,6 +17,7 @@ void add_fit(CLI::App& root, Commands& commands);
 void add_view(CLI::App& root, Commands& commands);
 void add_convert(CLI::App& root, Commands& commands);
 void add_bench(CLI::App& root, Commands& commands);
+void add_mesh(CLI::App& root, Commands& commands);
 }  // namespace quadrix::cli
 
 int main(int argc, char** argv) {
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   add_view(app, commands);
   add_convert(app, commands);
   add_bench(app, commands);
+  add_mesh(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
 

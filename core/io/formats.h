@@ -26,6 +26,8 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
 
 void write_off(const PolygonMesh& mesh, const std::filesystem::path& path);  // write_mesh.cpp
 void write_obj(const PolygonMesh& mesh, const std::filesystem::path& path);
+void write_ply(const PolygonMesh& mesh, const std::filesystem::path& path);  // binary little-endian
+void write_stl(const PolygonMesh& mesh, const std::filesystem::path& path);  // binary, float32
 void write_xyz(const PointCloud& cloud, const std::filesystem::path& path);  // read_xyz.cpp
 
 /// Whether the bytes are a binary STL: 84 + 50·n bytes for the count n at byte 80.

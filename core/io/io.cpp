@@ -151,7 +151,10 @@ void write_mesh(const PolygonMesh& mesh, const fs::path& path) {
   const std::string ext = io::lower_extension(path);
   if (ext == ".off") return io::write_off(mesh, path);
   if (ext == ".obj") return io::write_obj(mesh, path);
-  throw InvalidInput(fmt::format("{}: cannot write mesh format '{}' (expected .off or .obj)", path.string(), ext));
+  if (ext == ".ply") return io::write_ply(mesh, path);
+  if (ext == ".stl") return io::write_stl(mesh, path);
+  throw InvalidInput(
+      fmt::format("{}: cannot write mesh format '{}' (expected .ply, .obj, .off or .stl)", path.string(), ext));
 }
 
 PointCloud read_points(const fs::path& path) {

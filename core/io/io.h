@@ -6,11 +6,11 @@
 /// | format          | read as        | extension          | reader / writer           |
 /// |-----------------|----------------|--------------------|---------------------------|
 /// | PLY (all three encodings) with `comment quadrix-format` | model | .qxm .ply | core/model_io |
-/// | PLY with faces  | mesh, points   | .ply               | read_ply.cpp              |
+/// | PLY with faces  | mesh, points   | .ply               | read_ply.cpp / write_mesh.cpp |
 /// | PLY without     | points         | .ply               | read_ply.cpp              |
 /// | OFF ([ST][C][N]OFF) | mesh, points | .off             | read_off.cpp / write_mesh.cpp |
 /// | OBJ (v, vn, f)  | mesh, points   | .obj               | read_obj.cpp / write_mesh.cpp |
-/// | STL ASCII/binary | mesh, points  | .stl               | read_stl.cpp              |
+/// | STL ASCII/binary | mesh, points  | .stl               | read_stl.cpp / write_mesh.cpp |
 /// | XYZ, 3 or 6 columns | points     | .xyz .txt .pts     | read_xyz.cpp              |
 /// | Kanai's SLIM    | model          | .slim2t            | core/model_io             |
 ///
@@ -36,7 +36,9 @@ FileKind detect_file_kind(const std::filesystem::path& path);
 /// counts beyond the file, trailing data); IoError when it cannot be read.
 PolygonMesh read_mesh(const std::filesystem::path& path);
 
-/// Writes OBJ or OFF by extension (temporary file + rename). \throws InvalidInput, IoError.
+/// Writes PLY (binary, double coordinates), OBJ, OFF or STL (binary, float32, polygons fanned into
+/// triangles) by extension (temporary file + rename); per-vertex colours where the format has
+/// them (not STL). \throws InvalidInput, IoError.
 void write_mesh(const PolygonMesh& mesh, const std::filesystem::path& path);
 
 /// Reads points (and the file's normals, if any) from PLY, XYZ/PTS/TXT, OFF, OBJ or STL vertices.

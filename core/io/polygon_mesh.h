@@ -1,5 +1,7 @@
 #pragma once
 /// A polygon mesh as a face soup: triangles, quads and mixed polygons kept as in the file.
+#include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -13,6 +15,9 @@ struct PolygonMesh {
   std::vector<Eigen::Vector3d> vertices;
   std::vector<int> indices;
   std::vector<int> offsets{0};
+  /// Optional 8-bit sRGB colour per vertex: empty, or one per vertex (PLY red/green/blue,
+  /// OFF's COFF columns, OBJ's "v x y z r g b").
+  std::vector<std::array<std::uint8_t, 3>> colours;
 
   std::size_t face_count() const { return offsets.size() - 1; }
   std::span<const int> face(std::size_t f) const {

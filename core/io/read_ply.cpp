@@ -1,5 +1,5 @@
 // PLY surfaces through core/io/ply.h (ASCII, binary either endianness): element `vertex`
-// (x y z [nx ny nz], other properties ignored) and, when present, element `face` with the list
+// (x y z [nx ny nz] [red green blue], other properties ignored) and, when present, element `face` with the list
 // `vertex_indices` (or `vertex_index`). Counts, lists and trailing bytes are checked by ply::File.
 #include <cmath>
 
@@ -21,6 +21,9 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
     throw FormatError(
         f.message("vertex", -1, {}, ply::kNoByte, "has some but not all of the normal properties nx ny nz"));
   if (normal_count == 3) props.insert(props.end(), {"nx", "ny", "nz"});
+  const std::size_t colour_column = props.size();
+  const bool has_colours = ev->find("red") >= 0 && ev->find("green") >= 0 && ev->find("blue") >= 0;
+  if (has_colours) props.insert(props.end(), {"red", "green", "blue"});
   std::vector<ply::Request> req = {{"vertex", props, {}}};
   const ply::Element* ef = f.header().find("face");
   if (ef) {
@@ -44,6 +47,17 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
       if (!(n.norm() > 0))
         throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3), "zero normal"));
       s.normals[i] = n.normalized();
+    }
+    if (has_colours) {
+      std::array<std::uint8_t, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        const double v = t(i, colour_column + k);
+        if (!(v >= 0 && v <= 255))
+          throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), props[colour_column + k],
+                                      t.byte_offset(i, colour_column + k), fmt::format("colour {} outside 0..255", v)));
+        c[k] = static_cast<std::uint8_t>(std::lround(v));
+      }
+      s.mesh.colours.push_back(c);
     }
   }
   if (!ef) return s;

@@ -167,13 +167,36 @@ TEST_P(MeshIoRoundTrip, ExactVerticesAndFaces) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, MeshIoRoundTrip, ::testing::Values(".obj", ".off", ".OBJ"));
+INSTANTIATE_TEST_SUITE_P(Formats, MeshIoRoundTrip, ::testing::Values(".obj", ".off", ".OBJ", ".ply"));
+
+TEST_F(MeshIoRoundTrip, PlyColoursAndStlTrianglesReadBack) {
+  PolygonMesh m = mixed_mesh();
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    m.colours.push_back({static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(255 - v), 7});
+  write_mesh(m, dir_ / "c.ply");
+  EXPECT_EQ(read_mesh(dir_ / "c.ply").colours, m.colours);
+  // STL: polygons fanned into triangles, float32 coordinates.
+  write_mesh(m, dir_ / "c.stl");
+  const PolygonMesh s = read_mesh(dir_ / "c.stl");
+  std::size_t triangles = 0;
+  for (std::size_t f = 0; f < m.face_count(); ++f) triangles += m.face(f).size() - 2;
+  EXPECT_EQ(s.face_count(), triangles);
+  for (std::size_t f = 0; f < s.face_count(); ++f) {
+    const auto v = s.face(f);
+    ASSERT_EQ(v.size(), 3u);
+    for (const int i : v) {
+      double nearest = 1e300;
+      for (const auto& p : m.vertices) nearest = std::min(nearest, (p - s.vertices[i]).norm());
+      EXPECT_LT(nearest, 1e-6 * (1 + s.vertices[i].norm()));
+    }
+  }
+}
 
 class MeshIo : public TempDir {};
 
 TEST_F(MeshIo, WriteRejectsBadInput) {
   PolygonMesh m = mixed_mesh();
-  EXPECT_THROW(write_mesh(m, dir_ / "m.stl"), InvalidInput);
+  EXPECT_THROW(write_mesh(m, dir_ / "m.xyz"), InvalidInput);
   m.vertices[2].y() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(write_mesh(m, dir_ / "m.obj"), InvalidInput);
   EXPECT_FALSE(fs::exists(dir_ / "m.obj"));

@@ -1,0 +1,567 @@
+#include "convert/to_mesh.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <tuple>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/reference.h"
+#include "core/slim.h"
+#include "fit/data_surface.h"
+#include "fit/surface_error.h"
+
+namespace quadrix {
+namespace {
+
+constexpr int kPermutations[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+
+bool has_any_colour(const Model& m) {
+  for (const auto& s : m.slims)
+    if (s.colour) return true;
+  for (const auto& t : m.tets)
+    if (t.colour) return true;
+  for (const auto& g : m.glyphs)
+    if (g.colour) return true;
+  return false;
+}
+
+/// Triangles being collected, with an optional colour per vertex.
+struct Builder {
+  PolygonMesh mesh;
+  bool colours = false;
+  int add_vertex(const Eigen::Vector3d& p, const Rgb& c) {
+    mesh.vertices.push_back(p);
+    if (colours) mesh.colours.push_back(c);
+    return static_cast<int>(mesh.vertices.size()) - 1;
+  }
+  void add_triangle(int a, int b, int c) {
+    if (a == b || b == c || a == c) return;
+    const int f[3] = {a, b, c};
+    mesh.add_face(f);
+  }
+};
+
+/// Marching tetrahedra on one tetrahedron: values at four nodes, positive outside. crossing(i, j)
+/// gives the mesh vertex on the edge between local nodes i and j; triangles are oriented so their
+/// normal points from the negative nodes to the positive ones.
+template <typename Crossing>
+void march(const std::array<Eigen::Vector3d, 4>& p, const std::array<double, 4>& f, Builder& out,
+           Crossing&& crossing) {
+  int pos[4], neg[4], np = 0, nn = 0;
+  for (int i = 0; i < 4; ++i) (f[i] >= 0.0 ? pos[np++] : neg[nn++]) = i;
+  if (np == 0 || nn == 0) return;
+  Eigen::Vector3d cp = Eigen::Vector3d::Zero(), cn = Eigen::Vector3d::Zero();
+  for (int i = 0; i < np; ++i) cp += p[pos[i]] / np;
+  for (int i = 0; i < nn; ++i) cn += p[neg[i]] / nn;
+  const Eigen::Vector3d outward = cp - cn;
+  const auto emit = [&](int a, int b, int c) {
+    const auto& V = out.mesh.vertices;
+    if ((V[b] - V[a]).cross(V[c] - V[a]).dot(outward) < 0) std::swap(b, c);
+    out.add_triangle(a, b, c);
+  };
+  if (np == 1 || nn == 1) {
+    const bool lone_pos = np == 1;
+    const int lone = lone_pos ? pos[0] : neg[0];
+    const int* others = lone_pos ? neg : pos;
+    emit(crossing(lone, others[0]), crossing(lone, others[1]), crossing(lone, others[2]));
+    return;
+  }
+  const int a = crossing(pos[0], neg[0]), b = crossing(pos[0], neg[1]), c = crossing(pos[1], neg[1]),
+            d = crossing(pos[1], neg[0]);
+  emit(a, b, c);
+  emit(a, c, d);
+}
+
+/// Root in [0, 1] of the quadric along p + s(q − p) nearest the linear estimate, else that estimate.
+double edge_root(const Quadric& f, const Eigen::Vector3d& p, const Eigen::Vector3d& q, double fp, double fq) {
+  const double linear = fp / (fp - fq);
+  const Eigen::Vector3d d = q - p;
+  const double a = d.dot(f.A * d), b = 2.0 * d.dot(f.A * p + f.b), c = f.eval(p);
+  double best = linear, best_gap = std::numeric_limits<double>::infinity();
+  const auto consider = [&](double s) {
+    if (s >= 0.0 && s <= 1.0 && std::abs(s - linear) < best_gap) {
+      best = s;
+      best_gap = std::abs(s - linear);
+    }
+  };
+  if (std::abs(a) <= 1e-14 * (std::abs(b) + std::abs(c))) {
+    if (b != 0.0) consider(-c / b);
+  } else {
+    const double disc = b * b - 4.0 * a * c;
+    if (disc >= 0.0) {
+      const double sq = std::sqrt(disc);
+      const double qq = -0.5 * (b + std::copysign(sq, b));
+      if (qq != 0.0) consider(c / qq);
+      consider(qq / a);
+    }
+  }
+  return std::clamp(best, 0.0, 1.0);
+}
+
+// ---- tetrahedron patches ----------------------------------------------------------------------
+
+struct Key4 {
+  std::array<std::uint64_t, 4> v{};
+  bool operator==(const Key4&) const = default;
+};
+struct Key4Hash {
+  std::size_t operator()(const Key4& k) const {
+    std::uint64_t h = 1469598103934665603ull;
+    for (const auto x : k.v) h = (h ^ x) * 1099511628211ull;
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+void mesh_tets(const Model& model, int k, Builder& out) {
+  // Corners welded by exact position, so neighbours name their shared lattice points alike.
+  std::map<std::array<double, 3>, std::uint64_t> corner_ids;
+  const auto corner_id = [&](const Eigen::Vector3d& x) {
+    return corner_ids.emplace(std::array<double, 3>{x.x(), x.y(), x.z()}, corner_ids.size()).first->second;
+  };
+  const auto sub = edgewise_subdivision(k);
+  struct Node {
+    Eigen::Vector3d x;
+    double value;
+  };
+  std::unordered_map<Key4, Node, Key4Hash> nodes;
+  struct EdgeKey {
+    Key4 a, b;
+    bool operator==(const EdgeKey&) const = default;
+  };
+  struct EdgeHash {
+    std::size_t operator()(const EdgeKey& e) const { return Key4Hash{}(e.a) * 31 + Key4Hash{}(e.b); }
+  };
+  std::unordered_map<EdgeKey, int, EdgeHash> crossings;
+  for (const TetPatch& tet : model.tets) {
+    const Eigen::Vector3d centroid = tet.centroid();
+    std::array<std::uint64_t, 4> g;
+    for (int i = 0; i < 4; ++i) g[i] = corner_id(tet.corners[i]);
+    const Rgb colour = tet.colour.value_or(Rgb{200, 200, 200});
+    const auto node_of = [&](const Eigen::Vector3i& x) -> std::pair<Key4, Node> {
+      const int c[4] = {k - x[0], x[0] - x[1], x[1] - x[2], x[2]};
+      // (global corner id, count, local corner): sorted by id, so a point shared with a neighbour
+      // gets the same key and the same position (the same sum in the same order).
+      std::array<std::tuple<std::uint64_t, int, int>, 4> parts;
+      for (int i = 0; i < 4; ++i) parts[i] = {c[i] == 0 ? ~std::uint64_t{0} : g[i], c[i], i};  // unused corners last
+      std::sort(parts.begin(), parts.end());
+      Key4 key;
+      Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 4; ++i) {
+        const auto [id, count, local] = parts[i];
+        key.v[i] = count == 0 ? 0 : ((id + 1) << 16 | static_cast<std::uint64_t>(count));
+        pos += (static_cast<double>(count) / k) * tet.corners[local];
+      }
+      return {key, {pos, tet.quadric.eval(pos - centroid)}};
+    };
+    for (const auto& s : sub) {
+      std::array<Key4, 4> keys;
+      std::array<Eigen::Vector3d, 4> p;
+      std::array<double, 4> f;
+      for (int i = 0; i < 4; ++i) {
+        auto [key, node] = node_of(s[i]);
+        const auto it = nodes.emplace(key, node).first;
+        keys[i] = key;
+        p[i] = it->second.x;
+        f[i] = it->second.value;
+      }
+      march(p, f, out, [&](int i, int j) {
+        if (f[j] >= 0.0) std::swap(i, j);  // i on the positive side: a canonical edge direction
+        const double s = edge_root(tet.quadric, p[i] - centroid, p[j] - centroid, f[i], f[j]);
+        // A crossing at a lattice point (the surface through a node) is that node's one vertex.
+        constexpr double kAtNode = 1e-9;
+        const EdgeKey ek = s <= kAtNode ? EdgeKey{keys[i], keys[i]} : s >= 1 - kAtNode ? EdgeKey{keys[j], keys[j]} : EdgeKey{keys[i], keys[j]};
+        if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
+        const int v = out.add_vertex(p[i] + s * (p[j] - p[i]), colour);
+        crossings.emplace(ek, v);
+        return v;
+      });
+    }
+  }
+}
+
+// ---- glyphs -----------------------------------------------------------------------------------
+
+/// Unit icosphere subdivided `levels` times: vertices and triangles (counter-clockwise outside).
+void icosphere(int levels, std::vector<Eigen::Vector3d>& v, std::vector<std::array<int, 3>>& tris) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& x : v) x.normalize();
+  tris = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+          {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+          {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    const auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      if (const auto it = mid.find(key); it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    next.reserve(tris.size() * 4);
+    for (const auto& [a, b, c] : tris) {
+      const int ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+    }
+    tris = std::move(next);
+  }
+}
+
+void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
+  const Rgb colour = g.colour.value_or(Rgb{200, 200, 200});
+  if (g.kind == GlyphKind::cylinder) {
+    const Eigen::Vector3d half = g.axes.col(0);
+    const Eigen::Vector3d axis = half.normalized();
+    const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+    // Sagitta r(1 − cos(π/n)) ≤ bound/2.
+    const double ratio = std::clamp(1.0 - 0.5 * bound / g.radius, -1.0, 1.0);
+    int n = std::clamp(static_cast<int>(std::ceil(std::numbers::pi / std::acos(ratio))), 8, 4096);
+    n = std::min(n << extra, 1 << 16);
+    const int base = static_cast<int>(out.mesh.vertices.size());
+    for (int end = 0; end < 2; ++end)
+      for (int i = 0; i < n; ++i) {
+        const double a = 2.0 * std::numbers::pi * i / n;
+        out.add_vertex(g.centre + (end ? half : Eigen::Vector3d(-half)) + g.radius * (std::cos(a) * e1 + std::sin(a) * e2),
+                       colour);
+      }
+    const int bottom = out.add_vertex(g.centre - half, colour), top = out.add_vertex(g.centre + half, colour);
+    for (int i = 0; i < n; ++i) {
+      const int j = (i + 1) % n;
+      const int b0 = base + i, b1 = base + j, t0 = base + n + i, t1 = base + n + j;
+      out.add_triangle(b0, b1, t1);
+      out.add_triangle(b0, t1, t0);
+      out.add_triangle(bottom, b1, b0);
+      out.add_triangle(top, t0, t1);
+    }
+    return;
+  }
+  const Eigen::Matrix3d M = g.kind == GlyphKind::sphere ? Eigen::Matrix3d(g.radius * Eigen::Matrix3d::Identity()) : g.axes;
+  const Eigen::Vector3d axis_lengths = M.colwise().norm();  // semi-axes (axes are orthogonal)
+  const double a_max = axis_lengths.maxCoeff(), a_min = axis_lengths.minCoeff();
+  const double rho = a_min * a_min / a_max;  // smallest radius of curvature
+  // An icosphere's edge after l levels is about 1.05/2^l on the unit sphere; a flat triangle of
+  // edge e sits about e²/(6ρ) inside a surface of curvature radius ρ.
+  const double e = std::sqrt(6.0 * rho * 0.5 * bound);
+  int levels = std::clamp(static_cast<int>(std::ceil(std::log2(1.0515 * a_max / e))), 1, 8);
+  levels = std::min(levels + extra, 9);
+  std::vector<Eigen::Vector3d> v;
+  std::vector<std::array<int, 3>> tris;
+  icosphere(levels, v, tris);
+  const bool flips = M.determinant() < 0;
+  const int base = static_cast<int>(out.mesh.vertices.size());
+  for (const auto& u : v) out.add_vertex(g.centre + M * u, colour);
+  for (const auto& [a, b, c] : tris) flips ? out.add_triangle(base + a, base + c, base + b) : out.add_triangle(base + a, base + b, base + c);
+}
+
+// ---- SLIM -------------------------------------------------------------------------------------
+
+struct SlimGrid {
+  Eigen::Vector3d origin;
+  double h;
+  Eigen::Vector3i n;  // nodes per axis
+  std::uint64_t index(const Eigen::Vector3i& i) const {
+    return (static_cast<std::uint64_t>(i.z()) * n.y() + i.y()) * n.x() + i.x();
+  }
+  Eigen::Vector3d at(const Eigen::Vector3i& i) const { return origin + h * i.cast<double>(); }
+};
+
+void mesh_slims(const Model& model, double h, Builder& out) {
+  Box3 box;
+  for (const auto& s : model.slims) box.extend(bounds(s));
+  SlimGrid grid;
+  grid.h = h;
+  grid.origin = box.min - Eigen::Vector3d::Constant(h);
+  grid.n = ((box.max - grid.origin) / h).array().ceil().cast<int>() + 2;
+  struct Acc {
+    double w = 0, wd = 0;
+  };
+  std::unordered_map<std::uint64_t, Acc> acc;
+  for (const SlimPatch& s : model.slims) {
+    const Eigen::Vector3i lo = ((s.centre.array() - s.radius - grid.origin.array()) / h).floor().cast<int>().max(0);
+    const Eigen::Vector3i hi =
+        ((s.centre.array() + s.radius - grid.origin.array()) / h).ceil().cast<int>().min(grid.n.array() - 1);
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const Eigen::Vector3i i(x, y, z);
+          const Eigen::Vector3d u = (grid.at(i) - s.centre) / s.radius;
+          const double w = slim_weight(u.norm());
+          if (!(w > 0.0) || (s.clip && !s.clip->keeps(u))) continue;
+          const double gn = s.local.gradient(u).norm();
+          if (!(gn > 1e-12)) continue;
+          Acc& a = acc[grid.index(i)];
+          a.w += w;
+          a.wd += w * s.radius * s.local.eval(u) / gn;  // Taubin's distance, world units
+        }
+  }
+  std::vector<std::uint64_t> keys;
+  keys.reserve(acc.size());
+  for (const auto& [k, a] : acc) keys.push_back(k);
+  std::sort(keys.begin(), keys.end());
+  std::unordered_map<std::uint64_t, int> crossings;  // edge (a·N + b) → vertex
+  const std::uint64_t total = static_cast<std::uint64_t>(grid.n.x()) * grid.n.y() * grid.n.z();
+  const Rgb grey{200, 200, 200};
+  for (const std::uint64_t k0 : keys) {
+    const Eigen::Vector3i base(static_cast<int>(k0 % grid.n.x()), static_cast<int>(k0 / grid.n.x() % grid.n.y()),
+                               static_cast<int>(k0 / grid.n.x() / grid.n.y()));
+    if ((base.array() + 1 >= grid.n.array()).any()) continue;
+    std::array<double, 8> f;
+    std::array<std::uint64_t, 8> id;
+    bool complete = true;
+    for (int c = 0; c < 8 && complete; ++c) {
+      const Eigen::Vector3i i = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+      id[c] = grid.index(i);
+      const auto it = acc.find(id[c]);
+      complete = it != acc.end() && it->second.w > 0;
+      if (complete) f[c] = it->second.wd / it->second.w;
+    }
+    if (!complete) continue;
+    for (const auto& perm : kPermutations) {
+      std::array<int, 4> corner{0, 0, 0, 0};
+      for (int s = 0; s < 3; ++s) corner[s + 1] = corner[s] | (1 << perm[s]);
+      std::array<Eigen::Vector3d, 4> p;
+      std::array<double, 4> fv;
+      for (int s = 0; s < 4; ++s) {
+        const int c = corner[s];
+        p[s] = grid.at(base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
+        fv[s] = f[c];
+      }
+      march(p, fv, out, [&](int i, int j) {
+        const std::uint64_t a = id[corner[i]], b = id[corner[j]];
+        const std::uint64_t ek = std::min(a, b) * total + std::max(a, b);
+        if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
+        const double s = fv[i] / (fv[i] - fv[j]);
+        const int v = out.add_vertex(p[i] + s * (p[j] - p[i]), grey);
+        crossings.emplace(ek, v);
+        return v;
+      });
+    }
+  }
+}
+
+std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m) {
+  std::vector<Eigen::Vector3d> n(m.vertices.size(), Eigen::Vector3d::Zero());
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto v = m.face(f);
+    const Eigen::Vector3d fn = (m.vertices[v[1]] - m.vertices[v[0]]).cross(m.vertices[v[2]] - m.vertices[v[0]]);
+    for (const int i : v) n[i] += fn;
+  }
+  for (auto& x : n)
+    if (x.norm() > 0) x.normalize();
+  return n;
+}
+
+/// The drawn surface seen along −n from p + reach·n, within 2·reach: the first hit.
+std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceOptions& trace,
+                                       const Eigen::Vector3d& p, const Eigen::Vector3d& n, double reach) {
+  const Ray ray{p + reach * n, -n};
+  return scene.trace(ray, 0.0, 2.0 * reach, trace);
+}
+
+/// Distance along the line p + s·n (|s| ≤ reach) to the nearest of up to four surfaces it meets
+/// (a glyph buried in another is met behind the one covering it), or −1 when it meets none.
+double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& n, double reach) {
+  const Ray ray{p + reach * n, -n};
+  double best = -1.0, tmin = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
+    if (!hit) break;
+    const double d = std::abs(hit->t - reach);
+    if (best < 0 || d < best) best = d;
+    if (hit->t >= reach) break;  // later hits are farther from p
+    tmin = hit->t + 1e-9 * reach;
+  }
+  return best;
+}
+
+/// Moves each SLIM-made vertex onto the drawn surface along its normal.
+void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, double reach, std::size_t first,
+                     Builder& out) {
+  const std::vector<Eigen::Vector3d> normals = vertex_normals(out.mesh);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(first, out.mesh.vertices.size()),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+                        if (!(normals[v].norm() > 0)) continue;
+                        const auto hit = along_normal(scene, trace, out.mesh.vertices[v], normals[v], reach);
+                        if (!hit || hit->kind != PrimitiveKind::slim) continue;
+                        out.mesh.vertices[v] = hit->point;
+                        if (out.colours) out.mesh.colours[v] = hit->colour;
+                      }
+                    });
+}
+
+MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
+                             double reach) {
+  const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
+  struct Sample {
+    Eigen::Vector3d p, n;
+  };
+  std::vector<Sample> samples;
+  samples.reserve(m.vertices.size() + 4 * m.face_count());
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    if (vn[v].norm() > 0) samples.push_back({m.vertices[v], vn[v]});
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto v = m.face(f);
+    const Eigen::Vector3d &a = m.vertices[v[0]], &b = m.vertices[v[1]], &c = m.vertices[v[2]];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (!(n.norm() > 0)) continue;
+    n.normalize();
+    samples.push_back({(a + b + c) / 3.0, n});
+    samples.push_back({0.5 * (a + b), n});
+    samples.push_back({0.5 * (b + c), n});
+    samples.push_back({0.5 * (c + a), n});
+  }
+  // A sample on a crease or on the surface's boundary (a cylinder's rim, where an open sheet leaves
+  // its tetrahedra) may see its normal line graze past the edge; then parallel lines offset by
+  // ε around it are tried (ε growing from reach/1000 to reach/5), each bounding the distance by
+  // its own plus ε.
+  std::vector<double> d(samples.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const auto& [p, n] = samples[i];
+      d[i] = line_distance(scene, trace, p, n, reach);
+      if (d[i] >= 0) continue;
+      const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+      for (const double eps : {1e-3 * reach, 1e-2 * reach, 0.05 * reach, 0.2 * reach}) {
+        for (int k = 0; k < 8; ++k) {
+          const double a = k * std::numbers::pi / 4;
+          const Eigen::Vector3d q = p + eps * (std::cos(a) * e1 + std::sin(a) * e2);
+          if (const double dq = line_distance(scene, trace, q, n, reach); dq >= 0)
+            d[i] = d[i] < 0 ? dq + eps : std::min(d[i], dq + eps);
+        }
+        if (d[i] >= 0) break;
+      }
+    }
+  });
+  MeshDistance out;
+  out.samples = samples.size();
+  double sum2 = 0;
+  std::vector<double> found;
+  found.reserve(d.size());
+  for (const double x : d) {
+    if (x < 0) {
+      ++out.misses;
+      continue;
+    }
+    found.push_back(x);
+    out.max = std::max(out.max, x);
+    sum2 += x * x;
+  }
+  if (!found.empty()) {
+    out.rms = std::sqrt(sum2 / found.size());
+    const std::size_t k = std::min(found.size() - 1, static_cast<std::size_t>(0.99 * found.size()));
+    std::nth_element(found.begin(), found.begin() + k, found.end());
+    out.p99 = found[k];
+  }
+  // A miss is at least `reach` away (nothing was hit within it).
+  if (out.misses > 0) out.max = std::max(out.max, reach);
+  return out;
+}
+
+std::size_t count_open_edges(const PolygonMesh& m) {
+  std::unordered_map<std::uint64_t, int> uses;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto v = m.face(f);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const auto [a, b] = std::minmax(v[i], v[(i + 1) % v.size()]);
+      ++uses[static_cast<std::uint64_t>(a) << 32 | static_cast<std::uint32_t>(b)];
+    }
+  }
+  return static_cast<std::size_t>(std::count_if(uses.begin(), uses.end(), [](const auto& e) { return e.second != 2; }));
+}
+
+double median_radius(const Model& m) {
+  std::vector<double> r;
+  for (const auto& s : m.slims) r.push_back(s.radius);
+  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+  return r[r.size() / 2];
+}
+
+}  // namespace
+
+std::vector<std::array<Eigen::Vector3i, 4>> edgewise_subdivision(int k) {
+  std::vector<std::array<Eigen::Vector3i, 4>> out;
+  const auto inside = [k](const Eigen::Vector3i& x) { return k >= x[0] && x[0] >= x[1] && x[1] >= x[2] && x[2] >= 0; };
+  for (int a = 0; a < k; ++a)
+    for (int b = 0; b <= a; ++b)
+      for (int c = 0; c <= b; ++c)
+        for (const auto& perm : kPermutations) {
+          std::array<Eigen::Vector3i, 4> t;
+          t[0] = {a, b, c};
+          bool ok = inside(t[0]);
+          for (int s = 0; s < 3 && ok; ++s) {
+            t[s + 1] = t[s];
+            ++t[s + 1][perm[s]];
+            ok = inside(t[s + 1]);
+          }
+          if (ok) out.push_back(t);
+        }
+  return out;
+}
+
+ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
+  if (model.empty()) throw InvalidInput("cannot mesh an empty model (no primitives)");
+  const Box3 box = bounds(model);
+  const double diagonal = box.diagonal();
+  const double bound = o.max_error > 0 ? o.max_error : 1e-3 * diagonal;
+  if (!std::isfinite(bound) || !(bound > 0)) throw InvalidInput(fmt::format("mesh: max error {} is not positive", bound));
+  const ReferenceScene scene(model);
+  TraceOptions trace;
+  trace.slim.offset = o.slim_offset >= 0 ? o.slim_offset : slim_offset_of(model);
+  // SLIM grid: a chord of length h sits about h²κ/8 off a surface of curvature κ; patches bend
+  // over their radius R at most, so h = sqrt(8·bound·R)/2 starts near the bound. At most 256 cells
+  // along the diagonal at first; refinements halve it.
+  const double slim_h0 = model.slims.empty()
+                             ? 0
+                             : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
+                                        diagonal / 256.0);
+
+  ToMeshResult best;
+  for (int level = 0; level <= o.max_refinements; ++level) {
+    if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
+    Builder b;
+    b.colours = has_any_colour(model);
+    if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
+    for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
+    double reach = 4.0 * bound;
+    if (!model.slims.empty()) {
+      const double h = slim_h0 / (1 << level);
+      const std::size_t first = b.mesh.vertices.size();
+      mesh_slims(model, h, b);
+      snap_to_surface(scene, trace, 1.5 * h, first, b);
+      reach = std::max(reach, 1.5 * h);
+    }
+    ToMeshResult r;
+    r.bound = bound;
+    r.refinements = level;
+    r.mesh = std::move(b.mesh);
+    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach);
+    r.open_edges = count_open_edges(r.mesh);
+    const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
+    if ((r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0) || last) {
+      if (r.mesh.face_count() > 0) {
+        const DataSurface data = DataSurface::from_mesh(r.mesh);
+        const SurfaceError se = measure_surface_error(
+            model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
+        r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0};
+      }
+      r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+    }
+    best = std::move(r);
+    if (best.within || last) break;
+  }
+  if (o.progress) o.progress(1.0);
+  return best;
+}
+
+}  // namespace quadrix

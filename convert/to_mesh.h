@@ -1,0 +1,59 @@
+#pragma once
+/// Any model as a triangle mesh within a measured distance of the surface the renderer draws.
+///
+/// | primitives | how                                                                       |
+/// |------------|---------------------------------------------------------------------------|
+/// | tetrahedron patches | each tetrahedron's edgewise subdivision into k³ tetrahedra, marching tetrahedra on its quadric; crossings are the quadric's exact roots on the edges; lattice points and crossings welded across shared faces (watertight where neighbours agree in sign) |
+/// | SLIM       | marching tetrahedra (Kuhn split) on a grid of the blended signed distance Σwᵢdᵢ/Σwᵢ (dᵢ Taubin's distance to patch i), then each vertex moved onto the per-ray blend (core/slim.h) seen along its normal |
+/// | glyphs     | icospheres (spheres, ellipsoids) and n-gon prisms with capped ends (cylinders), vertices on the surface |
+///
+/// The error is measured both ways: mesh → surface at every vertex, edge midpoint and face
+/// centroid (distance along the sample's normal to what the CPU reference ray caster draws,
+/// core/reference.h; an upper bound of the Euclidean distance), and surface → mesh from rendered
+/// views (fit/surface_error.h). The resolution doubles until both are within the bound.
+#include <cstddef>
+#include <functional>
+
+#include "core/mesh_io.h"
+#include "core/model.h"
+
+namespace quadrix {
+
+struct ToMeshOptions {
+  double max_error = 0;           ///< world units; ≤ 0: 1e-3 × the model's bounding-box diagonal
+  int max_refinements = 4;        ///< resolution doublings tried after the first mesh
+  std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
+  double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
+  int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
+  int view_resolution = 256;      ///< surface → mesh: pixels per side of each view
+  std::function<void(double)> progress;  ///< fraction done (0..1), roughly
+};
+
+/// One direction of the distance between mesh and surface (world units).
+struct MeshDistance {
+  double max = 0, rms = 0, p99 = 0;
+  std::size_t samples = 0;
+  std::size_t misses = 0;  ///< mesh → surface: samples whose normal line met no surface nearby
+};
+
+struct ToMeshResult {
+  PolygonMesh mesh;                 ///< triangles, counter-clockwise seen from outside; colours if the model has any
+  double bound = 0;                 ///< the max_error aimed at (world units)
+  MeshDistance mesh_to_surface;     ///< vertices, edge midpoints, face centroids → drawn surface
+  MeshDistance surface_to_mesh;     ///< pixels of the drawn surface → mesh
+  std::size_t open_edges = 0;       ///< edges not shared by exactly two triangles (0: watertight)
+  int refinements = 0;              ///< doublings used
+  bool within = false;              ///< both maxima ≤ bound and no misses
+  double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
+};
+
+/// Meshes every primitive of the model. \throws InvalidInput for an empty model.
+ToMeshResult mesh_model(const Model& model, const ToMeshOptions& options = {});
+
+/// The edgewise subdivision of the tetrahedron (0,0,0), (k,0,0), (k,k,0), (k,k,k) into k³
+/// tetrahedra (Kuhn's cube split restricted to it): each as four lattice points (x₁ ≥ x₂ ≥ x₃),
+/// barycentric counts (k − x₁, x₁ − x₂, x₂ − x₃, x₃). Its faces carry the regular triangle
+/// lattice, so neighbours subdivided alike share their face points.
+std::vector<std::array<Eigen::Vector3i, 4>> edgewise_subdivision(int k);
+
+}  // namespace quadrix

@@ -1,0 +1,69 @@
+// `quadrix mesh`: every writer read back by core/io, the measured error in the report, exit codes.
+#include <gtest/gtest.h>
+
+#include "tests/support.h"
+
+#include <cmath>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/mesh_io.h"
+
+using namespace quadrix;
+using test_support::CmdResult;
+
+namespace {
+CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
+std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+}  // namespace
+
+class CliMesh : public test_support::TempDir {};
+
+TEST_F(CliMesh, EveryFormatReadsBackWithinTheReportedError) {
+  const auto model = dir_ / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  std::size_t triangles = 0;
+  for (const char* ext : {".ply", ".obj", ".off", ".stl"}) {
+    const auto out = dir_ / (std::string("s") + ext), report = dir_ / (std::string("r") + ext + ".json");
+    const CmdResult r = quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-3 --report " + q(report));
+    ASSERT_EQ(r.code, 0) << ext << ": " << r.out;
+    EXPECT_NE(r.out.find("triangles"), std::string::npos) << "no summary line: " << r.out;
+    const auto j = read_json(report)["mesh"];
+    EXPECT_TRUE(j["within_bound"].get<bool>());
+    EXPECT_LE(j["max_error"].get<double>(), 1e-3);
+    EXPECT_EQ(j["open_edges"].get<int>(), 0);
+    const PolygonMesh m = read_mesh(out);
+    if (!triangles) triangles = m.face_count();
+    EXPECT_EQ(m.face_count(), triangles) << ext;
+    EXPECT_EQ(m.face_count(), j["triangles"].get<std::size_t>()) << ext;
+    // The unit sphere glyph: every vertex read back lies on it (STL stores float32).
+    const double tol = std::string(ext) == ".stl" ? 1e-6 : 1e-12;
+    for (const auto& v : m.vertices) ASSERT_NEAR(v.norm(), 1.0, tol) << ext;
+    if (std::string(ext) == ".ply") {
+      ASSERT_EQ(m.colours.size(), m.vertices.size());  // the glyph's colour carried over
+      EXPECT_TRUE(j["colours"].get<bool>());
+    }
+  }
+}
+
+TEST_F(CliMesh, UnknownExtensionIsAUsageError) {
+  const auto model = dir_ / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  const CmdResult r = quadrix_run("mesh " + q(model) + " -o " + q(dir_ / "s.xyz"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "s.xyz"));
+}
+
+TEST_F(CliMesh, OutsideTheBoundWritesTheMeshAndExitsSeven) {
+  const auto model = dir_ / "h.qxm", out = dir_ / "h.obj";
+  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 4 -o " + q(model)).code, 0);
+  const CmdResult r = quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-5 --max-refinements 0");
+  EXPECT_EQ(r.code, 7) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_EQ(quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-5 --max-refinements 0 --allow-exceed --quiet").code, 0);
+}

@@ -1,0 +1,99 @@
+// quadrix mesh MODEL -o out.ply|obj|off|stl: any model as a triangle mesh within a measured
+// distance of the surface the renderer draws (convert/to_mesh.h).
+#include <iostream>
+
+#include <fmt/format.h>
+
+#include "convert/to_mesh.h"
+#include "core/error.h"
+#include "core/io/file.h"
+#include "core/log.h"
+#include "core/mesh_io.h"
+#include "core/model_io.h"
+#include "tools/cli.h"
+
+namespace quadrix::cli {
+namespace {
+
+struct MeshArgs {
+  std::string model, out;
+  double max_error = 1e-3;  // relative to the bounding-box diagonal
+  double max_error_abs = 0;
+  bool allow_exceed = false;
+  ToMeshOptions options;
+};
+
+nlohmann::json distance_json(const MeshDistance& d) {
+  return {{"max", d.max}, {"rms", d.rms}, {"p99", d.p99}, {"samples", d.samples}, {"misses", d.misses}};
+}
+
+int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
+  const std::string ext = io::lower_extension(a.out);
+  if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl")
+    throw CLI::ValidationError("--out", fmt::format("{}: the extension picks the format: .ply, .obj, .off or .stl", a.out));
+  const Model model = read_model(a.model);
+  if (model.empty()) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
+  ToMeshOptions o = a.options;
+  o.max_error = a.max_error_abs > 0 ? a.max_error_abs : a.max_error * bounds(model).diagonal();
+  Progress progress("mesh", progress_allowed(common));
+  o.progress = progress.callback();
+  const ToMeshResult r = mesh_model(model, o);
+  write_mesh(r.mesh, a.out);
+  report.json["mesh"] = {{"model", a.model},
+                         {"out", a.out},
+                         {"vertices", r.mesh.vertices.size()},
+                         {"triangles", r.mesh.face_count()},
+                         {"colours", !r.mesh.colours.empty()},
+                         {"bound", r.bound},
+                         {"max_error", r.max_error()},
+                         {"mesh_to_surface", distance_json(r.mesh_to_surface)},
+                         {"surface_to_mesh", distance_json(r.surface_to_mesh)},
+                         {"open_edges", r.open_edges},
+                         {"refinements", r.refinements},
+                         {"within_bound", r.within}};
+  if (!common.quiet)
+    std::cout << fmt::format("{}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
+                             "surface->mesh {:.3g}), {}, {:.2f} s\n",
+                             a.out, r.mesh.face_count(), r.mesh.vertices.size(), r.mesh.colours.empty() ? "" : " with colours",
+                             r.max_error(), r.bound, r.mesh_to_surface.max, r.surface_to_mesh.max,
+                             r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges),
+                             report.elapsed());
+  if (r.within) return kOk;
+  const std::string what = fmt::format(
+      "{}: the mesh is outside the bound {:.3g} after {} refinements (max error {:.3g}, {} samples whose normal met no "
+      "surface); the mesh was written to {}",
+      a.model, r.bound, r.refinements, r.max_error(), r.mesh_to_surface.misses, a.out);
+  if (a.allow_exceed) {
+    log::warn("{}", what);
+    return kOk;
+  }
+  std::cerr << "quadrix: " << what << " (--allow-exceed accepts it)\n";
+  return kExceeded;
+}
+
+}  // namespace
+
+void add_mesh(CLI::App& root, Commands& commands) {
+  auto* app = root.add_subcommand("mesh", "Export a model as a triangle mesh (PLY, OBJ, OFF, STL) within a measured error");
+  auto a = std::make_shared<MeshArgs>();
+  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t)")->required();
+  app->add_option("-o,--out", a->out, "Output mesh; the extension picks the format: .ply (binary, colours), .obj, .off, .stl")
+      ->required();
+  app->add_option("--max-error", a->max_error, "Bound on the distance between mesh and drawn surface, relative to the "
+                                               "bounding-box diagonal")
+      ->check(CLI::Range(1e-7, 0.5))
+      ->capture_default_str();
+  app->add_option("--max-error-abs", a->max_error_abs, "The bound in world units (overrides --max-error)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--max-refinements", a->options.max_refinements, "Resolution doublings tried to reach the bound")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
+  app->add_option("--slim-offset", a->options.slim_offset,
+                  "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
+      ->check(CLI::Range(0.0, 10.0));
+  app->add_flag("--allow-exceed", a->allow_exceed,
+                "Exit 0 even when the mesh stays outside its bound (otherwise exit 7, the mesh still written)");
+  commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_mesh(*a, c, r); }});
+}
+
+}  // namespace quadrix::cli
