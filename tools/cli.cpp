@@ -3,6 +3,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <mutex>
 
@@ -59,6 +61,26 @@ nlohmann::json camera_json(const Camera& c) {
   return {{"eye", vec(c.eye)},       {"target", vec(c.target)}, {"up", vec(c.up)},
           {"fov_y_deg", c.fov_y_deg}, {"width", c.width},        {"height", c.height},
           {"near", c.near_plane},     {"far", c.far_plane}};
+}
+
+CLI::Validator number(NumberRange r) {
+  const bool open_lo = r.open_lo || std::isinf(r.lo), open_hi = r.open_hi || std::isinf(r.hi);
+  const std::string range = fmt::format("{}{}, {}{}", open_lo ? '(' : '[', r.lo, r.hi, open_hi ? ')' : ']');
+  const std::string description = open_lo && open_hi && std::isinf(r.lo) && std::isinf(r.hi) ? "finite NUMBER" : "NUMBER in " + range;
+  return CLI::Validator(
+      [r, range](std::string& text) -> std::string {
+        const std::string shown = text.size() > 40 ? text.substr(0, 40) + "…" : text;
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size()) return fmt::format("'{}' is not a number", shown);
+        if (!std::isfinite(v))
+          return fmt::format("'{}' is not a finite number (expected a number in {})", shown, range);
+        const bool low_ok = r.open_lo ? v > r.lo : v >= r.lo;
+        const bool high_ok = r.open_hi ? v < r.hi : v <= r.hi;
+        if (!low_ok || !high_ok) return fmt::format("{} is outside {}", shown, range);
+        return {};
+      },
+      description, "number");
 }
 
 std::pair<int, int> parse_size(const std::string& text) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -76,6 +77,24 @@ void add_common_options(CLI::App& app, CommonOptions& options);
 /// (world units), fov_y_deg (vertical), width and height (pixels), near and far (world units).
 /// A right-handed look-at camera; pixel (i, j) is centred at (i + ½, j + ½), row 0 at the top.
 nlohmann::json camera_json(const Camera& camera);
+
+/// Bounds of a numeric option; unset ends are unbounded. Open ends exclude the bound: (0, 1) is
+/// {.lo = 0, .hi = 1, .open_lo = true, .open_hi = true}.
+struct NumberRange {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool open_lo = false;
+  bool open_hi = false;
+};
+
+/// A CLI11 validator for every numeric option (each element of a list option): the value must be a
+/// finite number (no nan, inf) inside the range; the message names the value and the range as
+/// "[lo, hi]" / "(lo, hi)". CLI11 puts the option's name in front, and main maps it to exit 2.
+CLI::Validator number(NumberRange range = {});
+/// Shorthands: any finite number; > 0; ≥ 0.
+inline CLI::Validator finite() { return number(); }
+inline CLI::Validator positive() { return number({.lo = 0, .open_lo = true}); }
+inline CLI::Validator non_negative() { return number({.lo = 0}); }
 
 /// Parses "WxH" (e.g. 1024x768). \throws CLI::ValidationError.
 std::pair<int, int> parse_size(const std::string& text);

@@ -209,7 +209,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
   app->add_option("--errors", a->errors, "Error bounds relative to the bounding-box diagonal")
       ->delimiter(',')
-      ->check(CLI::Range(1e-7, 0.5))
+      ->check(number({.lo = 1e-7, .hi = 0.5}))
       ->capture_default_str();
   app->add_option("--models", a->models,
                   "bunny (meshes/bunny.ply), armadillo (meshes/armadillo.obj), kitten (points/kitten.xyz), or files")
@@ -219,7 +219,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
   app->add_flag("--peers,!--no-peers", a->peers, "Run OpenMesh decimation and CGAL Poisson on the same data");
   app->add_option("--view-resolution", a->view_resolution,
                   "Pixels per side of each of the 8 views that measure the surface side")
-      ->check(CLI::Range(16, 4096))
+      ->check(number({.lo = 16, .hi = 4096}))
       ->capture_default_str();
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "

@@ -157,9 +157,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                   "A triangle mesh drawn as the baseline row (e.g. a decimated mesh of the same error)");
   app->add_option("--context", a->context, "GL context")->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
-  app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(CLI::Range(1, 1000));
-  app->add_option("--azimuth", a->azimuth, "Camera azimuth (degrees)");
-  app->add_option("--elevation", a->elevation, "Camera elevation (degrees)");
+  app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(number({.lo = 1, .hi = 1000}));
+  app->add_option("--azimuth", a->azimuth, "Camera azimuth (degrees)")->check(finite());
+  app->add_option("--elevation", a->elevation, "Camera elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const auto [w, h] = parse_size(a->size);
                         const std::string ext = std::filesystem::path(a->input).extension().string();

@@ -26,12 +26,12 @@ void add_convert(CLI::App& root, Commands& commands) {
     QuadConvertOptions options;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("MESH", a->mesh, "Input polygon mesh")->required()->check(CLI::ExistingFile);
+  app->add_option("MESH", a->mesh, "Input polygon mesh")->required();
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
   app->add_option("--colour", a->colour, "Constant colour R,G,B (0..255) for every patch");
   app->add_option("--planar-threshold", a->options.planar_threshold,
                   "Store a quad as two flat triangles when its patch is within this fraction of its diameter of them")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(number({.lo = 0, .hi = 1}));
   app->add_flag("--skip-degenerate", a->options.skip_degenerate, "Skip zero-area faces instead of failing");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         if (!a->colour.empty()) a->options.colour = parse_rgb(a->colour);

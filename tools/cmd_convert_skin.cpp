@@ -22,15 +22,14 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   };
   auto a = std::make_shared<Args>();
   app->add_option("INPUT", a->input, "Balls: PDB atoms (.pdb, .ent), weighted points (.cin: x y z r²) or .xyzr")
-      ->required()
-      ->check(CLI::ExistingFile);
+      ->required();
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
   app->add_option("--shrink", a->shrink, "Skin shrink factor s in (0, 1) (default 0.5)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(number({.lo = 0, .hi = 1, .open_lo = true, .open_hi = true}));
   app->add_option("--radii", a->radii, "PDB atom radii: vdw (default), covalent or unit")
       ->check(CLI::IsMember({"vdw", "covalent", "unit"}));
   app->add_option("--radius-scale", a->radius_scale, "Multiply every radius by this factor (default 1)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   app->add_flag("--no-water", a->no_water, "PDB: leave out water molecules (residues HOH, WAT, DOD, H2O)");
   app->add_option("--tetrahedra", a->tetrahedra,
                   "Mixed cells and their tetrahedra: regular (our mixed complex over CGAL's regular "

@@ -16,14 +16,16 @@ namespace quadrix::cli {
 namespace {
 
 
-// "A,B,C" of three numbers. \throws CLI::ValidationError.
+// "A,B,C" of three numbers, each finite and within range. \throws CLI::ValidationError.
 template <typename T>
-std::array<T, 3> parse_triple(const std::string& text, const char* option) {
+std::array<T, 3> parse_triple(const std::string& text, const char* option, NumberRange range) {
   std::array<T, 3> v{};
   std::string rest = text;
   for (int a = 0; a < 3; ++a) {
     const auto comma = rest.find(',');
-    const std::string item = rest.substr(0, comma);
+    std::string item = rest.substr(0, comma);
+    if (const std::string why = number(range)(item); !why.empty())
+      throw CLI::ValidationError(option, fmt::format("'{}': {}", text.substr(0, 80), why));
     try {
       std::size_t used = 0;
       if constexpr (std::is_integral_v<T>) v[a] = static_cast<T>(std::stoll(item, &used));
@@ -110,13 +112,13 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
   };
   auto a = std::make_shared<Args>();
   app->add_option("VOLUME", a->volume, "Input volume: .nhdr/.nrrd, .inr/.inr.gz, or raw with --dims and --type");
-  app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range)")->required();
+  app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range)")->required()->check(finite());
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
-  app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest)");
+  app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest), each in [1, 2^30]");
   app->add_option("--type", a->type, "Raw volume: uint8|int8|uint16|int16|uint32|int32|float|double");
   app->add_flag("--big-endian", a->big_endian, "Raw volume: big-endian samples (default little)");
-  app->add_option("--spacing", a->spacing, "Raw volume: voxel spacing SX,SY,SZ (default 1,1,1)");
-  app->add_option("--header-bytes", a->header_bytes, "Raw volume: bytes to skip at the start of the file");
+  app->add_option("--spacing", a->spacing, "Raw volume: voxel spacing SX,SY,SZ, each finite and > 0 (default 1,1,1)");
+  app->add_option("--header-bytes", a->header_bytes, "Raw volume: bytes to skip at the start of the file")->check(non_negative());
   app->add_option("--reconstruction", a->reconstruction,
                   "Edge-midpoint values: catmull-rom (interpolating, C1; default) or trilinear")
       ->check(CLI::IsMember({"catmull-rom", "trilinear"}));
@@ -124,7 +126,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
   app->add_option("--colour", a->colour, "Constant colour R,G,B (0..255) for every patch");
   app->add_option("--synth", a->synth, "Use an analytic volume instead of VOLUME: marschner-lobb")
       ->check(CLI::IsMember({"marschner-lobb"}));
-  app->add_option("--grid", a->grid, "Samples per axis of the --synth volume (default 41)")->check(CLI::Range(2, 1024));
+  app->add_option("--grid", a->grid, "Samples per axis of the --synth volume (default 41)")->check(number({.lo = 2, .hi = 1024}));
   app->add_option("--write-volume", a->write_volume, "Also write the input volume as NRRD (FILE.nhdr + FILE.raw)");
   app->add_option("--tets", a->tets,
                   "Use a tetrahedral mesh instead of VOLUME: Medit .mesh or TetGen .node/.ele (needs --values)");
@@ -138,12 +140,12 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                           if (a->dims.empty() || a->type.empty())
                             throw CLI::ValidationError("--dims", "raw volumes need both --dims and --type");
                           RawVolumeLayout l;
-                          l.dims = parse_triple<int>(a->dims, "--dims");
+                          l.dims = parse_triple<int>(a->dims, "--dims", {.lo = 1, .hi = 1 << 30});
                           l.type = parse_voxel_type(a->type);
                           l.big_endian = a->big_endian;
                           l.header_bytes = a->header_bytes;
                           if (!a->spacing.empty()) {
-                            const auto s = parse_triple<double>(a->spacing, "--spacing");
+                            const auto s = parse_triple<double>(a->spacing, "--spacing", {.lo = 0, .open_lo = true});
                             l.spacing = Eigen::Vector3d(s[0], s[1], s[2]);
                           }
                           raw = l;

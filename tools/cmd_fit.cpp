@@ -29,27 +29,27 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("POINTS", a->points, "Point cloud (PLY, XYZ with 3 or 6 columns) or mesh (PLY, OFF, OBJ, STL: its faces give the normals)")->required();
   app->add_option("-o,--out", a->out, "Output .qxm")->required();
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
-      ->check(CLI::Range(1e-7, 0.5));
+      ->check(number({.lo = 1e-7, .hi = 0.5}));
   app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive());
   app->add_option("--normal-weight", a->options.normal_weight, "μ: weight of the normal term")
-      ->check(CLI::Range(1e-6, 10.0));
+      ->check(number({.lo = 1e-6, .hi = 10}));
   app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")
-      ->check(CLI::Range(0.0, 0.9));
+      ->check(number({.lo = 0, .hi = 0.9}));
   app->add_flag("--allow-exceed", a->allow_exceed,
                 "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
   app->add_flag("!--no-surface-check", a->options.check_surface,
                 "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
   app->add_option("--repair-rounds", a->options.repair_rounds,
                   "Rounds of verification and repair of the patches at fault")
-      ->check(CLI::Range(0, 100))
+      ->check(number({.lo = 0, .hi = 100}))
       ->capture_default_str();
-  app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)");
+  app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)")->check(non_negative());
   app->add_flag("--sharp", a->options.sharp,
                 "Sharp features: a clip plane per patch whose normals split into two clusters");
   app->add_option("--sharp-angle", a->options.sharp_angle_deg,
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
-      ->check(CLI::Range(1.0, 179.0));
+      ->check(number({.lo = 1, .hi = 179}));
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         // A mesh's faces give the normals and the surface the fit is bounded against.
                         std::optional<PolygonMesh> mesh;

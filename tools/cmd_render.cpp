@@ -208,10 +208,10 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
   app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about the up axis, from the front")
-      ->check(CLI::Range(-3600.0, 3600.0))
+      ->check(number({.lo = -3600.0, .hi = 3600.0}))
       ->capture_default_str();
   app->add_option("--elevation", a->elevation, "Camera elevation in degrees above the plane normal to up")
-      ->check(CLI::Range(-90.0, 90.0))
+      ->check(number({.lo = -90.0, .hi = 90.0}))
       ->capture_default_str();
   app->add_option("--up", a->up, "World up axis: +x -x +y -y +z -z")
       ->check(CLI::IsMember({"+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"}))
@@ -220,23 +220,23 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember({"front", "side", "top", "iso"}));
   app->add_option("--fov", a->fov, "Vertical field of view in degrees: the lens (the distance is fitted for 40, so a "
                                    "narrower lens zooms in)")
-      ->check(CLI::Range(0.001, 179.0))
+      ->check(number({.lo = 0.001, .hi = 179.0}))
       ->capture_default_str();
-  app->add_option("--zoom", a->zoom, "Magnification of the framed view")->check(CLI::Range(0.01, 1000.0))->capture_default_str();
+  app->add_option("--zoom", a->zoom, "Magnification of the framed view")->check(number({.lo = 0.01, .hi = 1000.0}))->capture_default_str();
   app->add_option("--fill", a->fill, "Fraction of the smaller image side the visible geometry fills (0: frame the "
                                      "bounding sphere instead)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(number({.lo = 0.0, .hi = 1.0}))
       ->capture_default_str();
   app->add_option("--background", a->background, "Background R,G,B, or none (transparent PNG)")->capture_default_str();
   app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}));
   app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
-  app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(CLI::Range(1, 10000));
+  app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
   app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
   app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
-      ->check(CLI::Range(0.0, 10.0));
+      ->check(number({.lo = 0, .hi = 10}));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_render(*a, c, r); }});
 }
 

@@ -62,13 +62,13 @@ void add_view(CLI::App& root, Commands& commands) {
   app->add_option("MODEL", a->model, "Model file (.qxm)")->required();
   app->add_option("--mesh", a->mesh, "Also draw this mesh");
   app->add_option("--size", a->size, "Window size WxH");
-  app->add_option("--azimuth", a->azimuth, "Initial azimuth (degrees)");
-  app->add_option("--elevation", a->elevation, "Initial elevation (degrees)")->check(CLI::Range(-89.9, 89.9));
-  app->add_option("--fov", a->fov, "Vertical field of view (degrees)")->check(CLI::Range(0.001, 179.0));
+  app->add_option("--azimuth", a->azimuth, "Initial azimuth (degrees)")->check(finite());
+  app->add_option("--elevation", a->elevation, "Initial elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
+  app->add_option("--fov", a->fov, "Vertical field of view (degrees)")->check(number({.lo = 0.001, .hi = 179}));
   app->add_option("--shading", a->shading, "phong, envmap or npr")->check(CLI::IsMember({"phong", "envmap", "npr"}));
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
   app->add_flag("--outlines", a->outlines, "Start with the SLIM ball outlines shown (key B)");
-  app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")->check(CLI::NonNegativeNumber);
+  app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")->check(non_negative());
   app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const auto [w, h] = parse_size(a->size);

@@ -6,9 +6,14 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
 
@@ -207,4 +212,151 @@ TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
   EXPECT_GT(j.at("fit").at("surface").at("samples_beyond_bound").get<int>(), 0);
   r = quadrix_run("fit " + q(xyz) + " -o " + q(model) + " --max-error 1e-3 --repair-rounds 0 --allow-exceed");
   EXPECT_EQ(r.code, 0) << r.out;
+}
+
+namespace {
+// A numeric option as `quadrix CMD --help` states it: "--name TYPE:NUMBER in [lo, hi)" or
+// "--name TYPE:finite NUMBER".
+struct NumericOption {
+  std::string name;
+  double lo = -INFINITY, hi = INFINITY;
+  bool open_lo = true, open_hi = true;
+};
+
+// Every option of the help text whose value is a number; fails the test for a number typed
+// option (FLOAT, INT, UINT) without the shared range check.
+std::vector<NumericOption> numeric_options(const std::string& help) {
+  std::vector<NumericOption> found;
+  std::istringstream in(help);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::string name, type;
+    words >> name >> type;
+    if (name.rfind("--", 0) != 0) continue;
+    if (const auto comma = name.find(','); comma != std::string::npos) name = name.substr(comma + 1);
+    const bool typed = type.rfind("FLOAT", 0) == 0 || type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0;
+    const auto at = line.find("NUMBER");
+    if (typed && at == std::string::npos) ADD_FAILURE() << name << " is a number without the range check: " << line;
+    if (at == std::string::npos) continue;
+    NumericOption o{name};
+    const auto in_at = line.find("NUMBER in ", at);
+    if (in_at != std::string::npos) {
+      const std::string range = line.substr(in_at + 10);
+      char open = 0, close = 0;
+      char lo[64] = {0}, hi[64] = {0};
+      EXPECT_EQ(std::sscanf(range.c_str(), "%c%63[^,], %63[^])]%c", &open, lo, hi, &close), 4) << line;
+      o.lo = std::strtod(lo, nullptr), o.hi = std::strtod(hi, nullptr);
+      o.open_lo = open == '(', o.open_hi = close == ')';
+    }
+    found.push_back(o);
+  }
+  return found;
+}
+
+// Values the option must refuse: nan, ±inf, and just outside each finite end.
+std::vector<std::string> refused_values(const NumericOption& o) {
+  std::vector<std::string> v{"nan", "inf", "-inf"};
+  const auto text = [](double x) { return fmt::format("{:.17g}", x); };
+  if (std::isfinite(o.lo)) v.push_back(o.open_lo ? text(o.lo) : text(o.lo - std::max(1.0, std::abs(o.lo))));
+  if (std::isfinite(o.hi)) v.push_back(o.open_hi ? text(o.hi) : text(o.hi + std::max(1.0, std::abs(o.hi))));
+  return v;
+}
+}  // namespace
+
+TEST(Cli, EveryNumericOptionOfEveryCommandRefusesNanInfAndOutOfRange) {
+  ScratchDir dir("cli-numbers");
+  const auto missing = [&](const char* name) { return q(dir / name); };
+  // Each command with its required arguments (inputs that do not exist: the check comes first).
+  const std::vector<std::pair<std::string, std::string>> commands = {
+      {"render", missing("a.qxm") + " -o " + missing("a.png")},
+      {"synth", "sphere -o " + missing("s.qxm")},
+      {"fit", missing("p.xyz") + " -o " + missing("f.qxm")},
+      {"view", missing("a.qxm")},
+      {"info", missing("a.qxm")},
+      {"mesh", missing("a.qxm") + " -o " + missing("m.ply")},
+      {"convert quads", missing("m.obj") + " -o " + missing("q.qxm")},
+      {"convert skin", missing("b.pdb") + " -o " + missing("k.qxm")},
+      {"convert volume", missing("v.nhdr") + " --iso 0.5 -o " + missing("v.qxm")},
+      {"bench fit", "--out " + missing("bench")},
+      {"bench render", missing("a.qxm") + " --out " + missing("bench")},
+  };
+  struct Run {
+    std::string args, option;
+  };
+  std::vector<Run> runs;
+  std::size_t options = 0;
+  for (const auto& [command, args] : commands) {
+    const CmdResult help = quadrix_run(command + " --help");
+    ASSERT_EQ(help.code, 0) << command << ": " << help.out;
+    for (const NumericOption& o : numeric_options(help.out)) {
+      ++options;
+      // --iso is required by convert volume: replace it rather than give it twice.
+      std::string base = args;
+      if (o.name == "--iso") base.replace(base.find("--iso 0.5"), 9, "");
+      for (const std::string& value : refused_values(o))
+        runs.push_back({command + " " + base + " " + o.name + " " + value, o.name});
+    }
+  }
+  runs.push_back({"render " + missing("a.qxm") + " -o " + missing("a.png") + " --fov NaN", "--fov"});
+  runs.push_back({"fit " + missing("p.xyz") + " -o " + missing("f.qxm") + " --max-error 1e999", "--max-error"});
+  // Four at a time: each run is a process start and a parse.
+  std::vector<CmdResult> results(runs.size());
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> workers;
+  for (int t = 0; t < 4; ++t)
+    workers.emplace_back([&] {
+      for (std::size_t i; (i = next++) < runs.size();) results[i] = quadrix_run(runs[i].args);
+    });
+  for (auto& w : workers) w.join();
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    EXPECT_EQ(results[i].code, 2) << runs[i].args << ": " << results[i].out;
+    EXPECT_NE(results[i].out.find(runs[i].option), std::string::npos) << runs[i].args << ": " << results[i].out;
+  }
+  // Numbers inside strings: sizes, colours, volume dims and spacing.
+  const std::vector<std::string> inside = {
+      "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size 0x10",
+      "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size nanx10",
+      "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,nan",
+      "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,0",
+      "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,4 --spacing 1,inf,1",
+      "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,4 --spacing 1,0,1",
+      "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,4 --header-bytes -1",
+  };
+  for (const std::string& args : inside) {
+    const CmdResult r = quadrix_run(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+  }
+  std::printf("%zu numeric options, %zu refused values tried\n", options, runs.size());
+  EXPECT_GE(options, 25u);
+}
+
+TEST(Cli, OpenRangesRefuseTheirEndsAndClosedRangesAcceptThem) {
+  ScratchDir dir("cli-ranges");
+  const auto model = dir / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  for (const char* v : {"0", "1"}) {
+    const CmdResult r = quadrix_run("convert skin " + q(dir / "b.pdb") + " -o " + q(dir / "k.qxm") + " --shrink " + v);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("--shrink"), std::string::npos) << r.out;
+  }
+  // Closed ends are accepted: the run gets past the command line (here to a finished render).
+  for (const char* v : {"0", "1"}) {
+    const CmdResult r = quadrix_run("render " + q(model) + " -o " + q(dir / "e.png") + " --backend cpu --size 32x32 --fill " + v);
+    EXPECT_EQ(r.code, 0) << r.out;
+  }
+}
+
+TEST(Cli, AMissingInputIsExitFiveForEveryCommand) {
+  ScratchDir dir("cli-missing");
+  const std::string out = q(dir / "out.qxm");
+  for (const std::string& args :
+       {"info " + q(dir / "no.qxm"), "render " + q(dir / "no.qxm") + " -o " + q(dir / "o.png"),
+        "fit " + q(dir / "no.xyz") + " -o " + out, "convert quads " + q(dir / "no.obj") + " -o " + out,
+        "convert skin " + q(dir / "no.pdb") + " -o " + out, "convert skin " + q(dir / "no.cin") + " -o " + out,
+        "convert volume " + q(dir / "no.nhdr") + " --iso 1 -o " + out,
+        "render " + q(dir / "no.ply") + " -o " + q(dir / "o.png")}) {
+    const CmdResult r = quadrix_run(args);
+    EXPECT_EQ(r.code, 5) << args << ": " << r.out;
+    EXPECT_NE(r.out.find("no."), std::string::npos) << args << ": " << r.out;
+  }
 }
