@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
   int rc = kInternal;
   const char* kind = "internal error";
   try {
+    // Every output of the command lands together at the end, or none does.
+    OutputTransaction outputs;
     for (auto& c : commands) {
       if (!c.app->parsed()) continue;
       report.json["command"] = c.app->get_name();
@@ -59,6 +61,9 @@ int main(int argc, char** argv) {
       kind = nullptr;
       break;
     }
+    kind = "internal error";
+    if (rc == kOk || rc == kExceeded) outputs.commit();
+    kind = nullptr;
   } catch (const FormatError& e) {
     std::cerr << "quadrix: bad input: " << e.what() << "\n";
     rc = kBadInput;

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
+#include <csignal>
 #include <thread>
 #include <cmath>
 #include <cstdio>
@@ -359,4 +361,62 @@ TEST(Cli, AMissingInputIsExitFiveForEveryCommand) {
     EXPECT_EQ(r.code, 5) << args << ": " << r.out;
     EXPECT_NE(r.out.find("no."), std::string::npos) << args << ": " << r.out;
   }
+}
+
+TEST(Cli, AFailedCommandLeavesNoOutputBehind) {
+  ScratchDir dir("cli-no-output");
+  const auto model = dir / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 4 -o " + q(model)).code, 0);
+  // The PNG is written before the depth image fails: neither may appear.
+  for (const char* backend : {"cpu", "gl"}) {
+    const CmdResult r = quadrix_run("render " + q(model) + " -o " + q(dir / "out.png") + " --size 32x32 --backend " +
+                                    backend + " --depth-out " + q(dir / "missing" / "d.pfm"));
+    if (r.code == 6) continue;  // no GL here: nothing to test on that backend
+    EXPECT_EQ(r.code, 5) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.png")) << backend;
+  }
+  // convert volume --write-volume writes the volume first; a bad iso-value then fails the command.
+  const CmdResult r = quadrix_run("convert volume --synth marschner-lobb --grid 8 --iso 1e9 --write-volume " +
+                                  q(dir / "v.nhdr") + " -o " + q(dir / "v.qxm"));
+  EXPECT_EQ(r.code, 3) << r.out;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename(), "s.qxm") << "left behind: " << e.path();
+}
+
+TEST(Cli, TemporariesOfAKilledRunAreRemovedByTheNextWrite) {
+  ScratchDir dir("cli-sigkill");
+  const auto nhdr = dir / "v.nhdr";
+  const auto temporaries = [&] {
+    std::vector<std::string> found;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+      if (e.path().filename().string().find(".tmp-") != std::string::npos) found.push_back(e.path().filename());
+    return found;
+  };
+  // The volume is written (to temporaries) before a conversion of several seconds: kill it then.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const std::string out = (dir / "v.qxm").string(), volume = nhdr.string();
+    ::execl(QUADRIX_BINARY, QUADRIX_BINARY, "convert", "volume", "--synth", "marschner-lobb", "--grid", "120", "--iso",
+            "0.5", "--write-volume", volume.c_str(), "-o", out.c_str(), "--quiet", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  while (temporaries().size() < 2 && std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the conversion ended before it was killed";
+  const auto left = temporaries();
+  ASSERT_EQ(left.size(), 2u) << "expected the .raw and .nhdr temporaries of the killed run";
+  EXPECT_FALSE(std::filesystem::exists(nhdr));
+  // A temporary of a running process (this test) is not touched.
+  const auto live = dir / fmt::format(".v.nhdr.tmp-{}-0000abcd", ::getpid());
+  { std::ofstream(live) << "in use"; }
+  // The next write to the same targets removes the killed run's temporaries.
+  const CmdResult r = quadrix_run("synth marschner-lobb --resolution 8 -o " + q(nhdr));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(nhdr));
+  EXPECT_EQ(temporaries(), std::vector<std::string>{live.filename().string()});
 }
