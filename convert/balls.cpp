@@ -14,6 +14,7 @@
 
 #include "convert/molecule.h"
 #include "core/error.h"
+#include "core/io/file.h"
 #include "core/log.h"
 
 namespace quadrix {
@@ -83,12 +84,12 @@ std::vector<Ball> read_columns(const fs::path& path, const BallReadOptions& o, b
     const std::string where = fmt::format("{}:{}", path.string(), line_no);
     for (auto& x : v) {
       std::string w;
-      if (!(s >> w)) throw FormatError(fmt::format("{}: expected 4 numbers (x y z {}), got '{}'", where, weights ? "w" : "r", line));
+      if (!(s >> w)) throw FormatError(fmt::format("{}: expected 4 numbers (x y z {}), got '{}'", where, weights ? "w" : "r", io::echo(line)));
       const auto r = std::from_chars(w.data(), w.data() + w.size(), x);
       if (r.ec != std::errc() || r.ptr != w.data() + w.size() || !std::isfinite(x))
-        throw FormatError(fmt::format("{}: '{}' is not a finite number", where, w));
+        throw FormatError(fmt::format("{}: '{}' is not a finite number", where, io::echo(w)));
     }
-    if (s >> extra) throw FormatError(fmt::format("{}: more than 4 values ('{}')", where, extra));
+    if (s >> extra) throw FormatError(fmt::format("{}: more than 4 values ('{}')", where, io::echo(extra)));
     if (!(v[3] > 0))
       throw FormatError(fmt::format("{}: {} {} must be > 0", where, weights ? "weight (squared radius)" : "radius", v[3]));
     Ball b;

@@ -298,7 +298,7 @@ Volume read_nrrd(const fs::path& path) {
       throw FormatError(fmt::format("{}: multi-file data ('data file: {}') is not supported", what, data_file));
     fs::path df = data_file;
     if (df.is_relative()) df = path.parent_path() / df;
-    data_what = df.string();
+    data_what = fmt::format("{} (data file {})", what, df.string());
     std::error_code ec;
     if (fs::exists(df, ec) && !fs::is_directory(df, ec) && !fs::is_regular_file(df, ec))
       throw FormatError(fmt::format("{}: 'data file: {}' is not a regular file (a device or a pipe)", what,
@@ -306,7 +306,13 @@ Volume read_nrrd(const fs::path& path) {
     const double need = static_cast<double>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) * std::max(sizes[2], 0) *
                         static_cast<double>(voxel_bytes(*type));
     const bool exact = !gz && line_skip == 0 && byte_skip >= 0 && need < 1e18;
-    data = io::read_file(df, exact ? static_cast<std::size_t>(byte_skip) + static_cast<std::size_t>(need) : io::kNoLimit);
+    try {
+      data = io::read_file(df, exact ? static_cast<std::size_t>(byte_skip) + static_cast<std::size_t>(need) : io::kNoLimit);
+    } catch (const IoError& e) {  // the header is where the user looks first: name it too
+      throw IoError(fmt::format("{}: data file '{}': {}", what, io::echo(data_file), e.what()));
+    } catch (const FormatError& e) {
+      throw FormatError(fmt::format("{}: data file '{}': {}", what, io::echo(data_file), e.what()));
+    }
   } else {
     if (data_start == std::string::npos)
       throw FormatError(fmt::format("{}: no 'data file' field and no attached data after a blank line", what));

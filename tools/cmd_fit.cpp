@@ -76,7 +76,12 @@ void add_fit(CLI::App& root, Commands& commands) {
                         SlimFitOptions o = a->options;
                         o.max_error = a->max_error_abs > 0 ? a->max_error_abs : a->max_error;
                         o.max_error_is_absolute = a->max_error_abs > 0;
-                        SlimFitResult r = mesh ? fit_slim(cloud, *mesh, o) : fit_slim(cloud, o);
+                        SlimFitResult r;
+                        try {
+                          r = mesh ? fit_slim(cloud, *mesh, o) : fit_slim(cloud, o);
+                        } catch (const InvalidInput& e) {  // unusable data: say which file held it
+                          throw InvalidInput(fmt::format("{}: {}", a->points, e.what()));
+                        }
                         r.model.metadata["producer"] =
                             fmt::format("quadrix fit {}{}", a->points,
                                         o.sharp ? fmt::format(" --sharp --sharp-angle {:g}", o.sharp_angle_deg) : "");

@@ -1,6 +1,8 @@
 // quadrix: one command for fitting, converting, rendering and inspecting quadric models.
 #include <exception>
 #include <iostream>
+#include <string>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -18,6 +20,21 @@ void add_view(CLI::App& root, Commands& commands);
 void add_convert(CLI::App& root, Commands& commands);
 void add_bench(CLI::App& root, Commands& commands);
 void add_mesh(CLI::App& root, Commands& commands);
+
+namespace {
+// An error message as printed: control bytes (a file's content echoed by a reader that did not
+// escape it) as \xNN, so nothing reaches the terminal raw; newlines kept.
+std::string printable(std::string_view message) {
+  std::string out;
+  out.reserve(message.size());
+  for (const char c : message) {
+    const auto u = static_cast<unsigned char>(c);
+    if ((u < 0x20 && c != '\n' && c != '\t') || u == 0x7f) out += fmt::format("\\x{:02x}", u);
+    else out += c;
+  }
+  return out;
+}
+}  // namespace
 }  // namespace quadrix::cli
 
 int main(int argc, char** argv) {
@@ -65,28 +82,28 @@ int main(int argc, char** argv) {
     if (rc == kOk || rc == kExceeded) outputs.commit();
     kind = nullptr;
   } catch (const FormatError& e) {
-    std::cerr << "quadrix: bad input: " << e.what() << "\n";
+    std::cerr << "quadrix: bad input: " << printable(e.what()) << "\n";
     rc = kBadInput;
   } catch (const InvalidInput& e) {
-    std::cerr << "quadrix: invalid input: " << e.what() << "\n";
+    std::cerr << "quadrix: invalid input: " << printable(e.what()) << "\n";
     rc = kBadInput;
   } catch (const IoError& e) {
-    std::cerr << "quadrix: i/o error: " << e.what() << "\n";
+    std::cerr << "quadrix: i/o error: " << printable(e.what()) << "\n";
     rc = kIo;
   } catch (const SolverError& e) {
-    std::cerr << "quadrix: computation failed: " << e.what() << "\n";
+    std::cerr << "quadrix: computation failed: " << printable(e.what()) << "\n";
     rc = kComputation;
   } catch (const GlError& e) {
-    std::cerr << "quadrix: OpenGL: " << e.what() << "\n";
+    std::cerr << "quadrix: OpenGL: " << printable(e.what()) << "\n";
     rc = kGl;
   } catch (const CLI::ValidationError& e) {
-    std::cerr << "quadrix: usage: " << e.what() << "\n";
+    std::cerr << "quadrix: usage: " << printable(e.what()) << "\n";
     rc = kUsage;
   } catch (const std::bad_alloc&) {
     std::cerr << "quadrix: out of memory\n";
     rc = kComputation;
   } catch (const std::exception& e) {
-    std::cerr << "quadrix: " << kind << ": " << e.what() << "\n";
+    std::cerr << "quadrix: " << kind << ": " << printable(e.what()) << "\n";
     rc = kInternal;
   }
   if (!common.report.empty()) {
@@ -95,7 +112,7 @@ int main(int argc, char** argv) {
     try {
       write_file_atomically(common.report, [&](std::ostream& out) { out << report.json.dump(2) << "\n"; });
     } catch (const std::exception& e) {
-      std::cerr << "quadrix: i/o error: cannot write report: " << e.what() << "\n";
+      std::cerr << "quadrix: i/o error: cannot write report: " << printable(e.what()) << "\n";
       if (rc == kOk) rc = kIo;
     }
   }

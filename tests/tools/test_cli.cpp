@@ -420,3 +420,57 @@ TEST(Cli, TemporariesOfAKilledRunAreRemovedByTheNextWrite) {
   EXPECT_TRUE(std::filesystem::exists(nhdr));
   EXPECT_EQ(temporaries(), std::vector<std::string>{live.filename().string()});
 }
+
+TEST(Cli, MalformedCorpusGivesTheManifestsExitCodeAndMessage) {
+  // tests/data/malformed: files made by make_corpus.py; MANIFEST.tsv holds, per file, the command
+  // kind that reads it, the exit code and a fragment of the message (which also names the file).
+  const std::filesystem::path root = std::filesystem::path(QUADRIX_TEST_DATA) / "malformed";
+  std::ifstream manifest(root / "MANIFEST.tsv");
+  ASSERT_TRUE(manifest) << root / "MANIFEST.tsv";
+  ScratchDir dir("cli-corpus");
+  const std::string out = q(dir / "out.qxm"), files = (root / "files").string();
+  struct Case {
+    std::string file, args, fragment;
+    int code = 0;
+  };
+  std::vector<Case> cases;
+  for (std::string line; std::getline(manifest, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    Case c;
+    std::string kind, code;
+    std::getline(fields, c.file, '\t'), std::getline(fields, kind, '\t'), std::getline(fields, code, '\t');
+    std::getline(fields, c.fragment);
+    c.code = std::stoi(code);
+    const std::string f = q(root / "files" / c.file);
+    if (kind == "info") c.args = "info " + f;
+    else if (kind == "quads") c.args = "convert quads " + f + " -o " + out;
+    else if (kind == "fit") c.args = "fit " + f + " -o " + out;
+    else if (kind == "volume") c.args = "convert volume " + f + " --iso 0.5 -o " + out;
+    else if (kind == "tets") c.args = "convert volume --tets " + f + " --values " + q(root / "files" / "values4.txt") + " --iso 0.5 -o " + out;
+    else if (kind == "skin") c.args = "convert skin " + f + " -o " + out;
+    else FAIL() << "unknown command kind '" << kind << "' in: " << line;
+    cases.push_back(c);
+  }
+  ASSERT_GE(cases.size(), 150u);
+  std::vector<CmdResult> results(cases.size());
+  std::atomic<std::size_t> next{0};
+  std::vector<std::thread> workers;
+  for (int t = 0; t < 4; ++t)
+    workers.emplace_back([&] {
+      for (std::size_t i; (i = next++) < cases.size();) results[i] = quadrix_run(cases[i].args);
+    });
+  for (auto& w : workers) w.join();
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    SCOPED_TRACE(cases[i].file);
+    EXPECT_EQ(results[i].code, cases[i].code) << results[i].out;
+    EXPECT_NE(results[i].out.find(cases[i].file), std::string::npos) << "the message names no file: " << results[i].out;
+    EXPECT_NE(results[i].out.find(cases[i].fragment), std::string::npos)
+        << "expected '" << cases[i].fragment << "' in: " << results[i].out;
+    EXPECT_LE(results[i].out.size(), 1000u) << "a message of " << results[i].out.size() << " bytes";
+    EXPECT_FALSE(std::any_of(results[i].out.begin(), results[i].out.end(),
+                             [](char c) { return (static_cast<unsigned char>(c) < 0x20 && c != '\n') || c == 0x7f; }))
+        << "raw control bytes in: " << results[i].out;
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "a failed command left an output behind";
+}
