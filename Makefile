@@ -6,7 +6,7 @@ CMAKE_ARGS ?=
 DEMO_OUT   ?= out/demo
 QUADRIX    := $(BUILD)/tools/quadrix
 
-.PHONY: all deps configure build test test-sanitize demo bench clean
+.PHONY: all deps configure build test test-sanitize demo bench fuzz clean
 
 all: build
 
@@ -35,6 +35,11 @@ demo: build
 
 bench: build
 	@tools/bench.sh $(QUADRIX) out/bench
+
+# libFuzzer (clang, ASan + UBSan) on the I/O kit's readers, FUZZ_SECONDS each from the malformed corpus.
+FUZZ_SECONDS ?= 20
+fuzz:
+	@tools/fuzz.sh out/fuzz $(FUZZ_SECONDS)
 
 clean:
 	rm -rf $(BUILD) $(SAN_BUILD) out
