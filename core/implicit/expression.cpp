@@ -257,6 +257,21 @@ struct RayDual {
   Interval v, d;
 };
 
+// Statements `float out = base^n;` by repeated squaring, unrolled.
+std::string power_code(const std::string& base, int n, const std::string& out) {
+  if (n == 0) return fmt::format("  float {} = 1.0;\n", out);
+  std::string code = fmt::format("  float {}_b0 = {};\n", out, base);
+  std::string acc;
+  int k = 0;
+  for (unsigned m = static_cast<unsigned>(n < 0 ? -n : n);; ++k) {
+    if (m & 1u) acc = acc.empty() ? fmt::format("{}_b{}", out, k) : fmt::format("{} * {}_b{}", acc, out, k);
+    m >>= 1;
+    if (!m) break;
+    code += fmt::format("  float {0}_b{1} = {0}_b{2} * {0}_b{2};\n", out, k + 1, k);
+  }
+  return code + fmt::format("  float {} = {};\n", out, n < 0 ? "1.0 / (" + acc + ")" : acc);
+}
+
 std::string literal(double v) { return v < 0 ? fmt::format("({:.9e})", v) : fmt::format("{:.9e}", v); }
 
 }  // namespace
@@ -472,10 +487,15 @@ std::string Expression::glsl(std::string_view name) const {
         ve = fmt::format("{} / {}", a, b);
         ge = fmt::format("qx_div({}, {})", a, b);
         break;
-      case Op::pow_int:
-        ve = fmt::format("qx_powi({}, {})", a, nd.n);
-        ge = fmt::format("vec4(qx_powi({0}.x, {1}), {1}.0 * qx_powi({0}.x, {2}) * {0}.yzw)", a, nd.n, nd.n - 1);
+      case Op::pow_int: {
+        // Straight-line products (loops per power make a JIT like llvmpipe's crawl).
+        const std::string pv = fmt::format("q{}", i);
+        v += power_code(a, nd.n, pv);
+        g += power_code(ax, nd.n - 1, pv);
+        ve = pv;
+        ge = fmt::format("vec4({0} * {1}, {2}.0 * {0} * {3}.yzw)", pv, ax, nd.n, a);
         break;
+      }
       case Op::pow:
         ve = fmt::format("qx_pow({}, {})", a, b);
         ge = fmt::format("vec4(qx_pow({0}.x, {1}.x), {1}.x * qx_pow({0}.x, {1}.x - 1.0) * {0}.yzw)", a, b);
