@@ -216,3 +216,27 @@ TEST(ImplicitReference, MixesWithOtherPrimitives) {
   ASSERT_TRUE(behind);
   EXPECT_EQ(behind->kind, PrimitiveKind::glyph);
 }
+
+// The iterative and trigonometric Chebyshev forms of Chmutov 50 are the same surface inside the
+// cube: the reference finds the same first hits for both.
+TEST(ImplicitRoot, ChmutovFormsAgree) {
+  const Box3 cube{Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  ImplicitSurface iter = gallery_surface("chmutov-iter-50").surface, trig = gallery_surface("chmutov-trig-50").surface;
+  iter.bounds = trig.bounds = cube;
+  const CompiledImplicit a = compile(iter), b = compile(trig);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int hits = 0, same = 0;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::Vector3d target(0.6 * u(rng), 0.6 * u(rng), 0.6 * u(rng));
+    const Eigen::Vector3d eye = 4.0 * Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const Ray ray{eye, (target - eye).normalized()};
+    const auto ra = first_root(a, ray, 0, 20), rb = first_root(b, ray, 0, 20);
+    ASSERT_EQ(ra.has_value(), rb.has_value()) << k;
+    if (!ra) continue;
+    ++hits;
+    same += std::abs(ra->t - rb->t) < 1e-6;
+    EXPECT_NEAR(ra->t, rb->t, 1e-6) << "ray " << k << " certain " << ra->certain << rb->certain;
+  }
+  EXPECT_GT(hits, 200);
+}
