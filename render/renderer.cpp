@@ -50,7 +50,7 @@ struct Renderer::Impl {
     double FrameStats::*ms;
   };
   // Passes that fill the G-buffer (inside the statistics queries), then those that make the image.
-  std::array<Step, 4> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+  std::array<Step, 5> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
                                      {&glyph, &FrameStats::ms_geometry},
                                      {&mesh, &FrameStats::ms_geometry},
                                      {&implicit, &FrameStats::ms_geometry},
