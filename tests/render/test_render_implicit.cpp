@@ -170,7 +170,6 @@ TEST_F(GlImplicit, CoarseStepsAreCaught) {
   const Agreement a = run(m, view(g.surface.bounds, 40, 25), o, "barth-decic b = d/4");
   EXPECT_LT(std::min(a.coverage, a.depth), 0.9);
 }
-#endif
 
 // An implicit sphere and a tetrahedron-patch model overlapping: each pixel shows the nearer.
 TEST_F(GlImplicit, MixesDepthCorrectWithQuadricPatches) {
@@ -211,3 +210,4 @@ TEST_F(GlImplicit, FarAndThinSurfaces) {
   o.step_divisions = 2000;
   expect_agree(run(m, view(m.implicits[0].bounds, 10, 50), o, "thin far torus"), 150);
 }
+#endif
