@@ -156,6 +156,7 @@ Box3 bounds(const Model& m) {
   for (const auto& s : m.slims) b.extend(bounds(s));
   for (const auto& t : m.tets) b.extend(bounds(t));
   for (const auto& g : m.glyphs) b.extend(bounds(g));
+  for (const auto& s : m.implicits) b.extend(s.bounds);
   return b;
 }
 

@@ -81,6 +81,16 @@ struct Box3 {
   double diagonal() const { return empty() ? 0.0 : (max - min).norm(); }
 };
 
+/// An implicit surface S(x, y, z) = 0 in world coordinates, drawn where it lies inside its
+/// bounds ([Singh10]). The expression grammar is core/implicit/expression.h; every parameter
+/// it names needs a value here.
+struct ImplicitSurface {
+  std::string expression;
+  std::map<std::string, double> parameters;
+  Box3 bounds;  ///< world units, not empty
+  std::optional<Rgb> colour;
+};
+
 /// A SLIM hierarchy beside the drawn patches (Ohtake et al. 2005 §4, Kanai's .slim2t): a forest
 /// of balls, each merged ball a fit over the balls below it, with its fitting error.
 /// Ball ids: id < Model::slims.size() is Model::slims[id], the rest are others[id − slims.size()];
@@ -100,10 +110,11 @@ struct Model {
   SlimHierarchy slim_hierarchy;  ///< empty, or parent links and errors for slims + others
   std::vector<TetPatch> tets;
   std::vector<Glyph> glyphs;
+  std::vector<ImplicitSurface> implicits;
   /// Header metadata (`comment key value` lines): producer, units, max_error, …
   std::map<std::string, std::string> metadata;
 
-  std::size_t size() const { return slims.size() + tets.size() + glyphs.size(); }
+  std::size_t size() const { return slims.size() + tets.size() + glyphs.size() + implicits.size(); }
   bool empty() const { return size() == 0; }
 };
 

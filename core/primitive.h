@@ -7,7 +7,7 @@
 namespace quadrix {
 
 /// Every kind a renderer draws (the value is the id's top bits).
-enum class PrimitiveKind : std::uint8_t { none = 0, slim = 1, tet = 2, glyph = 3, mesh = 4 };
+enum class PrimitiveKind : std::uint8_t { none = 0, slim = 1, tet = 2, glyph = 3, mesh = 4, implicit = 5 };
 
 /// Bits of an id that hold the index; larger indices cannot be named.
 inline constexpr int kPrimitiveIndexBits = 28;

@@ -10,6 +10,7 @@
 #include "core/bvh.h"
 #include "core/culling.h"
 #include "core/error.h"
+#include "core/implicit/surface.h"
 
 namespace quadrix {
 namespace {
@@ -71,8 +72,21 @@ struct ReferenceScene::Impl {
   const Model* model;
   std::vector<PreparedTet> tets;
   std::vector<PreparedGlyph> glyphs;
+  std::vector<implicit::CompiledImplicit> implicits;
   std::vector<Ref> refs;
   Bvh bvh;
+
+  // Implicits are two-sided: the first root, guaranteed by interval isolation, whatever its facing.
+  bool hit_implicit(const implicit::CompiledImplicit& s, const Ray& ray, double tmin, double tmax, Hit& hit) const {
+    const auto root = implicit::first_root(s, ray, tmin, tmax);
+    if (!root) return false;
+    hit.t = root->t;
+    hit.point = ray.at(root->t);
+    hit.gradient = s.expression.value_gradient(hit.point, s.parameters).gradient;
+    if (!hit.gradient.allFinite()) hit.gradient.setZero();
+    hit.front_facing = hit.gradient.dot(ray.dir) <= 0;
+    return true;
+  }
 
   bool hit_tet(const PreparedTet& p, const Ray& ray, double tmin, double tmax, bool cull, Hit& hit) const {
     Ray local;
@@ -140,6 +154,12 @@ ReferenceScene::ReferenceScene(const Model& model) : impl_(std::make_unique<Impl
     impl_->refs.push_back({PrimitiveKind::glyph, i});
     boxes.push_back(bounds(model.glyphs[i]));
   }
+  impl_->implicits.reserve(model.implicits.size());
+  for (std::uint32_t i = 0; i < model.implicits.size(); ++i) {
+    impl_->implicits.push_back(implicit::compile(model.implicits[i]));
+    impl_->refs.push_back({PrimitiveKind::implicit, i});
+    boxes.push_back(model.implicits[i].bounds);
+  }
   impl_->bvh = Bvh(boxes);
 }
 
@@ -178,6 +198,9 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
       case PrimitiveKind::glyph:
         if (!impl_->hit_glyph(impl_->glyphs[r.index], ray, tmin, best_t, options.cull_backfaces, h)) return;
         break;
+      case PrimitiveKind::implicit:
+        if (!impl_->hit_implicit(impl_->implicits[r.index], ray, tmin, best_t, h)) return;
+        break;
       case PrimitiveKind::none:
       case PrimitiveKind::mesh: return;  // the reference traces no meshes
     }
@@ -210,8 +233,9 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
   if (out.normal.dot(ray.dir) > 0) out.normal = -out.normal;  // two-sided: face the viewer
   out.kind = best_ref.kind;
   out.index = static_cast<int>(best_ref.index);
-  const std::optional<Rgb>& colour =
-      best_ref.kind == PrimitiveKind::tet ? m.tets[best_ref.index].colour : m.glyphs[best_ref.index].colour;
+  const std::optional<Rgb>& colour = best_ref.kind == PrimitiveKind::tet        ? m.tets[best_ref.index].colour
+                                     : best_ref.kind == PrimitiveKind::implicit ? m.implicits[best_ref.index].colour
+                                                                                : m.glyphs[best_ref.index].colour;
   if (colour) out.colour = *colour;
   return out;
 }

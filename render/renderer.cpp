@@ -13,6 +13,7 @@
 #include "render/gl/objects.h"
 #include "render/passes/frame.h"
 #include "render/passes/glyph_pass.h"
+#include "render/passes/implicit_pass.h"
 #include "render/passes/mesh_pass.h"
 #include "render/passes/shade_pass.h"
 #include "render/passes/slim_pass.h"
@@ -37,6 +38,7 @@ struct Renderer::Impl {
   GlyphPass glyph;
   MeshPass mesh;
   SlimPass slim;
+  ImplicitPass implicit;
   ShadePass shade;
   SlimOutlinePass slim_outline{slim};
   Box3 box;            // of the model's primitives
@@ -48,9 +50,10 @@ struct Renderer::Impl {
     double FrameStats::*ms;
   };
   // Passes that fill the G-buffer (inside the statistics queries), then those that make the image.
-  std::array<Step, 4> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
+  std::array<Step, 5> gbuffer_steps{{{&tet, &FrameStats::ms_geometry},
                                      {&glyph, &FrameStats::ms_geometry},
                                      {&mesh, &FrameStats::ms_geometry},
+                                     {&implicit, &FrameStats::ms_geometry},
                                      {&slim, &FrameStats::ms_slim}}};
   std::array<Step, 2> image_steps{{{&shade, &FrameStats::ms_shading}, {&slim_outline, &FrameStats::ms_shading}}};
 };
@@ -62,13 +65,18 @@ Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
 
 Renderer::~Renderer() = default;
 
-void Renderer::set_model(const Model& model) {
+void Renderer::set_model(const Model& model) { set_model(model, AmpOptions{}); }
+
+void Renderer::set_model(const Model& model, const AmpOptions& amp) {
   impl_->tet.upload(model.tets);
   impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model.slims);
   impl_->box = bounds(model);
   impl_->closed = surfaces_are_closed(model);
+  impl_->implicit.upload(model.implicits, amp);
 }
+
+double Renderer::implicit_compile_ms() const { return impl_->implicit.compile_ms(); }
 
 void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) { impl_->mesh.upload(mesh, colour); }
 
@@ -77,7 +85,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   const auto start = Clock::now();
   I.targets.resize(camera.width, camera.height);
   FrameStats st;
-  st.primitives = I.tet.count() + I.glyph.count() + I.slim.count();
+  st.primitives = I.tet.count() + I.glyph.count() + I.slim.count() + I.implicit.count();
   const CameraUniforms camera_uniforms(camera);
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).
   RenderOptions exact = o;

@@ -11,6 +11,7 @@
 #include "core/image.h"
 #include "core/mesh_io.h"
 #include "core/model.h"
+#include "render/amp_options.h"
 
 namespace quadrix::render {
 
@@ -90,6 +91,10 @@ public:
   /// Uploads a model's primitives (float, relative to each primitive's local origin).
   /// \throws GlError (e.g. out of GPU memory), InvalidInput for kinds not supported yet.
   void set_model(const Model& model);
+  /// As set_model, with the adaptive-marching settings of its implicit surfaces.
+  void set_model(const Model& model, const AmpOptions& amp);
+  /// Milliseconds the last set_model spent generating and compiling implicit-surface programs.
+  double implicit_compile_ms() const;
   /// Ordinary triangles drawn into the same G-buffer (polygons fanned).
   void set_mesh(const PolygonMesh& mesh, Rgb colour = {180, 180, 190});
 

@@ -1,0 +1,43 @@
+// Helpers of the generated implicit-surface code (core/implicit/expression.h: Expression::glsl):
+// powers, real powers and Chebyshev polynomials, each as a value and as a dual (value, ∇).
+
+// aⁿ by repeated squaring (a < 0 fine: a whole exponent is a product).
+float qx_powi(float a, int n) {
+  float r = 1.0, b = a;
+  for (int m = abs(n); m > 0; m >>= 1) {
+    if ((m & 1) != 0) r *= b;
+    b *= b;
+  }
+  return n < 0 ? 1.0 / r : r;
+}
+
+// a^e: a product for whole e, else pow (undefined for a < 0, as on the CPU where it is NaN).
+float qx_pow(float a, float e) {
+  if (e == floor(e) && abs(e) < 65536.0) return qx_powi(a, int(e));
+  return a < 0.0 ? (0.0 / 0.0) : pow(a, e);
+}
+
+vec4 qx_div(vec4 a, vec4 b) {
+  float q = a.x / b.x;
+  return vec4(q, (a.yzw - q * b.yzw) / b.x);
+}
+
+// (T_n(x), T_n′(x)) by the three-term recurrences of T and U (T_n′ = n·U_{n−1}).
+vec2 qx_cheb(int n, float x) {
+  if (n == 0) return vec2(1.0, 0.0);
+  float t0 = 1.0, t1 = x, u0 = 1.0, u1 = 2.0 * x;
+  for (int k = 1; k < n; ++k) {
+    float t2 = 2.0 * x * t1 - t0;
+    t0 = t1;
+    t1 = t2;
+    float u2 = 2.0 * x * u1 - u0;
+    u0 = u1;
+    u1 = u2;
+  }
+  return vec2(t1, float(n) * u0);
+}
+
+vec4 qx_cheb_dual(int n, vec4 a) {
+  vec2 c = qx_cheb(n, a.x);
+  return vec4(c.x, c.y * a.yzw);
+}
