@@ -21,7 +21,7 @@ Box3 bounds(const TetPatch& t) {
 }
 
 Box3 bounds(const Glyph& g) {
-  Eigen::Vector3d half;
+  Eigen::Vector3d half = Eigen::Vector3d::Zero();
   switch (g.kind) {
     case GlyphKind::sphere: half.setConstant(g.radius); break;
     case GlyphKind::ellipsoid:
