@@ -13,6 +13,7 @@
 #include "core/synth.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "tests/render/gl_test.h"
 #include "tests/render/random_models.h"
 
 using namespace quadrix;
@@ -125,16 +126,8 @@ TEST(CullingExact, CpuReferenceCullingChangesNoPixel) {
   }
 }
 
-class CullingExactGl : public ::testing::Test {
+class CullingExactGl : public GlTest {
 protected:
-  void SetUp() override {
-    try {
-      context_ = render::create_context("auto");
-    } catch (const std::exception& e) {
-      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
-    }
-    renderer_ = std::make_unique<render::Renderer>(*context_);
-  }
   Images draw(const Camera& cam, bool cull, render::FrameStats* stats = nullptr) {
     render::RenderOptions o;
     o.cull = cull;
@@ -144,8 +137,6 @@ protected:
     const auto g = renderer_->read_gbuffer();
     return {g.coverage, g.depth};
   }
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::Renderer> renderer_;
 };
 
 TEST_F(CullingExactGl, CullingChangesNoPixelAndMatchesTheReference) {

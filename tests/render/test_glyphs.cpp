@@ -16,6 +16,7 @@
 #include "core/synth.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "tests/render/gl_test.h"
 #include "tests/render/gl_compare.h"
 
 using namespace quadrix;
@@ -23,16 +24,8 @@ using quadrix::testing_gl::Comparison;
 
 namespace {
 
-class GlGlyphs : public ::testing::Test {
+class GlGlyphs : public GlTest {
 protected:
-  void SetUp() override {
-    try {
-      context_ = render::create_context("auto");
-    } catch (const std::exception& e) {
-      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
-    }
-    renderer_ = std::make_unique<render::Renderer>(*context_);
-  }
   render::GBuffer draw(const Model& m, const Camera& cam, render::RenderOptions o = {}) {
     renderer_->set_model(m);
     last_stats_ = renderer_->draw(cam, o);
@@ -52,8 +45,6 @@ protected:
                 c.depth_p99, c.normal_median_deg, c.normal_p99_deg, c.covered);
     return c;
   }
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::Renderer> renderer_;
   render::FrameStats last_stats_;
 };
 

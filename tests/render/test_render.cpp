@@ -27,6 +27,7 @@
 #include "render/context.h"
 #include "render/gl/objects.h"
 #include "render/renderer.h"
+#include "tests/render/gl_test.h"
 #include "tests/render/random_models.h"
 
 using namespace quadrix;
@@ -81,16 +82,8 @@ Comparison compare(const ReferenceImage& ref, const render::GBuffer& gl) {
   return c;
 }
 
-class GlRender : public ::testing::Test {
+class GlRender : public GlTest {
 protected:
-  void SetUp() override {
-    try {
-      context_ = render::create_context("auto");
-    } catch (const std::exception& e) {
-      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
-    }
-    renderer_ = std::make_unique<render::Renderer>(*context_);
-  }
   Comparison run(const Model& m, const Camera& cam, bool cull) {
     renderer_->set_model(m);
     render::RenderOptions o;
@@ -105,8 +98,6 @@ protected:
                 c.depth_p99, c.normal_median_deg, c.covered);
     return c;
   }
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::Renderer> renderer_;
 };
 
 void expect_accurate(const Comparison& c, int min_covered) {

@@ -14,6 +14,7 @@
 #include "core/synth.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "tests/render/gl_test.h"
 
 using namespace quadrix;
 
@@ -66,16 +67,8 @@ Agreement agreement(const ReferenceImage& ref, const render::GBuffer& gl) {
   return a;
 }
 
-class GlImplicit : public ::testing::Test {
+class GlImplicit : public GlTest {
 protected:
-  void SetUp() override {
-    try {
-      context_ = render::create_context("auto");
-    } catch (const std::exception& e) {
-      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
-    }
-    renderer_ = std::make_unique<render::Renderer>(*context_);
-  }
   Agreement run(const Model& m, const Camera& cam, const render::AmpOptions& amp, const std::string& what) {
     renderer_->set_model(m, amp);
     const auto t0 = std::chrono::steady_clock::now();
@@ -91,8 +84,6 @@ protected:
                 ms(t2 - t1));
     return a;
   }
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::Renderer> renderer_;
 };
 
 void expect_agree(const Agreement& a, int min_covered) {

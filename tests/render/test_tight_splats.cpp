@@ -13,6 +13,7 @@
 #include "core/synth.h"
 #include "render/context.h"
 #include "render/renderer.h"
+#include "tests/render/gl_test.h"
 
 using namespace quadrix;
 using Eigen::Vector3d;
@@ -86,16 +87,8 @@ TEST(TightSplats, PlaneGivesAThinSlabAndNoGradientTheBall) {
   EXPECT_FALSE(slim_patch_slab(p).tight);
 }
 
-class TightSplatsGl : public ::testing::Test {
+class TightSplatsGl : public GlTest {
 protected:
-  void SetUp() override {
-    try {
-      context_ = render::create_context("auto");
-    } catch (const std::exception& e) {
-      GTEST_SKIP() << "no headless OpenGL 4.5 context: " << e.what();
-    }
-    renderer_ = std::make_unique<render::Renderer>(*context_);
-  }
   render::GBuffer draw(const Camera& cam, bool tight, render::FrameStats& st) {
     render::RenderOptions o;
     o.slim_tight_splats = tight;
@@ -103,8 +96,6 @@ protected:
     st = renderer_->draw(cam, o);
     return renderer_->read_gbuffer();
   }
-  std::unique_ptr<render::GlContext> context_;
-  std::unique_ptr<render::Renderer> renderer_;
 };
 
 TEST_F(TightSplatsGl, NoCoveredPixelLiesOutsideItsTightSplat) {
