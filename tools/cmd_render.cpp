@@ -1,6 +1,7 @@
 // quadrix render MODEL --out img.png: ray-cast a model with the OpenGL renderer (contexts osmesa,
 // egl, glfw) or the double-precision CPU reference.
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <cmath>
 #include <numbers>
@@ -106,6 +107,19 @@ FloatImage normals_of(const render::GBuffer& g) {
 
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   if (a.out.empty()) throw CLI::ValidationError("--out", "an output PNG is required");
+  // The format follows the name: PNG images, PFM depth and normals; anything else is refused
+  // rather than written as PNG bytes under another extension.
+  const auto expect_extension = [](const std::string& option, const std::string& file, const char* ext,
+                                   const char* format) {
+    std::string e = std::filesystem::path(file).extension().string();
+    for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (!file.empty() && e != ext)
+      throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a {} name", file,
+                                                     format, ext));
+  };
+  expect_extension("--out", a.out, ".png", "PNG");
+  expect_extension("--depth-out", a.depth_out, ".pfm", "PFM");
+  expect_extension("--normal-out", a.normal_out, ".pfm", "PFM");
   const auto [w, h] = parse_size(a.size);
   const auto implicit_surface = implicit_from_options(a);
   if (a.model.empty() && !implicit_surface) throw CLI::ValidationError("MODEL", "give a MODEL, --implicit or --surface");
@@ -183,6 +197,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 
   if (backend == "cpu") {
     if (mesh) throw InvalidInput("--mesh needs the GL backend");
+    if (a.shading != "phong")
+      throw CLI::ValidationError("--shading", fmt::format("the CPU reference shades phong only, not {}; use --backend gl", a.shading));
     const double t0 = report.elapsed();
     const ReferenceScene scene(model);
     Progress progress("render", progress_allowed(common));

@@ -112,6 +112,35 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(quadrix_run("render --help").code, 0);
 }
 
+// The output format follows the name (PNG images, PFM depth and normals) and every backend honours
+// --shading or refuses: nothing written under a wrong extension, no silent Phong.
+TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
+  ScratchDir dir("cli-honest");
+  const auto model = dir / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  for (const std::string out : {"a.jpg", "a.PPM", "a"}) {
+    const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / out) + " --size 32x32");
+    EXPECT_EQ(r.code, 2) << out << ": " << r.out;
+    EXPECT_NE(r.out.find("PNG"), std::string::npos) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir / out)) << out;
+  }
+  CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / "b.png") + " --size 32x32 --depth-out " +
+                            q(dir / "d.png"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "b.png"));
+  for (const std::string shading : {"npr", "envmap"}) {
+    r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / "c.png") + " --size 32x32 --shading " + shading);
+    EXPECT_EQ(r.code, 2) << shading << ": " << r.out;
+    EXPECT_NE(r.out.find("phong only"), std::string::npos) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c.png"));
+  }
+  r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / "ok.PNG") + " --size 32x32 --depth-out " +
+                  q(dir / "d.pfm"));
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "ok.PNG"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "d.pfm"));
+}
+
 TEST(Cli, MissingFilesAndUnwritableOutputsFailCleanly) {
   ScratchDir dir("cli-io");
   CmdResult r = quadrix_run("info " + q(dir / "nope.qxm"));
