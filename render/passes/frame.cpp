@@ -38,6 +38,15 @@ void set_camera_uniforms(const gl::Program& p, const CameraUniforms& c) {
   p.set("u_viewport", c.viewport);
 }
 
+void begin_gbuffer_draw(const Frame& f) {
+  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+}
+
 void FrameTargets::resize(int w, int h) {
   if (w == width && h == height) return;
   width = w, height = h;

@@ -60,6 +60,10 @@ struct Frame {
   bool slim_cull = true;
 };
 
+/// The state every opaque pass draws into the G-buffer with: its framebuffer bound, depth test
+/// GL_LESS with depth writes, no blending, no face culling (a pass that culls enables it after).
+void begin_gbuffer_draw(const Frame& frame);
+
 /// One step of a frame. Each pass owns its programs and the GPU data of its primitives, and
 /// sets the GL state it draws with.
 class Pass {

@@ -97,12 +97,7 @@ void GlyphPass::upload(std::span<const Glyph> glyphs) {
 
 void GlyphPass::run(const Frame& f) {
   const RenderOptions& o = f.options;
-  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-  glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
+  begin_gbuffer_draw(f);
   set_camera_uniforms(program_, f.camera);
   program_.set("u_cull", o.cull ? 1 : 0);
   program_.set("u_count_stats", o.statistics ? 1 : 0);

@@ -83,12 +83,7 @@ void ImplicitPass::set_parameters(std::size_t i, const std::map<std::string, dou
 }
 
 void ImplicitPass::run(const Frame& f) {
-  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-  glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
+  begin_gbuffer_draw(f);
   const Eigen::Vector3d eye = f.camera.target_world - f.camera.target_minus_eye.cast<double>();
   glBindVertexArray(f.empty_vao);
   for (std::size_t i = 0; i < surfaces_.size(); ++i) {

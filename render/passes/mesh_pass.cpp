@@ -42,12 +42,7 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
 }
 
 void MeshPass::run(const Frame& f) {
-  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-  glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
+  begin_gbuffer_draw(f);
   set_camera_uniforms(program_, f.camera);
   program_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.target_world).cast<float>()));
   program_.set("u_colour", Eigen::Vector3f(colour_[0] / 255.f, colour_[1] / 255.f, colour_[2] / 255.f));

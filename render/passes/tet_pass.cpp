@@ -75,11 +75,7 @@ void TetPass::upload(std::span<const TetPatch> tets) {
 
 void TetPass::run(const Frame& f) {
   const RenderOptions& o = f.options;
-  glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDepthMask(GL_TRUE);
-  glDisable(GL_BLEND);
+  begin_gbuffer_draw(f);
   // Front faces of each tetrahedron only: every covered pixel gets exactly one ray.
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
