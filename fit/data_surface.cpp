@@ -203,13 +203,13 @@ void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<
   for (const auto& [i, d2] : nb) out.push_back(m.boundary[i]);
 }
 
-double DataSurface::distance(const Eigen::Vector3d& x, double cap) const {
+double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) const {
   const auto& m = *impl_;
   thread_local std::vector<Neighbour> nb;
   if (!m.triangles.empty()) {
     // BVH walk in squared distances, nearest box first, pruning boxes farther than the best
     // triangle so far (or than the cap).
-    const double cap2 = cap * cap * (1.0 + 1e-12);
+    const double cap2 = cap * cap * (1.0 + 1e-12), good2 = good * good;
     double best = cap2;
     const auto& nodes = m.bvh.nodes();
     const auto& items = m.bvh.items();
@@ -227,6 +227,7 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap) const {
           const auto& t = m.triangles[items[n.first + k]];
           best = std::min(best, point_triangle_distance2(x, t[0], t[1], t[2]));
         }
+        if (best <= good2) break;
         continue;
       }
       const std::uint32_t left = static_cast<std::uint32_t>(&n - nodes.data()) + 1, right = n.first;
@@ -318,11 +319,12 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
       const Eigen::Vector3d u = line.at(roots.t[k]);
       if (!(u.squaredNorm() < 1.0) || (patch.clip && !patch.clip->keeps(u))) continue;
       const Eigen::Vector3d x = patch.centre + patch.radius * u;
-      const double d = data.distance(x, bound);
-      if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
       const Eigen::Vector3d g = patch.local.gradient(u);
-      const bool aligned = std::abs(g[c.axis]) >= kAligned * g.norm();
-      if (aligned && d + reach > bound && reach > min_reach && c.depth < max_depth) split = true;
+      const bool may_split = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach && c.depth < max_depth;
+      // Any triangle within `good` settles this sample: within the bound, and no split.
+      const double d = data.distance(x, bound, may_split ? std::max(0.0, bound - reach) : bound);
+      if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
+      if (may_split && d + reach > bound) split = true;
     }
     if (!split) continue;
     const double q = 0.25 * c.h;

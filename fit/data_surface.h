@@ -49,7 +49,10 @@ public:
 
   /// Distance from x to the data's surface, world units (thread-safe). With a finite cap, any
   /// distance beyond the cap comes back as +inf (faster: a mesh walk prunes what lies farther).
-  double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity()) const;
+  /// With good > 0, a mesh walk stops at the first triangle within good and returns its
+  /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions).
+  double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
+                  double good = 0) const;
   /// Nearest intersection of the ray with the triangles (either side); nothing for points.
   /// front: whether that triangle faces the ray: counter-clockwise seen from the ray's origin, or
   /// clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).

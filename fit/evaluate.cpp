@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include <fmt/format.h>
@@ -68,6 +69,36 @@ PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, c
   return out;
 }
 
+std::optional<Eigen::Vector3d> neighbourhood_normal(const PointIndex& index, std::span<const Eigen::Vector3d> normals,
+                                                    const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                                                    std::vector<Neighbour>& scratch) {
+  constexpr std::size_t kNeighbours = 12;
+  index.nearest(p, kNeighbours, scratch);
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (const auto& [j, d2] : scratch) m += normals[j];
+  if (!(m.norm() >= 0.9 * double(scratch.size())) || scratch.size() < kNeighbours) return std::nullopt;
+  m.normalize();
+  if (m.dot(n) >= std::cos(30.0 * std::numbers::pi / 180.0)) return std::nullopt;
+  return m;
+}
+
+PointProbe measure_point(const ReferenceScene& scene, const TraceOptions& trace, const PointIndex& index,
+                         std::span<const Eigen::Vector3d> normals, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                         double h, double E, std::vector<SlimSample>* blended, bool* other) {
+  if (other) *other = false;
+  PointProbe probe = probe_point(scene, trace, p, n, h, E, blended);
+  if (probe.error <= E) return probe;
+  thread_local std::vector<Neighbour> near;
+  thread_local std::vector<SlimSample> again_blended;
+  const auto m = neighbourhood_normal(index, normals, p, n, near);
+  if (!m) return probe;
+  const PointProbe again = probe_point(scene, trace, p, *m, h, E, blended ? &again_blended : nullptr);
+  if (!(again.error < probe.error)) return probe;
+  if (other) *other = true;
+  if (blended) blended->swap(again_blended);
+  return {again.error, std::max(probe.reach, again.reach)};
+}
+
 std::size_t SlimError::count_above(double e) const {
   return std::size_t(std::count_if(per_point.begin(), per_point.end(), [e](double x) { return x > e; }));
 }
@@ -103,9 +134,12 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   double E = 0.25 * h;
   if (auto it = model.metadata.find("max_error_abs"); it != model.metadata.end())
     if (const double e = std::stod(it->second); e > 0 && e < h) E = e;
+  std::vector<Eigen::Vector3d> unit(normals.size());
+  for (std::size_t i = 0; i < normals.size(); ++i) unit[i] = normals[i].normalized();
+  const PointIndex index{std::span<const Eigen::Vector3d>(cloud.points)};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.points, 512), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i != r.end(); ++i)
-      out.per_point[i] = probe_point(scene, trace, cloud.points[i], normals[i].normalized(), heights[i], E).error;
+      out.per_point[i] = measure_point(scene, trace, index, unit, cloud.points[i], unit[i], heights[i], E).error;
   });
   double sum = 0;
   std::size_t hits = 0;

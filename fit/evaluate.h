@@ -3,6 +3,7 @@
 /// surface the renderer shows (per-ray blend of core/slim.h), along the point's normal.
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "core/points_io.h"
 #include "core/reference.h"
 #include "fit/data_surface.h"
+#include "fit/point_index.h"
 
 namespace quadrix {
 
@@ -46,6 +48,21 @@ double blend_reach(std::span<const SlimSample> blended, double offset);
 /// blended: the SLIM samples of the counted crossing (cleared first). n: unit.
 PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
                        const Eigen::Vector3d& n, double h, double E, std::vector<SlimSample>* blended = nullptr);
+
+/// The direction to measure a point along when its own normal is off: the mean normal of its
+/// neighbourhood (the 12 nearest points) when those agree among themselves (|Σn| ≥ 0.9·12) and
+/// the point's normal lies more than 30° from it — a sliver face in a fold of a mesh, a flipped
+/// scan normal. Otherwise none, and the point is measured along its own normal only. The fitter
+/// and evaluate_slim both measure min(along n, along this), so they report the same error.
+std::optional<Eigen::Vector3d> neighbourhood_normal(const PointIndex& index, std::span<const Eigen::Vector3d> normals,
+                                                    const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                                                    std::vector<Neighbour>& scratch);
+
+/// probe_point along n, and along neighbourhood_normal when that exists and the first probe is
+/// beyond E; the better of the two. other: set when the second direction counted.
+PointProbe measure_point(const ReferenceScene& scene, const TraceOptions& trace, const PointIndex& index,
+                         std::span<const Eigen::Vector3d> normals, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                         double h, double E, std::vector<SlimSample>* blended = nullptr, bool* other = nullptr);
 
 struct SlimError {
   std::size_t points = 0;

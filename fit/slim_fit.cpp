@@ -585,6 +585,14 @@ private:
         if (b.is_bounded) pilot_centres_.push_back(P_[b.centre]), pilot_R_.push_back(b.R);
       if (!pilot_centres_.empty())
         pilot_index_ = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(pilot_centres_));
+      // As many candidates as the pilots say the covering needs (about n / their mean cover,
+      // balls overlapping about twice), times candidates_per_patch for the greedy to choose from.
+      double covered = 0;
+      for (std::size_t k = 0; k < pilot; ++k) covered += double(covers_[k].size());
+      const double mean_cover = std::max(1.0, covered / double(pilot));
+      const auto wanted = std::size_t(opt_.candidates_per_patch * 2.0 * double(n) / mean_cover);
+      const std::size_t keep = std::clamp(wanted, std::min(opt_.min_candidates, rest.size()), rest.size());
+      rest.resize(keep - std::min(keep, pilot));
       evaluate(rest, nullptr);
     } else {
       evaluate(centres, nullptr);
@@ -675,6 +683,7 @@ private:
     const std::size_t n = P_.size();
     point_error_.resize(n, kInf);
     point_reach_.resize(n, kInf);
+    other_direction_.resize(n, 0);
     const auto& slims = result_.model.slims;
     double max_radius = 0;
     for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
@@ -686,7 +695,11 @@ private:
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         if (!stale[i]) continue;
         const double h = probe_height_[i];
-        const PointProbe probe = probe_point(scene, trace, P_[i], N_[i], h, E_, &blended);
+        bool other = false;
+        const PointProbe probe = measure_point(scene, trace, *index_, N_, P_[i], N_[i], h, E_, &blended, &other);
+        // Measured along its neighbourhood's normal: traced again in every round (staleness
+        // follows the first ray only).
+        other_direction_[i] = other;
         point_error_[i] = probe.error;
         point_reach_[i] = probe.reach;
         if (!std::isfinite(probe.error)) {
@@ -701,7 +714,10 @@ private:
       }
     });
     std::size_t failing = 0;
-    for (const double e : point_error_) failing += !(e <= E_);
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(point_error_[i] <= E_) && ++failing <= 8)
+        log::debug("fit_slim: point {} at ({:.6g}, {:.6g}, {:.6g}) normal ({:.3f}, {:.3f}, {:.3f}): {:.3g} E from the surface",
+                   i, P_[i].x(), P_[i].y(), P_[i].z(), N_[i].x(), N_[i].y(), N_[i].z(), point_error_[i] / E_);
     return failing;
   }
 
@@ -835,7 +851,7 @@ private:
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P_.size(), 1024), [&](const auto& r) {
           std::vector<Neighbour> near;
           for (std::size_t i = r.begin(); i != r.end(); ++i)
-            stale_points[i] = !(point_error_[i] <= E_) ||
+            stale_points[i] = !(point_error_[i] <= E_) || other_direction_[i] ||
                               changed.meets(P_[i] + probe_height_[i] * N_[i], -N_[i], point_reach_[i], near);
         });
         std::vector<std::uint8_t> was(balls_.size(), 0);
@@ -1018,6 +1034,7 @@ private:
   std::vector<std::vector<double>> patch_errors_;    // per candidate: its last surface samples' distances
   std::vector<double> patch_reach_;                  // per candidate: how far its probes' blends looked
   std::vector<double> point_reach_;                  // per point: how far its probe's blend looked
+  std::vector<std::uint8_t> other_direction_;         // per point: measured along its neighbourhood's normal
   std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
 };
 

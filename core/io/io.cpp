@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 
@@ -188,20 +189,27 @@ PointCloud read_surface_points(const fs::path& path) {
 }
 
 bool mesh_wound_inward(const PolygonMesh& mesh) {
-  std::map<std::pair<int, int>, int> edges;  // undirected edge → number of faces using it
+  std::vector<std::uint64_t> edges;  // undirected edges, one entry per face using it
   double volume6 = 0;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
     const Eigen::Vector3d& p0 = mesh.vertices[vs[0]];
     for (std::size_t k = 0; k < vs.size(); ++k) {
       const int a = vs[k], b = vs[(k + 1) % vs.size()];
-      ++edges[{std::min(a, b), std::max(a, b)}];
+      edges.push_back(std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b)));
       if (k > 0 && k + 1 < vs.size()) volume6 += p0.dot(mesh.vertices[a].cross(mesh.vertices[b]));
     }
   }
-  const auto open = static_cast<std::size_t>(
-      std::count_if(edges.begin(), edges.end(), [](const auto& e) { return e.second != 2; }));
-  return !edges.empty() && open * 200 <= edges.size() && volume6 < 0;
+  std::sort(edges.begin(), edges.end());
+  std::size_t distinct = 0, open = 0;  // edges not used by exactly two faces
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    ++distinct;
+    open += j - i != 2;
+    i = j;
+  }
+  return distinct > 0 && open * 200 <= distinct && volume6 < 0;
 }
 
 PointCloud points_from_mesh(const PolygonMesh& mesh) {

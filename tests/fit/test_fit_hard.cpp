@@ -15,6 +15,7 @@
 #include "fit/slim_fit.h"
 #include "fit/surface_error.h"
 #include "core/camera.h"
+#include "core/io/io.h"
 #include "core/reference.h"
 #include "core/slim.h"
 #include "core/log.h"
@@ -117,14 +118,28 @@ Outcome fit_and_measure(const Shape& s, double rel, const SlimFitOptions& extra 
   if (drop_normals) input.normals.clear();
   o.fit = with_faces ? fit_slim(input, s.mesh, opt) : fit_slim(input, opt);
   o.E = o.fit.stats.max_error_abs;
-  // Points measured along the normals the fit used (estimated the same way when dropped).
-  o.points = evaluate_slim(o.fit.model, input, {.keep_per_point = true});
+  // Points measured along the normals the fit used (estimated the same way when dropped), from
+  // the same probe heights (with faces: at most halfway to the next sheet, as in the fitter).
   const DataSurface truth = with_faces ? DataSurface::from_mesh(s.mesh) : DataSurface::from_points(s.cloud.points, s.cloud.normals);
+  // With faces the fitter bounds the face centroids too (fit_slim's cover_faces), and a point's
+  // neighbourhood (measure_point) includes them: measure the same set.
+  PointCloud measured = input;
+  if (with_faces && input.has_normals()) {
+    const PointCloud faces = face_centroids(s.mesh);
+    measured.points.insert(measured.points.end(), faces.points.begin(), faces.points.end());
+    measured.normals.insert(measured.normals.end(), faces.normals.begin(), faces.normals.end());
+  }
+  o.points = evaluate_slim(o.fit.model, measured, {.keep_per_point = true, .surface = with_faces ? &truth : nullptr});
   o.surface = measure_surface_error(o.fit.model, truth, s.box, {.views = 8, .resolution = 160, .bound = 2 * o.E});
   std::cerr << "  patches " << o.fit.stats.patches << ", points max/E " << o.points.max / o.E << " (" << o.points.misses
             << " misses), surface p99.9/E " << o.surface.p999 / o.E << " max/E " << o.surface.max / o.E << " beyond 2E "
             << o.surface.share_beyond << ", holes " << o.surface.holes << "/" << o.surface.data_pixels << ", "
             << o.fit.stats.time_total << " s; fitter: points max/E " << o.fit.stats.max_blend / o.E << " (" << o.fit.stats.blend_failures << " beyond), surface max/E " << o.fit.stats.surface_max / o.E << " (" << o.fit.stats.surface_failures << " beyond 2E)\n";
+  if (!o.points.per_point.empty() && !measured.points.empty()) {
+    const auto w = o.points.worst;
+    std::cerr << "  worst point " << w << " at " << measured.points[w].transpose() << " normal "
+              << (measured.has_normals() ? Vec(measured.normals[w]) : Vec::Zero()).transpose() << "\n";
+  }
   return o;
 }
 
