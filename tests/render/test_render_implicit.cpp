@@ -6,9 +6,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include <unistd.h>
 
 #include "core/camera.h"
 #include "core/implicit/gallery.h"
+#include "core/model_io.h"
 #include "core/primitive.h"
 #include "core/reference.h"
 #include "core/synth.h"
@@ -187,6 +192,54 @@ TEST_F(GlImplicit, MixesDepthCorrectWithQuadricPatches) {
   EXPECT_GT(kinds - implicit_pixels, 50);  // both kinds visible
   std::printf("mixed: %d pixels, %d implicit, kind agreement %.5f\n", kinds, implicit_pixels, double(agree) / kinds);
   EXPECT_GE(double(agree) / kinds, 0.995);
+}
+
+// Every kind in one .qxm file: tetrahedron patches, a glyph, SLIM patches and an implicit torus
+// crossing them, written and read back, drawn by GL and by the CPU reference: the same kind,
+// coverage and depth at each pixel.
+TEST_F(GlImplicit, ModelFileMixesImplicitsWithEveryKind) {
+  Model m = synth_model("hyperboloid1", {.resolution = 5});
+  m.glyphs.push_back({GlyphKind::sphere, {1.1, 0.2, 1.1}, 0.55, Eigen::Matrix3d::Identity(), Rgb{90, 90, 220}});
+  for (SlimPatch s : synth_model("slim-sphere", {.count = 120}).slims) {
+    s.centre += Eigen::Vector3d(-1.3, 0.3, 1.0);
+    m.slims.push_back(s);
+  }
+  m.implicits.push_back({"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + z^2)", {{"r", 0.3}, {"R", 1.4}},
+                         {Eigen::Vector3d(-1.75, -0.35, -1.75), Eigen::Vector3d(1.75, 0.35, 1.75)}, Rgb{200, 80, 80}});
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("quadrix-mixed-" + std::to_string(::getpid()) + ".qxm");
+  write_model(m, file);
+  const Model r = read_model(file);
+  std::filesystem::remove(file);
+  ASSERT_EQ(r.implicits.size(), 1u);
+  const Camera cam = view(bounds(r), 30, 35);
+  const Agreement a = run(r, cam, {}, "mixed .qxm");
+  expect_agree(a, 3000);
+  const render::GBuffer gl = renderer_->read_gbuffer();
+  const ReferenceImage ref = render_reference(ReferenceScene(r), cam);
+  std::map<PrimitiveKind, int> seen;
+  int pixels = 0, agree = 0;
+  // Kind boundaries (not every patch's edge) make the band here.
+  const auto kind_at = [&](int x, int y) {
+    x = std::clamp(x, 0, 127), y = std::clamp(y, 0, 127);
+    return ref.coverage[y * 128 + x] ? primitive_kind(ref.primitive[y * 128 + x]) : PrimitiveKind::none;
+  };
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) {
+      const std::size_t i = y * 128 + x;
+      bool band = !ref.coverage[i];
+      for (int d = 0; d < 9; ++d) band = band || kind_at(x + d % 3 - 1, y + d / 3 - 1) != kind_at(x, y);
+      if (band) continue;
+      ++pixels;
+      ++seen[primitive_kind(ref.primitive[i])];
+      agree += primitive_kind(gl.primitive[i]) == primitive_kind(ref.primitive[i]);
+    }
+  for (PrimitiveKind k : {PrimitiveKind::tet, PrimitiveKind::glyph, PrimitiveKind::slim, PrimitiveKind::implicit})
+    EXPECT_GT(seen[k], 100) << "kind " << static_cast<int>(k) << " barely visible";
+  std::printf("mixed .qxm: %d pixels (tet %d glyph %d slim %d implicit %d), kind agreement %.5f\n", pixels,
+              seen[PrimitiveKind::tet], seen[PrimitiveKind::glyph], seen[PrimitiveKind::slim],
+              seen[PrimitiveKind::implicit], double(agree) / pixels);
+  EXPECT_GE(double(agree) / pixels, 0.995);
 }
 
 // Far from the origin and very thin: a torus tube of radius 0.02 around (40, −25, 30).
