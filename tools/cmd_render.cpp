@@ -74,7 +74,7 @@ void set_model_parameters(const RenderArgs& a, Model& model) {
   for (const auto& [name, v] : parameters_from_options(a)) {
     bool used = false;
     for (ImplicitSurface& s : model.implicits)
-      if (const auto& names = implicit::Expression::parse(s.expression).parameters();
+      if (const std::vector<std::string> names = implicit::Expression::parse(s.expression).parameters();
           std::find(names.begin(), names.end(), name) != names.end())
         s.parameters[name] = v, used = true;
     if (!used)

@@ -181,7 +181,7 @@ TEST_F(GlImplicit, FarAndThinGallerySurfacesMatchTheReference) {
     o.step_divisions = 2000;
     for (const auto& [az, el] : {std::pair(30.0, 40.0), std::pair(200.0, 70.0)}) {
       SCOPED_TRACE(testing::Message() << what << " azimuth " << az << " elevation " << el);
-      expect_agree(run(m, view(s.bounds, az, el), o, what), 150);
+      expect_agree(run(m, view(s.bounds, az, el), o, what), 100);  // the 0.01 tube covers ~130 px
     }
   }
 }
