@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/bounds.h"
 #include "core/error.h"
+#include "core/implicit/surface.h"
 #include "core/io/file.h"
 #include "core/io/ply.h"
 
@@ -28,6 +29,7 @@ constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_n
 constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
 constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
                                                       "x2", "y2", "z2", "x3", "y3", "z3"};
+constexpr std::array<const char*, 6> kBoundsNames = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
 constexpr std::array<const char*, 9> kAxisNames = {"a0x", "a0y", "a0z", "a1x", "a1y", "a1z", "a2x", "a2y", "a2z"};
 
 std::vector<std::string> names(std::initializer_list<std::span<const char* const>> groups) {
@@ -196,6 +198,54 @@ void read_slim_rows(const Rows& r, const SlimColumns& cols, std::size_t total, s
   }
 }
 
+/// Implicit surfaces from the `implicit` table: the expression as a list of ASCII bytes, the
+/// parameter values in the expression's order of first appearance, the bounds, a colour.
+void read_implicit_rows(const ply::File& f, const ply::Table& t, bool colour, std::vector<ImplicitSurface>& out) {
+  const Rows r(f, t);
+  const ply::Table::List& params = t.more_lists.at(0);
+  const auto fail_list = [&](std::size_t row, std::string_view list, std::string_view what) {
+    throw FormatError(f.message(t.element, static_cast<std::int64_t>(row), list, t.row_offsets[row], what));
+  };
+  out.reserve(out.size() + r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    ImplicitSurface& s = out.emplace_back();
+    for (std::uint64_t k = t.list_offsets[i]; k < t.list_offsets[i + 1]; ++k) {
+      const double c = t.list_values[k];
+      if (c != std::floor(c) || c < 32 || c > 126)
+        fail_list(i, "expression",
+                  fmt::format("character {} of the expression is {}, not printable ASCII (32..126)",
+                              k - t.list_offsets[i] + 1, c));
+      s.expression.push_back(static_cast<char>(c));
+    }
+    if (s.expression.empty()) fail_list(i, "expression", "the expression is empty");
+    implicit::Expression e;
+    try {
+      e = implicit::Expression::parse(s.expression);
+    } catch (const InvalidInput& x) {
+      fail_list(i, "expression", x.what());
+    }
+    const std::size_t n = params.offsets[i + 1] - params.offsets[i];
+    if (n != e.parameters().size())
+      fail_list(i, "parameters",
+                fmt::format("{} values for the {} parameters of '{}'{}", n, e.parameters().size(), io::echo(s.expression),
+                            e.parameters().empty() ? "" : fmt::format(" ({})", fmt::join(e.parameters(), ", "))));
+    for (std::size_t k = 0; k < n; ++k) {
+      const double v = params.values[params.offsets[i] + k];
+      if (!std::isfinite(v))
+        fail_list(i, "parameters", fmt::format("value {} of parameter '{}' is not finite", v, e.parameters()[k]));
+      s.parameters[e.parameters()[k]] = v;
+    }
+    s.bounds.min = r.vec3(i, 0);
+    s.bounds.max = r.vec3(i, 3);
+    for (std::size_t k = 0; k < 3; ++k)
+      if (!(s.bounds.min[static_cast<Eigen::Index>(k)] < s.bounds.max[static_cast<Eigen::Index>(k)]))
+        r.fail(i, 3 + k, fmt::format("bounds {} {} >= {} {}: the box is empty", kBoundsNames[k],
+                                     s.bounds.min[static_cast<Eigen::Index>(k)], kBoundsNames[3 + k],
+                                     s.bounds.max[static_cast<Eigen::Index>(k)]));
+    if (colour) s.colour = r.colour(i, 6);
+  }
+}
+
 Model read_qxm(const ply::File& f) {
   const ply::Header& h = f.header();
   Model model;
@@ -229,12 +279,14 @@ Model read_qxm(const ply::File& f) {
   const ply::Element* en = h.find("slim_node");
   const ply::Element* et = h.find("tet");
   const ply::Element* eg = h.find("glyph");
-  if (!es && !et && !eg) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "no element 'slim', 'tet' or 'glyph'"));
+  const ply::Element* ei = h.find("implicit");
+  if (!es && !et && !eg && !ei)
+    throw FormatError(f.message({}, -1, {}, ply::kNoByte, "no element 'slim', 'tet', 'glyph' or 'implicit'"));
 
   std::vector<ply::Request> requests;
   SlimColumns slim_columns, node_columns;
-  bool tet_colour = false, glyph_colour = false;
-  int is = -1, in = -1, it = -1, ig = -1;
+  bool tet_colour = false, glyph_colour = false, implicit_colour = false;
+  int is = -1, in = -1, it = -1, ig = -1, ii = -1;
   if (es) {
     slim_columns = slim_request(f, *es, false, requests);
     is = static_cast<int>(requests.size()) - 1;
@@ -261,6 +313,14 @@ Model read_qxm(const ply::File& f) {
     if (glyph_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
     ig = static_cast<int>(requests.size());
     requests.push_back({"glyph", std::move(props), {}});
+  }
+
+  if (ei) {
+    implicit_colour = optional_group(f, *ei, kColourNames);
+    auto props = required(f, *ei, names({kBoundsNames}));
+    if (implicit_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+    ii = static_cast<int>(requests.size());
+    requests.push_back({"implicit", std::move(props), "expression", {"parameters"}});
   }
 
   const std::vector<ply::Table> tables = f.read(requests);
@@ -327,6 +387,7 @@ Model read_qxm(const ply::File& f) {
       if (glyph_colour) g.colour = r.colour(i, 14);
     }
   }
+  if (ii >= 0) read_implicit_rows(f, tables[ii], implicit_colour, model.implicits);
   return model;
 }
 
@@ -554,6 +615,22 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     check_finite(g.centre.allFinite() && std::isfinite(g.radius) && g.axes.allFinite(), "glyph", i, path);
   }
 
+  // Implicit surfaces: parameter values in the order the expression names them.
+  std::vector<std::vector<double>> implicit_parameters;
+  for (std::size_t i = 0; i < model.implicits.size(); ++i) {
+    const ImplicitSurface& s = model.implicits[i];
+    try {
+      implicit_parameters.push_back(implicit::compile(s).parameters);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(fmt::format("{}: cannot write implicit surface {}: {}", path.string(), i, e.what()));
+    }
+    if (std::any_of(s.expression.begin(), s.expression.end(), [](char c) { return c < 32 || c > 126; }))
+      throw InvalidInput(fmt::format("{}: cannot write implicit surface {}: the expression is not printable ASCII",
+                                     path.string(), i));
+    if (implicit_parameters.back().size() > 255)
+      throw InvalidInput(fmt::format("{}: cannot write implicit surface {}: more than 255 parameters", path.string(), i));
+  }
+
   const auto has_clip = [](const SlimPatch& s) { return s.clip.has_value(); };
   const auto has_colour = [](const SlimPatch& s) { return s.colour.has_value(); };
   const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), has_clip);
@@ -598,6 +675,15 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, true));
   }
 
+  const bool implicit_colour = std::any_of(model.implicits.begin(), model.implicits.end(),
+                                           [](const ImplicitSurface& s) { return s.colour.has_value(); });
+  if (!model.implicits.empty()) {
+    ply::Element e = element("implicit", model.implicits.size(), names({kBoundsNames}), implicit_colour);
+    e.properties.insert(e.properties.begin(), {{"expression", ply::Type::uint8, true, ply::Type::uint32},
+                                               {"parameters", ply::Type::float64, true, ply::Type::uint8}});
+    h.elements.push_back(std::move(e));
+  }
+
   std::string out = ply::header_text(h);
   out.reserve(out.size() + (model.slims.size() + hy.others.size()) * 160 + model.tets.size() * 180 +
               model.glyphs.size() * 110);
@@ -626,6 +712,16 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     append_doubles(out, {g.centre.x(), g.centre.y(), g.centre.z(), g.radius});
     for (int k = 0; k < 3; ++k) append_doubles(out, {g.axes(0, k), g.axes(1, k), g.axes(2, k)});
     if (glyph_colour) append_colour(out, g.colour);
+  }
+  for (std::size_t i = 0; i < model.implicits.size(); ++i) {
+    const ImplicitSurface& s = model.implicits[i];
+    ply::append_le(out, ply::Type::uint32, static_cast<double>(s.expression.size()));
+    out += s.expression;
+    ply::append_le(out, ply::Type::uint8, static_cast<double>(implicit_parameters[i].size()));
+    for (double v : implicit_parameters[i]) ply::append_le(out, ply::Type::float64, v);
+    append_doubles(out, {s.bounds.min.x(), s.bounds.min.y(), s.bounds.min.z(), s.bounds.max.x(), s.bounds.max.y(),
+                         s.bounds.max.z()});
+    if (implicit_colour) append_colour(out, s.colour);
   }
   write_file_atomically(path,
                         [&](std::ostream& os) { os.write(out.data(), static_cast<std::streamsize>(out.size())); });

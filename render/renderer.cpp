@@ -78,6 +78,10 @@ void Renderer::set_model(const Model& model, const AmpOptions& amp) {
 
 double Renderer::implicit_compile_ms() const { return impl_->implicit.compile_ms(); }
 
+void Renderer::set_implicit_parameters(std::size_t i, const std::map<std::string, double>& values) {
+  impl_->implicit.set_parameters(i, values);
+}
+
 void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) { impl_->mesh.upload(mesh, colour); }
 
 FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {

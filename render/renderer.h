@@ -2,6 +2,7 @@
 /// The OpenGL renderer: ray-casts every primitive per pixel into a G-buffer and shades it in a
 /// deferred pass ([Stoll06] §5, DESIGN §6). A frame runs only the passes its scene needs.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -96,6 +97,10 @@ public:
   /// Milliseconds the last set_model spent generating and compiling implicit-surface programs.
   double implicit_compile_ms() const;
   /// Ordinary triangles drawn into the same G-buffer (polygons fanned).
+  /// New parameter values (names as in its expression) for implicit surface i of the model, used
+  /// from the next frame on: uniforms only, nothing recompiled or recomputed ([Singh10] dynamic
+  /// surfaces). \throws InvalidInput for an unknown name, std::out_of_range for a bad index.
+  void set_implicit_parameters(std::size_t i, const std::map<std::string, double>& values);
   void set_mesh(const PolygonMesh& mesh, Rgb colour = {180, 180, 190});
 
   /// Renders one frame at the camera's size. Allocates targets on size change.

@@ -20,7 +20,8 @@ void add_info(CLI::App& root, Commands& commands) {
                         nlohmann::json j;
                         j["file"] = *file;
                         j["valid"] = true;
-                        j["counts"] = {{"slim", m.slims.size()}, {"tet", m.tets.size()}, {"glyph", m.glyphs.size()}};
+                        j["counts"] = {{"slim", m.slims.size()}, {"tet", m.tets.size()}, {"glyph", m.glyphs.size()},
+                                       {"implicit", m.implicits.size()}};
                         std::size_t g[3] = {0, 0, 0};
                         for (const auto& gl : m.glyphs) ++g[static_cast<int>(gl.kind)];
                         j["glyph_kinds"] = {{"sphere", g[0]}, {"ellipsoid", g[1]}, {"cylinder", g[2]}};
@@ -39,6 +40,15 @@ void add_info(CLI::App& root, Commands& commands) {
                                                  {"roots", hs.roots},
                                                  {"error", {{"min", hs.min_error}, {"max", hs.max_error}}}};
                         }
+                        if (!m.implicits.empty()) {
+                          j["implicits"] = nlohmann::json::array();
+                          for (const auto& s : m.implicits)
+                            j["implicits"].push_back(
+                                {{"expression", s.expression},
+                                 {"parameters", s.parameters},
+                                 {"bounds", {{"min", {s.bounds.min.x(), s.bounds.min.y(), s.bounds.min.z()}},
+                                             {"max", {s.bounds.max.x(), s.bounds.max.y(), s.bounds.max.z()}}}}});
+                        }
                         j["metadata"] = m.metadata;
                         report.json["info"] = j;
                         if (*json) {
@@ -50,6 +60,17 @@ void add_info(CLI::App& root, Commands& commands) {
                         std::cout << fmt::format("  tetrahedron patches {}\n", m.tets.size());
                         std::cout << fmt::format("  glyphs             {} (spheres {}, ellipsoids {}, cylinders {})\n",
                                                  m.glyphs.size(), g[0], g[1], g[2]);
+                        if (!m.implicits.empty()) {
+                          std::cout << fmt::format("  implicit surfaces  {}\n", m.implicits.size());
+                          for (const auto& s : m.implicits) {
+                            std::string params;
+                            for (const auto& [k, v] : s.parameters) params += fmt::format(" {}={:.17g}", k, v);
+                            const std::string e = s.expression.size() > 60 ? s.expression.substr(0, 57) + "..." : s.expression;
+                            std::cout << fmt::format("    {}{} in [{:.6g} {:.6g} {:.6g}] – [{:.6g} {:.6g} {:.6g}]\n", e,
+                                                     params, s.bounds.min.x(), s.bounds.min.y(), s.bounds.min.z(),
+                                                     s.bounds.max.x(), s.bounds.max.y(), s.bounds.max.z());
+                          }
+                        }
                         if (hierarchical)
                           std::cout << fmt::format("  slim hierarchy     {} balls: {} levels, {} leaves, {} interior, "
                                                    "{} roots; error {:.6g} – {:.6g}\n",

@@ -53,6 +53,35 @@ Box3 parse_bounds(const std::string& text) {
   return {Eigen::Vector3d(v[0], v[2], v[4]), Eigen::Vector3d(v[1], v[3], v[5])};
 }
 
+// --param NAME=VALUE pairs. \throws CLI::ValidationError for a malformed one.
+std::map<std::string, double> parameters_from_options(const RenderArgs& a) {
+  std::map<std::string, double> out;
+  for (const std::string& p : a.params) {
+    const auto eq = p.find('=');
+    char* end = nullptr;
+    const std::string value = eq == std::string::npos ? "" : p.substr(eq + 1);
+    const double v = std::strtod(value.c_str(), &end);
+    if (eq == std::string::npos || eq == 0 || value.empty() || *end != '\0' || !std::isfinite(v))
+      throw CLI::ValidationError("--param", fmt::format("expected NAME=VALUE with a finite number, got '{}'", p));
+    out[p.substr(0, eq)] = v;
+  }
+  return out;
+}
+
+// Without --implicit/--surface, --param sets the parameter in every implicit surface of the model
+// that names it; a name none of them uses is a usage error.
+void set_model_parameters(const RenderArgs& a, Model& model) {
+  for (const auto& [name, v] : parameters_from_options(a)) {
+    bool used = false;
+    for (ImplicitSurface& s : model.implicits)
+      if (const std::vector<std::string> names = implicit::Expression::parse(s.expression).parameters();
+          std::find(names.begin(), names.end(), name) != names.end())
+        s.parameters[name] = v, used = true;
+    if (!used)
+      throw CLI::ValidationError("--param", fmt::format("no implicit surface of the model has a parameter '{}'", name));
+  }
+}
+
 // The implicit surface the options describe (none without --implicit or --surface), and the
 // root test its gallery entry asks for. Expression errors are usage errors (exit 2).
 std::optional<std::pair<ImplicitSurface, std::string>> implicit_from_options(const RenderArgs& a) {
@@ -75,15 +104,7 @@ std::optional<std::pair<ImplicitSurface, std::string>> implicit_from_options(con
   if (!a.bounds.empty() && a.radius > 0) throw CLI::ValidationError("--bounds", "give --bounds or --radius, not both");
   if (!a.bounds.empty()) s.bounds = parse_bounds(a.bounds);
   if (a.radius > 0) s.bounds = {Eigen::Vector3d::Constant(-a.radius), Eigen::Vector3d::Constant(a.radius)};
-  for (const std::string& p : a.params) {
-    const auto eq = p.find('=');
-    char* end = nullptr;
-    const std::string value = eq == std::string::npos ? "" : p.substr(eq + 1);
-    const double v = std::strtod(value.c_str(), &end);
-    if (eq == std::string::npos || eq == 0 || value.empty() || *end != '\0' || !std::isfinite(v))
-      throw CLI::ValidationError("--param", fmt::format("expected NAME=VALUE with a finite number, got '{}'", p));
-    s.parameters[p.substr(0, eq)] = v;
-  }
+  for (const auto& [name, v] : parameters_from_options(a)) s.parameters[name] = v;
   try {
     implicit::compile(s);
   } catch (const InvalidInput& e) {
@@ -131,6 +152,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
                 : model_is_molecule             ? read_molecule_glyphs(a.model)
                                                 : read_model(a.model);
   if (implicit_surface) model.implicits.push_back(implicit_surface->first);
+  else set_model_parameters(a, model);
   std::optional<PolygonMesh> mesh;
   if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
   if (model_is_mesh) {

@@ -8,6 +8,7 @@ packages=(
   libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libnanoflann-dev zlib1g-dev gemmi-dev tao-pegtl-dev libosmesa6-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
+  povray  # bench-only peer: `quadrix bench implicit` renders the same surfaces with POV-Ray
 )
 missing=()
 for p in "${packages[@]}"; do

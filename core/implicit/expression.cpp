@@ -503,8 +503,8 @@ std::string Expression::glsl(std::string_view name) const {
       case Op::sin: unary("sin", "cos(" + ax + ")"); break;
       case Op::cos: unary("cos", "-sin(" + ax + ")"); break;
       case Op::tan: unary("tan", fmt::format("1.0 / (cos({0}) * cos({0}))", ax)); break;
-      case Op::asin: unary("asin", fmt::format("inversesqrt(1.0 - {0} * {0})", ax)); break;
-      case Op::acos: unary("acos", fmt::format("-inversesqrt(1.0 - {0} * {0})", ax)); break;
+      case Op::asin: unary("qx_asin", fmt::format("inversesqrt(1.0 - {0} * {0})", ax)); break;
+      case Op::acos: unary("qx_acos", fmt::format("-inversesqrt(1.0 - {0} * {0})", ax)); break;
       case Op::atan: unary("atan", fmt::format("1.0 / (1.0 + {0} * {0})", ax)); break;
       case Op::exp: unary("exp", "exp(" + ax + ")"); break;
       case Op::log: unary("log", "1.0 / " + ax); break;

@@ -131,6 +131,16 @@ std::vector<GalleryEntry> gallery() {
       entry("blobby", "Blobby (sinusoidal)", "x^2 + y^2 + z^2 + sin(4*x) - cos(4*y) + sin(4*z) - 1", cube(2.0), {},
             "sign", 0.05),
       blinn(8),
+      // Two surfaces made to be animated (quadrix view --animate): three blobs pulled apart by s
+      // (merged below about s = 0.6, separate above 0.9) and a superquadric twisted by k radians
+      // per unit of z.
+      entry("blobs-merging", "Three Blinn blobs at distance s from the centre",
+            "0.25/((x - s)^2 + y^2 + z^2 + 0.01) + 0.25/((x + 0.5*s)^2 + (y - 0.866*s)^2 + z^2 + 0.01)"
+            " + 0.25/((x + 0.5*s)^2 + (y + 0.866*s)^2 + z^2 + 0.01) - 1",
+            box(2.2, 2.2, 1.0), {{"s", 0.8}}, "sign", 0.05),
+      entry("superquadric-twist", "Superquadric |x'|^4 + |y'|^4 + |z|^4 = 1, (x', y') turned by k·z",
+            "(x*cos(k*z) - y*sin(k*z))^4 + (x*sin(k*z) + y*cos(k*z))^4 + z^4 - 1", box(1.2, 1.2, 1.05),
+            {{"k", 1.0}}, "sign", 0.02),
       entry("scherk", "Scherk's minimal surface", "exp(z)*cos(y) - cos(x)", box(3.0, 3.0, 2.0), {}, "sign", 0.03),
       entry("diamond", "Diamond (Schwarz D)",
             "sin(x)*sin(y)*sin(z) + sin(x)*cos(y)*cos(z) + cos(x)*sin(y)*cos(z) + cos(x)*cos(y)*sin(z)", cube(2.5), {},

@@ -312,7 +312,8 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
   std::vector<int> element_request(h.elements.size(), -1);
   std::vector<std::vector<int>> column(h.elements.size());
   std::vector<Table> tables(requests.size());
-  std::vector<int> list_property(h.elements.size(), -1);
+  // Per element and property: which returned list it fills (0: Table::list, k > 0: more_lists[k − 1]) or −1.
+  std::vector<std::vector<int>> list_slot(h.elements.size());
   for (std::size_t r = 0; r < requests.size(); ++r) {
     const Request& req = requests[r];
     const auto it =
@@ -333,14 +334,22 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
     }
     tables[r].element = it->name;
     tables[r].properties = req.properties;
-    if (!req.list.empty()) {
-      const int pi = it->find(req.list);
+    list_slot[ei].assign(it->properties.size(), -1);
+    const auto want_list = [&](const std::string& name, int slot) {
+      const int pi = it->find(name);
       if (pi < 0)
-        throw FormatError(message(it->name, -1, req.list, kNoByte, "required property is missing from the header"));
+        throw FormatError(message(it->name, -1, name, kNoByte, "required property is missing from the header"));
       if (!it->properties[pi].is_list)
-        throw FormatError(message(it->name, -1, req.list, kNoByte, "is a scalar where a list is required"));
-      list_property[ei] = pi;
+        throw FormatError(message(it->name, -1, name, kNoByte, "is a scalar where a list is required"));
+      list_slot[ei][pi] = slot;
+    };
+    if (!req.list.empty()) {
+      want_list(req.list, 0);
       tables[r].list = req.list;
+    }
+    for (std::size_t k = 0; k < req.more_lists.size(); ++k) {
+      want_list(req.more_lists[k], static_cast<int>(k) + 1);
+      tables[r].more_lists.push_back({req.more_lists[k], {0}, {}});
     }
   }
 
@@ -351,6 +360,16 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
     Table* table = element_request[ei] >= 0 ? &tables[element_request[ei]] : nullptr;
     const std::size_t ncols = table ? table->properties.size() : 0;
     const std::vector<int>& col = column[ei];
+    // Where list property pi's kept entries go (nullptr: not kept), and the end of a row's lists.
+    const auto list_values = [&](std::size_t pi) -> std::vector<double>* {
+      if (!table || list_slot[ei][pi] < 0) return nullptr;
+      return list_slot[ei][pi] == 0 ? &table->list_values : &table->more_lists[list_slot[ei][pi] - 1].values;
+    };
+    const auto end_row_lists = [&] {
+      if (!table) return;
+      if (!table->list.empty()) table->list_offsets.push_back(table->list_values.size());
+      for (auto& l : table->more_lists) l.offsets.push_back(l.values.size());
+    };
 
     // Validate the count against the bytes left before allocating anything.
     std::size_t min_row = 0;
@@ -419,12 +438,12 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
             throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, pos,
                                       fmt::format("truncated: list count {} needs {} bytes but only {} are left", count,
                                                   count * static_cast<double>(vn), left)));
-          if (table && list_property[ei] == static_cast<int>(pi))
+          if (std::vector<double>* keep = list_values(pi))
             for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k)
-              table->list_values.push_back(load_value(s.data() + pos + cn + k * vn, p.type, swap));
+              keep->push_back(load_value(s.data() + pos + cn + k * vn, p.type, swap));
           pos += cn + static_cast<std::size_t>(count) * vn;
         }
-        if (table && !table->list.empty()) table->list_offsets.push_back(table->list_values.size());
+        end_row_lists();
       }
       continue;
     }
@@ -472,13 +491,13 @@ std::vector<Table> File::read(std::span<const Request> requests) const {
         if (count > static_cast<double>((s.size() - pos) / 2 + 1))
           throw FormatError(message(e.name, static_cast<std::int64_t>(row), p.name, count_at,
                                     fmt::format("truncated: list count {} exceeds the rest of the file", count)));
-        const bool keep = table && list_property[ei] == static_cast<int>(pi);
+        std::vector<double>* keep = list_values(pi);
         for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k) {
           const double v = next_value(p, p.type, "a list entry");
-          if (keep) table->list_values.push_back(v);
+          if (keep) keep->push_back(v);
         }
       }
-      if (table && !table->list.empty()) table->list_offsets.push_back(table->list_values.size());
+      end_row_lists();
       while (pos < s.size() && is_blank(s[pos])) ++pos;
       if (pos < s.size() && s[pos] != '\n') {
         std::size_t end = pos;

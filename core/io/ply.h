@@ -60,6 +60,13 @@ struct Table {
   std::string list;                          ///< the requested list property, or empty
   std::vector<std::uint64_t> list_offsets;   ///< row r's list entries: list_values[list_offsets[r] .. [r+1])
   std::vector<double> list_values;
+  /// Further list properties (Request::more_lists), in request order; same layout as list_*.
+  struct List {
+    std::string name;
+    std::vector<std::uint64_t> offsets;  ///< row r's entries: values[offsets[r] .. [r+1])
+    std::vector<double> values;
+  };
+  std::vector<List> more_lists;
   double operator()(std::size_t row, std::size_t col) const { return values[row * properties.size() + col]; }
   /// Byte offset of one value (its row's start where the column offset is not fixed).
   std::uint64_t byte_offset(std::size_t row, std::size_t col) const;
@@ -73,6 +80,7 @@ struct Request {
   std::string element;
   std::vector<std::string> properties;
   std::string list;  ///< optional: one list property whose entries are returned too
+  std::vector<std::string> more_lists;  ///< optional: further list properties (Table::more_lists)
 };
 
 /// A PLY file read into memory and its parsed header.

@@ -53,7 +53,12 @@ void main() {
     float af = abs(f0);
     if (af <= u_tau.x) s = abs(df0) <= u_tau.z ? 0.25 * u_step : 0.5 * u_step;
     else if (af > u_tau.y) s = 2.0 * u_step;
-    if (u_newton > 0.0) s = max(min(s, u_newton * af / abs(df0)), min(s, u_min_step));
+    if (u_newton > 0.0) {
+      // A derivative that is not finite gives no Newton distance (∞·0 where cos(n·acos x) meets
+      // its clamp at |x| = 1, the faces rays enter through): the floor, not b, is the safe step.
+      float cap = isnan(df0) || isinf(df0) ? 0.0 : u_newton * af / abs(df0);
+      s = max(min(s, cap), min(s, u_min_step));
+    }
     float t1 = min(t + s, te);
     vec4 g1 = S_grad(u_eye + t1 * d);
     float f1 = g1.x, df1 = dot(g1.yzw, d);

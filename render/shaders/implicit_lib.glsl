@@ -17,6 +17,25 @@ float qx_pow(float a, float e) {
   return a < 0.0 ? (0.0 / 0.0) : pow(a, e);
 }
 
+// asin and acos to about 2 ulp (the Cephes asinf polynomial, 5e-9 from the true functions on
+// [−1, 1]). Mesa's built-in acos on llvmpipe is off by up to 2e-4 rad (measured: a plane
+// z = acos(0.3 + 0.01y) − 0.5 lands 1.9e-4 deep), which cos(n·acos x) multiplies by n.
+float qx_asin_core(float z) {  // |z| ≤ 0.5
+  float s = z * z;
+  return ((((4.2163199048e-2 * s + 2.4181311049e-2) * s + 4.5470025998e-2) * s + 7.4953002686e-2) * s +
+          1.6666752422e-1) * s * z + z;
+}
+float qx_asin(float x) {
+  float a = abs(x);
+  float r = a > 0.5 ? 1.57079632679 - 2.0 * qx_asin_core(sqrt(0.5 * (1.0 - a))) : qx_asin_core(a);
+  return x < 0.0 ? -r : r;
+}
+float qx_acos(float x) {
+  if (x > 0.5) return 2.0 * qx_asin_core(sqrt(0.5 * (1.0 - x)));
+  if (x < -0.5) return 3.14159265359 - 2.0 * qx_asin_core(sqrt(0.5 * (1.0 + x)));
+  return 1.57079632679 - qx_asin_core(x);
+}
+
 vec4 qx_div(vec4 a, vec4 b) {
   float q = a.x / b.x;
   return vec4(q, (a.yzw - q * b.yzw) / b.x);

@@ -3,12 +3,18 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include <unistd.h>
 
 #include "core/camera.h"
 #include "core/implicit/gallery.h"
+#include "core/model_io.h"
 #include "core/primitive.h"
 #include "core/reference.h"
 #include "core/synth.h"
@@ -79,7 +85,8 @@ protected:
     const auto t2 = std::chrono::steady_clock::now();
     const Agreement a = agreement(ref, renderer_->read_gbuffer());
     const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
-    std::printf("%-22s coverage %.5f depth %.5f covered %5d  gl %.0f ms (compile %.0f ms) reference %.0f ms\n",
+    // GL marches in float, the reference isolates roots in double: their disagreement per surface.
+    std::printf("%-22s float vs double: coverage %.5f depth %.5f covered %5d  gl %.0f ms (compile %.0f ms) reference %.0f ms\n",
                 what.c_str(), a.coverage, a.depth, a.covered, ms(t1 - t0), renderer_->implicit_compile_ms(),
                 ms(t2 - t1));
     return a;
@@ -96,6 +103,23 @@ std::string fmt_sphere(const Eigen::Vector3d& c, double r) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "(x - %.17g)^2 + (y - %.17g)^2 + (z - %.17g)^2 - %.17g", c.x(), c.y(), c.z(), r * r);
   return buf;
+}
+
+// The expression with x, y, z replaced by (x − cx), (y − cy), (z − cz).
+std::string moved(const std::string& e) {
+  std::string out;
+  for (std::size_t i = 0; i < e.size();) {
+    if (std::isalpha(static_cast<unsigned char>(e[i])) || e[i] == '_') {
+      std::size_t j = i;
+      while (j < e.size() && (std::isalnum(static_cast<unsigned char>(e[j])) || e[j] == '_')) ++j;
+      const std::string id = e.substr(i, j - i);
+      out += id == "x" || id == "y" || id == "z" ? "(" + id + " - c" + id + ")" : id;
+      i = j;
+    } else {
+      out += e[i++];
+    }
+  }
+  return out;
 }
 
 Camera view(const Box3& box, double azimuth, double elevation) {
@@ -119,20 +143,45 @@ TEST_F(GlImplicit, EveryGallerySurfaceMatchesTheReference) {
     for (const auto& [az, el] : {std::pair(30.0, 20.0), std::pair(125.0, -35.0), std::pair(250.0, 60.0)}) {
       SCOPED_TRACE(testing::Message() << g.name << " azimuth " << az << " elevation " << el);
       const Agreement a = run(m, view(g.surface.bounds, az, el), amp_for(g), g.name);
-      if (g.name == "chmutov-trig-50") {
-        // Known: float acos near ±1 puts the sheets within 0.002 of the cube's faces at other
-        // depths than the double reference (coverage agrees; depth 0.54–0.71 measured).
+      if (g.name == "chmutov-iter-50" || g.name == "chmutov-trig-50") {
+        // Known shortfall: 0.6–1.3 % of pixels find a sheet 0.002 behind the first one next to
+        // the cube's faces, where T_50's sheets lie closer together than the march's smallest
+        // step (iterative form from above 0.9938, trigonometric form 0.9875 measured at
+        // azimuth 30 elevation 20); coverage agrees.
         EXPECT_GE(a.coverage, 0.995);
-        continue;
-      }
-      if (g.name == "chmutov-iter-50" && el == 60.0) {
-        // Known shortfall: from above, 0.6 % of pixels find a sheet 0.002 behind the first one
-        // next to the cube's faces (depth agreement 0.9938 measured); coverage agrees.
-        EXPECT_GE(a.coverage, 0.995);
-        EXPECT_GE(a.depth, 0.99);
+        EXPECT_GE(a.depth, 0.98);
         continue;
       }
       expect_agree(a, 500);
+    }
+  }
+}
+
+// Gallery surfaces moved far from the origin (25–70 times their size; the GL side works in
+// float) and made very thin (tubes and slabs 1 % of their extent), from two views each.
+TEST_F(GlImplicit, FarAndThinGallerySurfacesMatchTheReference) {
+  std::vector<std::pair<std::string, ImplicitSurface>> cases;
+  const Eigen::Vector3d far(60, -40, 25);
+  for (const char* name : {"torus", "goursat", "barth-sextic", "superquadric", "chmutov-iter-14"}) {
+    const implicit::GalleryEntry g = implicit::gallery_surface(name);
+    ImplicitSurface s = g.surface;
+    s.expression = moved(s.expression);
+    s.parameters.insert({{"cx", far.x()}, {"cy", far.y()}, {"cz", far.z()}});
+    s.bounds = {s.bounds.min + far, s.bounds.max + far};
+    cases.push_back({std::string(name) + " at (60, -40, 25)", s});
+  }
+  const Box3 unit{Eigen::Vector3d(-1.1, -1.1, -0.02), Eigen::Vector3d(1.1, 1.1, 0.02)};
+  cases.push_back({"torus tube 0.01", {"(x^2 + y^2 + z^2 + 1 - r^2)^2 - 4*(x^2 + y^2)", {{"r", 0.01}},
+                                       {Eigen::Vector3d(-1.1, -1.1, -0.011), Eigen::Vector3d(1.1, 1.1, 0.011)}, {}}});
+  cases.push_back({"slab 0.02", {"x^4 + y^4 + (z/0.01)^4 - 1", {}, unit, {}}});
+  for (const auto& [what, s] : cases) {
+    Model m;
+    m.implicits.push_back(s);
+    render::AmpOptions o;
+    o.step_divisions = 2000;
+    for (const auto& [az, el] : {std::pair(30.0, 40.0), std::pair(200.0, 70.0)}) {
+      SCOPED_TRACE(testing::Message() << what << " azimuth " << az << " elevation " << el);
+      expect_agree(run(m, view(s.bounds, az, el), o, what), 100);  // the 0.01 tube covers ~130 px
     }
   }
 }
@@ -187,6 +236,54 @@ TEST_F(GlImplicit, MixesDepthCorrectWithQuadricPatches) {
   EXPECT_GT(kinds - implicit_pixels, 50);  // both kinds visible
   std::printf("mixed: %d pixels, %d implicit, kind agreement %.5f\n", kinds, implicit_pixels, double(agree) / kinds);
   EXPECT_GE(double(agree) / kinds, 0.995);
+}
+
+// Every kind in one .qxm file: tetrahedron patches, a glyph, SLIM patches and an implicit torus
+// crossing them, written and read back, drawn by GL and by the CPU reference: the same kind,
+// coverage and depth at each pixel.
+TEST_F(GlImplicit, ModelFileMixesImplicitsWithEveryKind) {
+  Model m = synth_model("hyperboloid1", {.resolution = 5});
+  m.glyphs.push_back({GlyphKind::sphere, {1.1, 0.2, 1.1}, 0.55, Eigen::Matrix3d::Identity(), Rgb{90, 90, 220}});
+  for (SlimPatch s : synth_model("slim-sphere", {.count = 120}).slims) {
+    s.centre += Eigen::Vector3d(-1.3, 0.3, 1.0);
+    m.slims.push_back(s);
+  }
+  m.implicits.push_back({"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + z^2)", {{"r", 0.3}, {"R", 1.4}},
+                         {Eigen::Vector3d(-1.75, -0.35, -1.75), Eigen::Vector3d(1.75, 0.35, 1.75)}, Rgb{200, 80, 80}});
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("quadrix-mixed-" + std::to_string(::getpid()) + ".qxm");
+  write_model(m, file);
+  const Model r = read_model(file);
+  std::filesystem::remove(file);
+  ASSERT_EQ(r.implicits.size(), 1u);
+  const Camera cam = view(bounds(r), 30, 35);
+  const Agreement a = run(r, cam, {}, "mixed .qxm");
+  expect_agree(a, 3000);
+  const render::GBuffer gl = renderer_->read_gbuffer();
+  const ReferenceImage ref = render_reference(ReferenceScene(r), cam);
+  std::map<PrimitiveKind, int> seen;
+  int pixels = 0, agree = 0;
+  // Kind boundaries (not every patch's edge) make the band here.
+  const auto kind_at = [&](int x, int y) {
+    x = std::clamp(x, 0, 127), y = std::clamp(y, 0, 127);
+    return ref.coverage[y * 128 + x] ? primitive_kind(ref.primitive[y * 128 + x]) : PrimitiveKind::none;
+  };
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) {
+      const std::size_t i = y * 128 + x;
+      bool band = !ref.coverage[i];
+      for (int d = 0; d < 9; ++d) band = band || kind_at(x + d % 3 - 1, y + d / 3 - 1) != kind_at(x, y);
+      if (band) continue;
+      ++pixels;
+      ++seen[primitive_kind(ref.primitive[i])];
+      agree += primitive_kind(gl.primitive[i]) == primitive_kind(ref.primitive[i]);
+    }
+  for (PrimitiveKind k : {PrimitiveKind::tet, PrimitiveKind::glyph, PrimitiveKind::slim, PrimitiveKind::implicit})
+    EXPECT_GT(seen[k], 100) << "kind " << static_cast<int>(k) << " barely visible";
+  std::printf("mixed .qxm: %d pixels (tet %d glyph %d slim %d implicit %d), kind agreement %.5f\n", pixels,
+              seen[PrimitiveKind::tet], seen[PrimitiveKind::glyph], seen[PrimitiveKind::slim],
+              seen[PrimitiveKind::implicit], double(agree) / pixels);
+  EXPECT_GE(double(agree) / pixels, 0.995);
 }
 
 // Far from the origin and very thin: a torus tube of radius 0.02 around (40, −25, 30).

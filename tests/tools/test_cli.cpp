@@ -90,6 +90,34 @@ TEST(Cli, SynthInfoRenderRoundTrip) {
   EXPECT_EQ(finite, rj["render"]["covered_pixels"].get<int>());
 }
 
+// A model with an implicit surface: info lists it, render draws it, --param sets its parameter
+// (the surface grows with r) and a parameter it does not have is a usage error.
+TEST(Cli, ModelImplicitsAreListedAndTakeParameters) {
+  ScratchDir dir("cli");
+  Model m;
+  m.implicits.push_back({"x^2 + y^2 + z^2 - r^2", {{"r", 0.5}},
+                         {Eigen::Vector3d::Constant(-1.2), Eigen::Vector3d::Constant(1.2)}, Rgb{200, 60, 60}});
+  write_model(m, dir / "s.qxm");
+  CmdResult r = quadrix_run("info " + q(dir / "s.qxm") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"implicit\": 1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("x^2 + y^2 + z^2 - r^2"), std::string::npos) << r.out;
+  std::size_t covered[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const auto pfm = dir / fmt::format("d{}.pfm", k);
+    r = quadrix_run("render --backend cpu " + q(dir / "s.qxm") + " --fill 0 --size 48x48 -o " +
+                    q(dir / fmt::format("s{}.png", k)) + " --depth-out " + q(pfm) + (k ? " --param r=1" : ""));
+    ASSERT_EQ(r.code, 0) << r.out;
+    const FloatImage d = read_pfm(pfm);
+    covered[k] = std::count_if(d.data.begin(), d.data.end(), [](float v) { return std::isfinite(v); });
+  }
+  EXPECT_GT(covered[0], 50u);
+  EXPECT_GT(covered[1], 3 * covered[0]);  // radius 1 against 0.5: four times the area
+  r = quadrix_run("render --backend cpu " + q(dir / "s.qxm") + " --size 16x16 -o " + q(dir / "x.png") + " --param k=1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no implicit surface of the model has a parameter 'k'"), std::string::npos) << r.out;
+}
+
 TEST(Cli, EveryMalformedFileExitsThreeNamingThePlace) {
   ScratchDir dir("cli-malformed");
   const auto corpus = quadrix::test::make_malformed_corpus(dir.path());

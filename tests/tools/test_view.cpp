@@ -4,6 +4,8 @@
 #include <sys/wait.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 
 #include "core/image.h"
 #include "tests/core/malformed_corpus.h"
@@ -44,4 +46,46 @@ TEST(View, WindowFramesMatchHeadlessRender) {
   const std::size_t n = a.rgba.size() / 4;
   EXPECT_GE(same, n * 999 / 1000);
   EXPECT_GT(covered, n / 10);  // the model is on screen, not a blank frame
+}
+
+// A parameter animated in the window (--animate, a fixed 30 frames per second of animation under
+// --frames): frame 30 of s = 0.3 → 1.2 over 1 s shows s = 1.2 exactly, as the headless render of
+// that value does, and not the first frame's merged blobs.
+TEST(View, AnimatedParameterReachesItsEndValue) {
+  if (sh("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  ScratchDir dir("view");
+  const std::string q = QUADRIX_BINARY;
+  const auto window = (dir / "window.png").string(), report = (dir / "report.json").string();
+  const std::string view_args = " --size 160x120 --azimuth 20 --elevation 50";
+  const int rc = sh("xvfb-run -a -s '-screen 0 640x480x24' " + q + " view --surface blobs-merging" + view_args +
+                    " --animate s=0.3:1.2:1 --frames 31 --screenshot " + window + " --report " + report + " --quiet");
+  if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
+  ASSERT_EQ(rc, 0);
+  std::ifstream in(report);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"parameters_last_frame\""), std::string::npos) << text;
+  const auto agreement = [&](const std::string& s) {
+    const auto headless = (dir / ("headless-" + s + ".png")).string();
+    EXPECT_EQ(sh(q + " render --surface blobs-merging --param s=" + s + " -o " + headless + view_args +
+                 " --fill 0 --quiet"),
+              0);
+    const auto a = quadrix::read_png(window), b = quadrix::read_png(headless);
+    EXPECT_EQ(a.rgba.size(), b.rgba.size());
+    std::size_t same = 0;
+    for (std::size_t i = 0; i + 3 < std::min(a.rgba.size(), b.rgba.size()); i += 4) {
+      bool eq = true;
+      for (int c = 0; c < 3; ++c) eq &= std::abs(int(a.rgba[i + c]) - int(b.rgba[i + c])) <= 2;
+      same += eq;
+    }
+    return double(same) / double(a.rgba.size() / 4);
+  };
+  EXPECT_GE(agreement("1.2"), 0.999);
+  EXPECT_LT(agreement("0.3"), 0.95);  // the first frame's surface looks different
+}
+
+TEST(View, AnimateRefusesUnknownParametersAndBadSyntax) {
+  const std::string q = QUADRIX_BINARY;
+  EXPECT_EQ(sh(q + " view --surface blobs-merging --animate k=0:1:1 --frames 1 --quiet 2> /dev/null"), 2);
+  EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1:0 --frames 1 --quiet 2> /dev/null"), 2);
+  EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1 --frames 1 --quiet 2> /dev/null"), 2);
 }

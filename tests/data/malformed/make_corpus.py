@@ -67,6 +67,17 @@ def pdb():
         lines.append("ATOM  %5d  %-3s ALA A   1    %8.3f%8.3f%8.3f  1.00  0.00          %2s" % (i + 1, e, x, y, z, e))
     return ("\n".join(lines) + "\nEND\n").encode()
 
+def implicit_qxm(expression=b"x^2 + y^2 + z^2 - r^2", params=(1.0,), bounds=(-2, -2, -2, 2, 2, 2), count=None,
+                 props=b"property double min_x\nproperty double min_y\nproperty double min_z\n"
+                       b"property double max_x\nproperty double max_y\nproperty double max_z\n"):
+    """An ASCII .qxm with one implicit surface (element rows with two lists)."""
+    head = (b"ply\nformat ascii 1.0\ncomment quadrix-format 2\nelement implicit 1\n"
+            b"property list uint uchar expression\nproperty list uchar double parameters\n" + props + b"end_header\n")
+    n = len(expression) if count is None else count
+    row = [b"%d" % n] + [b"%d" % c for c in expression] + [b"%d" % len(params)]
+    row += [repr(float(v)).encode() for v in params] + [b"%g" % v for v in bounds]
+    return head + b" ".join(row) + b"\n"
+
 def mutate_text(seed):
     """Mutations of a whitespace-token text file: (suffix, bytes)."""
     # Truncations end inside a token (a cut at a line end can leave a valid file).
@@ -116,6 +127,18 @@ def main():
         put("nan-%s.qxm" % kind, head + b"end_header\n" + struct.pack("<d", float("nan")) + body[8:])
         put("inf-%s.qxm" % kind, head + b"end_header\n" + struct.pack("<d", float("inf")) + body[8:])
         put("no-end-header-%s.qxm" % kind, head + b"\n")
+    # Implicit surfaces in .qxm.
+    put("implicit-syntax.qxm", implicit_qxm(b"x^2 + * y", ()))
+    put("implicit-function.qxm", implicit_qxm(b"x^2 + frob(y)", ()))
+    put("implicit-param-count.qxm", implicit_qxm(params=()))
+    put("implicit-param-nan.qxm", implicit_qxm(params=(float("nan"),)))
+    put("implicit-bounds-empty.qxm", implicit_qxm(bounds=(1, -2, -2, -1, 2, 2)))
+    put("implicit-bounds-inf.qxm", implicit_qxm(bounds=(-2, -2, -2, 2, float("inf"), 2)))
+    put("implicit-ctrl.qxm", implicit_qxm(b"x^2 + \x1b[2J y^2 - 1", ()))
+    put("implicit-empty.qxm", implicit_qxm(b"", ()))
+    put("implicit-list-count.qxm", implicit_qxm(count=1000))
+    put("implicit-no-bounds.qxm", implicit_qxm(bounds=(-2, -2, -2, 2, 2), props=b"property double min_x\n"
+        b"property double min_y\nproperty double min_z\nproperty double max_x\nproperty double max_y\n"))
     put("empty.qxm", b"")
     put("text.qxm", b"hello\n")
     # Counts and trailing data.
