@@ -79,6 +79,11 @@ struct ShadowAgreement {
   int mismatched_off_boundary = 0;  // ... further than 2 pixels from a reference shadow boundary
 };
 
+  struct OutlineAgreement {
+    int covered = 0, cpu = 0, gl = 0;
+    double gl_near_cpu = 0, cpu_near_gl = 0;  // fraction of each one's pixels within 1 px of the other's
+  };
+
 class ShadowsOutlines : public GlTest {
 protected:
   Image8 draw(const Model& m, const Camera& cam, const render::RenderOptions& o) {
@@ -125,11 +130,6 @@ protected:
     return a;
   }
 
-  struct OutlineAgreement {
-    int covered = 0, cpu = 0, gl = 0;
-    double gl_near_cpu = 0, cpu_near_gl = 0;  // fraction of each one's pixels within 1 px of the other's
-  };
-
   OutlineAgreement outlines(const Model& m, render::Shading shading = render::Shading::phong) {
     const Camera cam = camera_for(m);
     const ReferenceScene scene(m);
@@ -138,7 +138,7 @@ protected:
         detect_outlines({.width = ref.width, .height = ref.height, .coverage = ref.coverage.data(),
                          .depth = ref.depth.data(), .normal = ref.normal.data(), .fov_y_deg = cam.fov_y_deg,
                          .scene_radius = ref.scene_radius});
-    const Image8 plain = draw(m, cam, {.shading = shading});
+    const Image8 plain = draw(m, cam, {});  // Phong, no lines (NPR draws them always)
     const Image8 lined = draw(m, cam, {.shading = shading, .outlines = true});
     const int w = ref.width, h = ref.height;
     std::vector<std::uint8_t> gl(cpu.size(), 0);
@@ -173,7 +173,7 @@ void expect_shadows_agree(const ShadowAgreement& a) {
   EXPECT_LE(a.mismatched_off_boundary, a.compared / 500);
 }
 
-void expect_outlines_agree(const ShadowsOutlines::OutlineAgreement& a) {
+void expect_outlines_agree(const OutlineAgreement& a) {
   EXPECT_GT(a.cpu, 100);
   EXPECT_GE(a.gl_near_cpu, 0.98);
   EXPECT_GE(a.cpu_near_gl, 0.98);
