@@ -50,7 +50,7 @@ TEST(CurvatureGlyphs, SphereHasCurvatureOneOverRadius) {
 
 TEST(CurvatureGlyphs, CylinderBendsAlongTheCircleOnly) {
   const double R = 1.0, pi = std::numbers::pi;
-  const PolygonMesh m = grid(48, 30, true, [&](double u, double v) {
+  const PolygonMesh m = grid(96, 40, true, [&](double u, double v) {
     return Eigen::Vector3d(R * std::cos(2 * pi * u), R * std::sin(2 * pi * u), 4.0 * v);
   });
   const CurvatureGlyphs g = curvature_glyphs(m);
