@@ -23,11 +23,7 @@ std::vector<std::uint8_t> detect_outlines(const OutlineInput& in, const OutlineO
     for (int x = 0; x < w; ++x) {
       const std::size_t i = at(x, y);
       bool is_edge = false;
-      if (!in.coverage[i]) {
-        for (int k = 0; k < 4 && !is_edge; ++k) is_edge = covered(x + dx[k], y + dy[k]);
-        edge[i] = is_edge;
-        continue;
-      }
+      if (!in.coverage[i]) continue;  // lines lie on the surface side of silhouettes
       for (int k = 0; k < 4 && !is_edge; ++k)
         is_edge = inside(x + dx[k], y + dy[k]) && !covered(x + dx[k], y + dy[k]);
       const double d0 = in.depth[i];
@@ -37,10 +33,10 @@ std::vector<std::uint8_t> detect_outlines(const OutlineInput& in, const OutlineO
         if (!covered(x - ax, y - ay) || !covered(x + ax, y + ay)) continue;
         const double wa = 1.0 / in.depth[at(x - ax, y - ay)], wb = 1.0 / in.depth[at(x + ax, y + ay)];
         const double predicted = 2.0 / (wa + wb);
-        is_edge = std::abs(d0 - predicted) > gap_limit;
+        is_edge = predicted - d0 > gap_limit;  // the nearer side of a step only: 1-pixel lines
       }
       const Eigen::Vector3f& n = in.normal[i];
-      for (int k = 0; k < 4 && !is_edge; ++k)
+      for (int k = 0; k < 4 && !is_edge; k += 2)  // +x and +y: one side of a crease
         if (covered(x + dx[k], y + dy[k])) is_edge = n.dot(in.normal[at(x + dx[k], y + dy[k])]) < cos_crease;
       edge[i] = is_edge;
     }

@@ -33,8 +33,9 @@ struct OutlineInput {
   double scene_radius = 1.0;                ///< bounding radius of the scene, world units
 };
 
-/// 1 on outline pixels: both sides of every coverage change (silhouettes), covered pixels at
-/// depth discontinuities and creases (OutlineOptions). \throws InvalidInput for a bad size.
+/// 1 on outline pixels, one pixel wide and on the surface: covered pixels next to background
+/// (silhouettes), on the nearer side of depth discontinuities, and before a crease along +x or +y
+/// (OutlineOptions). \throws InvalidInput for a bad size.
 std::vector<std::uint8_t> detect_outlines(const OutlineInput& input, const OutlineOptions& options = {});
 
 }  // namespace quadrix

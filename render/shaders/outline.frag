@@ -1,7 +1,8 @@
-// Outlines [Sigg06] §5: the detector of core/outlines.h (keep the two in step). Black where a
-// pixel lies on either side of a coverage change, at a depth discontinuity (its depth departs from
-// the one its two neighbours predict, linear in 1/depth, by more than u_min_gap and u_depth_pixels
-// footprints) or at a crease (4-neighbours' normals differ by more than the crease angle).
+// Outlines [Sigg06] §5: the detector of core/outlines.h (keep the two in step). One-pixel black
+// lines on covered pixels: next to background (silhouettes), on the nearer side of a depth
+// discontinuity (nearer than its two neighbours predict, linear in 1/depth, by more than u_min_gap
+// and u_depth_pixels footprints), before a crease along +x or +y (normals differ by more than the
+// crease angle).
 in vec2 v_uv;
 layout(binding = 0) uniform sampler2D g_normal_depth;
 uniform mat4 u_proj;
@@ -17,11 +18,7 @@ vec4 at(ivec2 q) { return inside(q) ? texelFetch(g_normal_depth, q, 0) : vec4(0.
 bool is_edge(ivec2 p) {
   const ivec2 k[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
   vec4 c = at(p);
-  if (!(c.w > 0.0)) {
-    for (int i = 0; i < 4; ++i)
-      if (at(p + k[i]).w > 0.0) return true;
-    return false;
-  }
+  if (!(c.w > 0.0)) return false;
   for (int i = 0; i < 4; ++i)
     if (inside(p + k[i]) && !(at(p + k[i]).w > 0.0)) return true;
   // Pixel footprint at depth d: d·2·tan(fov/2)/height = 2d/(P[1][1]·height).
@@ -30,9 +27,9 @@ bool is_edge(ivec2 p) {
     vec4 a = at(p - k[2 * axis]), b = at(p + k[2 * axis]);
     if (!(a.w > 0.0) || !(b.w > 0.0)) continue;
     float predicted = 2.0 / (1.0 / a.w + 1.0 / b.w);
-    if (abs(c.w - predicted) > limit) return true;
+    if (predicted - c.w > limit) return true;
   }
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < 4; i += 2) {
     vec4 q = at(p + k[i]);
     if (q.w > 0.0 && dot(c.xyz, q.xyz) < u_cos_crease) return true;
   }

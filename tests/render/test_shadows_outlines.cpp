@@ -260,12 +260,12 @@ TEST(Outlines, PlanesStepsAndCreases) {
   plane(tilted, -6.0 * std::cos(a), w / 2, w);
   edges = detect_outlines(in);
   for (int y = 1; y + 1 < h; ++y) EXPECT_TRUE(edges[y * w + w / 2 - 1] || edges[y * w + w / 2]) << "row " << y;
-  EXPECT_LE(std::count(edges.begin(), edges.end(), 1), 2 * h) << "lines 1-2 pixels wide";
+  EXPECT_LE(std::count(edges.begin(), edges.end(), 1), h) << "one pixel wide";
   // A crease: the right half turned by 90° about the line where they meet.
   plane(tilted, -5.0 * std::cos(a), 0, w);
   for (int y = 0; y < h; ++y)
     for (int x = w / 2; x < w; ++x) normal[y * w + x] = (R.transpose() * Eigen::Vector3d(-std::cos(a), 0, std::sin(a))).cast<float>();
   edges = detect_outlines(in);
-  for (int y = 0; y < h; ++y) EXPECT_TRUE(edges[y * w + w / 2 - 1] && edges[y * w + w / 2]) << "row " << y;
-  EXPECT_EQ(std::count(edges.begin(), edges.end(), 1), 2 * h);
+  for (int y = 0; y < h; ++y) EXPECT_TRUE(edges[y * w + w / 2 - 1] || edges[y * w + w / 2]) << "row " << y;
+  EXPECT_EQ(std::count(edges.begin(), edges.end(), 1), h) << "one pixel wide";
 }
