@@ -150,7 +150,7 @@ SkinConversion convert_skin(const std::vector<Ball>& balls, const SkinOptions& o
   }
   out.cgal_seconds = seconds_since(t0);
 
-  PatchEmitter emitter(balls, out);
+  PatchEmitter emitter(balls, out, s);
   const auto emit = [&](const MixedCell& m, const std::array<Vector3d, 4>& corners) {
     emitter.emit(m.balls, m.quadric, corners);
   };

@@ -2,6 +2,8 @@
 #include "convert/skin_detail.h"
 
 #include <algorithm>
+
+#include <Eigen/QR>
 #include <cmath>
 #include <limits>
 
@@ -66,7 +68,34 @@ SkinQuadric skin_quadric(const std::vector<WeightedPoint>& w, double s) {
   return q;
 }
 
-PatchEmitter::PatchEmitter(const std::vector<Ball>& balls, SkinConversion& out) : balls_(balls), out_(out) {
+Rgb skin_corner_colour(const std::vector<Ball>& balls, const std::vector<int>& simplex, const Vector3d& p,
+                       double shrink, const Vector3d& x) {
+  const int k = static_cast<int>(simplex.size());
+  Eigen::VectorXd w = Eigen::VectorXd::Ones(1);
+  if (k > 1) {
+    const Vector3d e = (x - shrink * p) / (1.0 - shrink);
+    const Vector3d p0 = balls[simplex[0]].centre;
+    Eigen::MatrixXd M(3, k - 1);
+    for (int i = 1; i < k; ++i) M.col(i - 1) = balls[simplex[i]].centre - p0;
+    const Eigen::VectorXd a = M.colPivHouseholderQr().solve(e - p0);  // least squares: onto the hull
+    w.resize(k);
+    w[0] = 1.0 - a.sum();
+    w.tail(k - 1) = a;
+    w = w.cwiseMax(0.0);
+    if (!(w.sum() > 0)) w.setOnes();
+    w /= w.sum();
+  }
+  Rgb out;
+  for (int ch = 0; ch < 3; ++ch) {
+    double v = 0;
+    for (int i = 0; i < std::max(k, 1); ++i) v += w[i] * balls[simplex[i]].colour[ch];
+    out[ch] = static_cast<std::uint8_t>(std::clamp(v + 0.5, 0.0, 255.0));
+  }
+  return out;
+}
+
+PatchEmitter::PatchEmitter(const std::vector<Ball>& balls, SkinConversion& out, double shrink)
+    : balls_(balls), out_(out), shrink_(shrink) {
   Vector3d lo = Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const auto& b : balls) lo = lo.cwiseMin(b.centre), hi = hi.cwiseMax(b.centre);
   size_ = (hi - lo).norm();
@@ -93,6 +122,10 @@ std::size_t PatchEmitter::emit_piece(const std::vector<int>& simplex_balls, cons
     if (d < bd) bd = d, best = b;
   }
   t.colour = balls_[best].colour;
+  std::array<Rgb, 4> corner_colours;
+  for (std::size_t k = 0; k < 4; ++k)
+    corner_colours[k] = skin_corner_colour(balls_, simplex_balls, sq.p, shrink_, corners[k]);
+  t.corner_colours = corner_colours;
   out_.model.tets.push_back(t);
   return 1;
 }

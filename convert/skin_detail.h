@@ -43,10 +43,12 @@ inline constexpr int kCrossingDepth = 6;
 /// Turns the tetrahedra of a mixed cell into patches of `out.model`: clipped to the box of the
 /// simplex's balls (the skin body inside a mixed cell lies in the union of those balls), slivers
 /// and tetrahedra the surface cannot cross skipped, coloured by the simplex's ball nearest in
-/// power distance to the tetrahedron's centroid.
+/// power distance to the tetrahedron's centroid, and per corner by the simplex's balls blended
+/// (skin_corner_colour) so neighbouring atoms' colours meet smoothly.
 class PatchEmitter {
  public:
-  PatchEmitter(const std::vector<Ball>& balls, SkinConversion& out);
+  /// shrink: the skin's s (the corner colours' blend follows the mixed cells it makes).
+  PatchEmitter(const std::vector<Ball>& balls, SkinConversion& out, double shrink = 0.5);
   /// Returns the number of patches written.
   std::size_t emit(const std::vector<int>& simplex_balls, const SkinQuadric& q,
                    const std::array<Eigen::Vector3d, 4>& corners);
@@ -57,7 +59,15 @@ class PatchEmitter {
   const std::vector<Ball>& balls_;
   SkinConversion& out_;
   double size_ = 0;  // diagonal of the balls' centres' box
+  double shrink_ = 0.5;
 };
+
+/// The colour at x inside the mixed cell of a simplex of balls (1 to 4, weighted circumcentre p,
+/// shrink s): x = s·v + (1 − s)·e with v on the dual Voronoi face and e in the simplex, so e's
+/// barycentric coordinates in the simplex (from (x − s·p)/(1 − s) projected onto its hull) blend
+/// the balls' colours: the pure ball colour at a ball's own cell, continuous across cells.
+Rgb skin_corner_colour(const std::vector<Ball>& balls, const std::vector<int>& simplex, const Eigen::Vector3d& p,
+                       double shrink, const Eigen::Vector3d& x);
 
 /// SkinTetrahedra::regular: our own mixed complex over CGAL's regular triangulation
 /// (convert/skin_regular.cpp). Balls and options already validated.

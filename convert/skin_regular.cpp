@@ -151,7 +151,7 @@ SkinConversion convert_skin_regular(const std::vector<Ball>& balls, const SkinOp
     std::vector<Vector3d> z;
     for (std::size_t chunk = r.begin(); chunk != r.end(); ++chunk) {
       SkinConversion& part = chunks[chunk];
-      PatchEmitter emitter(balls, part);
+      PatchEmitter emitter(balls, part, s);
       SkinQuadric q;
       std::size_t cell_patches = 0;
       const auto begin_cell = [&](std::initializer_list<Regular::Vertex_handle> vs) {

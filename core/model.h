@@ -44,6 +44,8 @@ struct TetPatch {
   std::array<Eigen::Vector3d, 4> corners;  ///< world units
   Quadric quadric;                         ///< f(y), y = x − centroid()
   std::optional<Rgb> colour;
+  /// Colour at each corner, interpolated barycentrically inside; takes precedence over colour.
+  std::optional<std::array<Rgb, 4>> corner_colours = std::nullopt;
 
   Eigen::Vector3d centroid() const { return 0.25 * ((corners[0] + corners[1]) + (corners[2] + corners[3])); }
   /// The quadric in world coordinates (loses precision far from the origin; for tests and tools).

@@ -27,6 +27,8 @@ constexpr std::array<const char*, 4> kSlimNames = {"x", "y", "z", "radius"};
 constexpr std::array<const char*, 2> kHierarchyNames = {"parent", "error"};
 constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_nz", "clip_d"};
 constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
+constexpr std::array<const char*, 12> kCornerColourNames = {"red0",   "green0", "blue0", "red1",   "green1", "blue1",
+                                                            "red2",   "green2", "blue2", "red3",   "green3", "blue3"};
 constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
                                                       "x2", "y2", "z2", "x3", "y3", "z3"};
 constexpr std::array<const char*, 6> kBoundsNames = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
@@ -285,7 +287,7 @@ Model read_qxm(const ply::File& f) {
 
   std::vector<ply::Request> requests;
   SlimColumns slim_columns, node_columns;
-  bool tet_colour = false, glyph_colour = false, implicit_colour = false;
+  bool tet_colour = false, tet_corner_colours = false, glyph_colour = false, implicit_colour = false;
   int is = -1, in = -1, it = -1, ig = -1, ii = -1;
   if (es) {
     slim_columns = slim_request(f, *es, false, requests);
@@ -302,6 +304,8 @@ Model read_qxm(const ply::File& f) {
     tet_colour = optional_group(f, *et, kColourNames);
     auto props = required(f, *et, names({kCornerNames, kCoefficientNames}));
     if (tet_colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+    tet_corner_colours = optional_group(f, *et, kCornerColourNames);
+    if (tet_corner_colours) props.insert(props.end(), kCornerColourNames.begin(), kCornerColourNames.end());
     it = static_cast<int>(requests.size());
     requests.push_back({"tet", std::move(props), {}});
   }
@@ -364,6 +368,11 @@ Model read_qxm(const ply::File& f) {
       t.quadric = Quadric::from_coefficients(r.coefficients(i, 12));
       if (is_degenerate_tetrahedron(t.corners)) r.fail_row(i, "degenerate tetrahedron (zero volume)");
       if (tet_colour) t.colour = r.colour(i, 22);
+      if (tet_corner_colours) {
+        std::array<Rgb, 4> c;
+        for (std::size_t k = 0; k < 4; ++k) c[k] = r.colour(i, (tet_colour ? 25 : 22) + 3 * k);
+        t.corner_colours = c;
+      }
     }
   }
   if (ig >= 0) {
@@ -639,6 +648,8 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   const bool node_colour = std::any_of(hy.others.begin(), hy.others.end(), has_colour);
   const bool tet_colour =
       std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
+  const bool tet_corner_colours = std::any_of(model.tets.begin(), model.tets.end(),
+                                              [](const TetPatch& t) { return t.corner_colours.has_value(); });
   const bool glyph_colour =
       std::any_of(model.glyphs.begin(), model.glyphs.end(), [](const Glyph& g) { return g.colour.has_value(); });
 
@@ -668,8 +679,11 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour));
   if (hierarchy && !hy.others.empty())
     h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour));
-  if (all || !model.tets.empty())
+  if (all || !model.tets.empty()) {
     h.elements.push_back(element("tet", model.tets.size(), names({kCornerNames, kCoefficientNames}), tet_colour));
+    if (tet_corner_colours)
+      for (const char* n : kCornerColourNames) h.elements.back().properties.push_back({n, ply::Type::uint8});
+  }
   if (all || !model.glyphs.empty()) {
     auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kAxisNames});
     h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, true));
@@ -706,6 +720,12 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     for (const auto& p : t.corners) append_doubles(out, {p.x(), p.y(), p.z()});
     for (double v : t.quadric.coefficients()) ply::append_le(out, ply::Type::float64, v);
     if (tet_colour) append_colour(out, t.colour);
+    if (tet_corner_colours) {
+      // A patch without its own corner colours repeats its colour at every corner.
+      const Rgb c = t.colour.value_or(Rgb{200, 200, 200});
+      const std::array<Rgb, 4> cs = t.corner_colours.value_or(std::array<Rgb, 4>{c, c, c, c});
+      for (const Rgb& rgb : cs) append_colour(out, rgb);
+    }
   }
   for (const Glyph& g : model.glyphs) {
     out.push_back(static_cast<char>(static_cast<std::uint8_t>(g.kind)));

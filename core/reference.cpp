@@ -11,6 +11,7 @@
 #include "core/culling.h"
 #include "core/error.h"
 #include "core/implicit/surface.h"
+#include "core/lighting.h"
 
 namespace quadrix {
 namespace {
@@ -64,6 +65,18 @@ PreparedGlyph prepare(const Glyph& g) {
     }
   }
   return p;
+}
+
+// Corner colours at barycentric coordinates b (clamped to the tetrahedron), rounded.
+Rgb interpolate_colour(const std::array<Rgb, 4>& c, const Eigen::Vector4d& b) {
+  const Eigen::Vector4d w = b.cwiseMax(0.0) / std::max(1e-300, b.cwiseMax(0.0).sum());
+  Rgb out;
+  for (int ch = 0; ch < 3; ++ch) {
+    double v = 0;
+    for (int k = 0; k < 4; ++k) v += w[k] * c[k][ch];
+    out[ch] = static_cast<std::uint8_t>(std::clamp(v + 0.5, 0.0, 255.0));
+  }
+  return out;
 }
 
 }  // namespace
@@ -237,6 +250,9 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
                                      : best_ref.kind == PrimitiveKind::implicit ? m.implicits[best_ref.index].colour
                                                                                 : m.glyphs[best_ref.index].colour;
   if (colour) out.colour = *colour;
+  if (best_ref.kind == PrimitiveKind::tet && m.tets[best_ref.index].corner_colours)
+    out.colour = interpolate_colour(*m.tets[best_ref.index].corner_colours,
+                                    impl_->tets[best_ref.index].tet.barycentric(out.point));
   return out;
 }
 
@@ -254,6 +270,14 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
   img.normal.assign(n, Eigen::Vector3f::Zero());
   img.primitive.assign(n, -1);
   img.albedo.assign(n, Rgb{0, 0, 0});
+  const Box3 box = bounds(scene.model());
+  img.scene_radius = box.empty() ? 0.0 : 0.5 * box.diagonal();
+  if (options.shadows && !box.empty()) img.key_light.assign(n, 1.0f);
+  const Eigen::Vector3d light = img.key_light.empty() ? Eigen::Vector3d::Zero() : shadow_light_camera(camera, box, 1).eye;
+  // Shadow rays leave the surface by this much (the GL map's bias is of the order of a texel).
+  const double shadow_eps = 1e-3 * img.scene_radius;
+  TraceOptions shadow_trace = options.trace;
+  shadow_trace.cull_backfaces = false;  // rays start on surfaces, inside closed solids' shells
   const Eigen::Vector3d fwd = camera.forward();
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).
   TraceOptions trace = options.trace;
@@ -272,6 +296,13 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
         img.normal[i] = hit->normal.cast<float>();
         img.primitive[i] = primitive_id(hit->kind, static_cast<std::size_t>(hit->index));
         img.albedo[i] = hit->colour;
+        if (!img.key_light.empty()) {
+          const Eigen::Vector3d to_light = light - hit->point;
+          const double distance = to_light.norm();
+          const Eigen::Vector3d dir = to_light / distance;
+          const Eigen::Vector3d lift = (hit->normal.dot(dir) >= 0 ? shadow_eps : -shadow_eps) * hit->normal;
+          if (scene.trace(Ray{hit->point + lift, dir}, shadow_eps, distance, shadow_trace)) img.key_light[i] = 0.0f;
+        }
       }
     }
     const int done = rows_done += static_cast<int>(rows.size());

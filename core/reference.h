@@ -61,10 +61,17 @@ struct ReferenceImage {
   std::vector<Eigen::Vector3f> normal;  ///< unit world-space normal facing the viewer; 0 background
   std::vector<std::int32_t> primitive; ///< primitive_id(kind, index); −1 background
   std::vector<Rgb> albedo;             ///< primitive colour
+  /// Visibility of the key light (core/lighting.h) per pixel: 1 lit, 0 in shadow; empty unless
+  /// ReferenceRenderOptions::shadows.
+  std::vector<float> key_light;
+  double scene_radius = 0;             ///< bounding radius of the model (outline thresholds)
 };
 
 struct ReferenceRenderOptions {
   TraceOptions trace;
+  /// A shadow ray per covered pixel towards the key light's point (core/lighting.h), filling
+  /// ReferenceImage::key_light.
+  bool shadows = false;
   /// Called with the fraction done (0..1) from worker threads at most every few rows.
   std::function<void(double)> progress;
 };

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/lighting.h"
+
 namespace quadrix {
 
 Image8 shade_phong(const ReferenceImage& img, const Camera& camera, const ShadeOptions& o) {
@@ -13,11 +15,21 @@ Image8 shade_phong(const ReferenceImage& img, const Camera& camera, const ShadeO
   const Eigen::Matrix4d V = camera.view();
   const Eigen::Matrix3d R = V.topLeftCorner<3, 3>();
   // Lights in eye space: a head light and a key light from the upper left.
-  const Eigen::Vector3d head(0, 0, 1), key = Eigen::Vector3d(-0.5, 0.8, 0.6).normalized();
+  const Eigen::Vector3d head(0, 0, 1), key = key_light_eye();
+  std::vector<std::uint8_t> edges;
+  if (o.outlines)
+    edges = detect_outlines({.width = img.width, .height = img.height, .coverage = img.coverage.data(),
+                             .depth = img.depth.data(), .normal = img.normal.data(), .fov_y_deg = camera.fov_y_deg,
+                             .scene_radius = img.scene_radius},
+                            o.outline);
   for (int y = 0; y < img.height; ++y) {
     for (int x = 0; x < img.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * img.width + x;
       std::uint8_t* px = out.pixel(x, y);
+      if (!edges.empty() && edges[i]) {
+        px[0] = px[1] = px[2] = 0, px[3] = 255;
+        continue;
+      }
       if (!img.coverage[i]) {
         px[0] = o.background[0], px[1] = o.background[1], px[2] = o.background[2], px[3] = 255;
         continue;
@@ -26,7 +38,8 @@ Image8 shade_phong(const ReferenceImage& img, const Camera& camera, const ShadeO
       const Eigen::Vector3d view_dir = camera.pixel_ray(x + 0.5, y + 0.5).dir;
       const Eigen::Vector3d to_eye = -(R * view_dir);
       double diffuse = 0, spec = 0;
-      for (const auto& [l, k] : {std::pair{head, 0.55}, std::pair{key, 0.45}}) {
+      const double key_visible = img.key_light.empty() ? 1.0 : img.key_light[i];
+      for (const auto& [l, k] : {std::pair{head, 0.55}, std::pair{key, 0.45 * key_visible}}) {
         const double d = std::max(0.0, n.dot(l));
         diffuse += k * d;
         const Eigen::Vector3d h = (l + to_eye).normalized();

@@ -2,19 +2,23 @@
 
 #include <glad/gl.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <chrono>
 #include <cstring>
 #include <limits>
 
 #include "core/culling.h"
 #include "core/error.h"
+#include "core/lighting.h"
 #include "render/context.h"
 #include "render/gl/objects.h"
 #include "render/passes/frame.h"
 #include "render/passes/glyph_pass.h"
 #include "render/passes/implicit_pass.h"
 #include "render/passes/mesh_pass.h"
+#include "render/passes/outline_pass.h"
 #include "render/passes/shade_pass.h"
 #include "render/passes/slim_pass.h"
 #include "render/passes/statistics.h"
@@ -40,8 +44,11 @@ struct Renderer::Impl {
   SlimPass slim;
   ImplicitPass implicit;
   ShadePass shade;
+  OutlinePass outline;
   SlimOutlinePass slim_outline{slim};
+  FrameTargets light_targets;  // the key light's view (shadows)
   Box3 box;            // of the model's primitives
+  Box3 mesh_box;       // of the triangles of set_mesh
   bool closed = true;  // its tetrahedron patches and glyphs bound solids (core/culling.h)
 
   /// A pass and the FrameStats figure its time adds to (time_passes only).
@@ -55,8 +62,42 @@ struct Renderer::Impl {
                                      {&mesh, &FrameStats::ms_geometry},
                                      {&implicit, &FrameStats::ms_geometry},
                                      {&slim, &FrameStats::ms_slim}}};
-  std::array<Step, 2> image_steps{{{&shade, &FrameStats::ms_shading}, {&slim_outline, &FrameStats::ms_shading}}};
+  std::array<Step, 3> image_steps{{{&shade, &FrameStats::ms_shading},
+                                   {&outline, &FrameStats::ms_shading},
+                                   {&slim_outline, &FrameStats::ms_shading}}};
+
+  /// Draws the G-buffer passes from the key light into light_targets, depth only.
+  ShadowMap draw_shadow_map(const Camera& camera, const Box3& scene, const RenderOptions& o);
 };
+
+ShadowMap Renderer::Impl::draw_shadow_map(const Camera& camera, const Box3& scene, const RenderOptions& o) {
+  const int size = std::clamp(o.shadow_map_size, 16, 16384);
+  const Camera light = shadow_light_camera(camera, scene, size);
+  light_targets.resize(size, size);
+  const CameraUniforms light_uniforms(light);
+  RenderOptions lo = o;
+  lo.statistics = false;
+  lo.glyph_proxies = false;
+  lo.cull = o.cull && backface_culling_is_exact(box, closed, light);
+  const Frame frame{light_uniforms, lo, light_targets, statistics.buffer(), empty_vao.id(), o.cull, /*depth_only=*/true};
+  glViewport(0, 0, size, size);
+  light_targets.clear();
+  for (const auto& s : gbuffer_steps)
+    if (s.pass->needed(lo)) s.pass->run(frame);
+  for (GLuint i = 0; i < 3; ++i) glColorMaski(i, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  ShadowMap map;
+  map.depth = light_targets.depth.id();
+  // View eye space → world → light clip, in double (the eye offsets cancel before the cast).
+  const Eigen::Matrix4d M = light.projection() * light.view() * camera.view().inverse();
+  map.eye_to_light = M.cast<float>();
+  const Eigen::Matrix4d P = light.projection();
+  map.proj22 = static_cast<float>(P(2, 2));
+  map.proj32 = static_cast<float>(P(2, 3));
+  map.texel_world = static_cast<float>(2.0 * (light.eye - light.target).norm() *
+                                       std::tan(0.5 * light.fov_y_deg * 3.14159265358979323846 / 180.0) / size);
+  map.size = size;
+  return map;
+}
 
 Renderer::Renderer(GlContext& context) : impl_(std::make_unique<Impl>()) {
   impl_->context = &context;
@@ -82,7 +123,11 @@ void Renderer::set_implicit_parameters(std::size_t i, const std::map<std::string
   impl_->implicit.set_parameters(i, values);
 }
 
-void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) { impl_->mesh.upload(mesh, colour); }
+void Renderer::set_mesh(const PolygonMesh& mesh, Rgb colour) {
+  impl_->mesh.upload(mesh, colour);
+  impl_->mesh_box = Box3{};
+  for (const auto& v : mesh.vertices) impl_->mesh_box.extend(v);
+}
 
 FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   auto& I = *impl_;
@@ -94,7 +139,20 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).
   RenderOptions exact = o;
   exact.cull = o.cull && backface_culling_is_exact(I.box, I.closed, camera);
-  const Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
+  Box3 scene = I.box;
+  if (I.mesh.needed(o)) scene.extend(I.mesh_box);
+  Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
+  frame.scene_radius = scene.empty() ? 1.0f : static_cast<float>(0.5 * scene.diagonal());
+  ShadowMap shadow;
+  if (o.shadows && !scene.empty()) {
+    const auto t = Clock::now();
+    shadow = I.draw_shadow_map(camera, scene, o);
+    frame.shadow = &shadow;
+    if (o.time_passes) {
+      glFinish();
+      st.ms_shadows = ms_since(t);
+    }
+  }
 
   glViewport(0, 0, I.targets.width, I.targets.height);
   glBindFramebuffer(GL_FRAMEBUFFER, I.targets.gbuffer.id());

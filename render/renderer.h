@@ -12,6 +12,7 @@
 #include "core/image.h"
 #include "core/mesh_io.h"
 #include "core/model.h"
+#include "core/outlines.h"
 #include "render/amp_options.h"
 
 namespace quadrix::render {
@@ -45,6 +46,15 @@ struct RenderOptions {
   bool slim_outlines = false;
   /// Debug: glyphs write every fragment of their proxy polygon, flat, without ray casting.
   bool glyph_proxies = false;
+  /// Shadows of the key light (core/lighting.h) from a shadow map of every primitive kind, with
+  /// adaptive percentage-closer filtering ([Sigg06] §5: 8 samples, 64 in the penumbra).
+  bool shadows = false;
+  int shadow_map_size = 2048;     ///< pixels per side of the light's view
+  float shadow_softness = 1.5f;   ///< PCF kernel radius, shadow-map texels
+  /// Black silhouette and crease lines (core/outlines.h, the CPU reference's detector); NPR
+  /// shading draws them too.
+  bool outlines = false;
+  OutlineOptions outline;
 };
 
 /// Measured figures of one frame.
@@ -68,7 +78,8 @@ struct FrameStats {
   double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
   double ms_geometry = 0;              ///< G-buffer passes (time_passes only)
   double ms_slim = 0;                  ///< the three SLIM passes (time_passes only)
-  double ms_shading = 0;               ///< deferred pass (time_passes only)
+  double ms_shading = 0;               ///< deferred pass and outlines (time_passes only)
+  double ms_shadows = 0;               ///< the light's view for the shadow map (time_passes only)
   double ms_total = 0;                 ///< CPU wall time of the frame incl. glFinish
 };
 

@@ -35,9 +35,10 @@ struct Row {
 };
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
-            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true) {
+            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false) {
   render::RenderOptions o;
   o.cull = cull;
+  o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
   o.slim_tight_splats = tight_splats;
   o.slim_offset = static_cast<float>(slim_offset);
   o.statistics = true;
@@ -183,6 +184,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           r.set_model(model);
                           rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_offset_of(model)));
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
+                          if (!model.glyphs.empty())
+                            rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
+                                                   slim_offset_of(model), true, true));
                           if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
                                                    slim_offset_of(model), false));
@@ -194,6 +198,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           render::Renderer r(*context);
                           r.set_mesh(*mesh);
                           rows.push_back(measure("tessellated glyphs", r, cam, false, a->frames));
+                          rows.push_back(measure("tessellated, shadows+outlines", r, cam, false, a->frames,
+                                                 SlimBlendOptions{}.offset, true, true));
                           mesh.reset();
                         }
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);

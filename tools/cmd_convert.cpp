@@ -12,6 +12,7 @@ namespace quadrix::cli {
 void add_convert_volume(CLI::App& convert, Commands& commands);
 void add_convert_skin(CLI::App& convert, Commands& commands);
 void add_convert_glyphs(CLI::App& convert, Commands& commands);
+void add_convert_curvature(CLI::App& convert, Commands& commands);
 
 void add_convert(CLI::App& root, Commands& commands) {
   // `convert` is only a group; main runs the leaf whose app parsed (its parent parses with it).
@@ -20,6 +21,7 @@ void add_convert(CLI::App& root, Commands& commands) {
   add_convert_volume(*convert, commands);
   add_convert_skin(*convert, commands);
   add_convert_glyphs(*convert, commands);
+  add_convert_curvature(*convert, commands);
   auto* app = convert->add_subcommand("quads", "Quad mesh (OBJ, OFF, PLY) to tetrahedron-clipped quadrics");
   struct Args {
     std::string mesh, out, colour;

@@ -34,8 +34,8 @@ struct RenderArgs {
   std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
   std::string shading = "phong", mesh, up = "+y", view, background = "255,255,255";
   double azimuth = 30, elevation = 20, fov = 40, zoom = 1, fill = 0.9;
-  bool no_cull = false;
-  int frames = 1;
+  bool no_cull = false, shadows = false, outlines = false;
+  int frames = 1, shadow_map = 2048;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
@@ -227,11 +227,12 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
     ro.trace.slim.offset = slim_offset;
+    ro.shadows = a.shadows;
     ro.progress = progress.callback();
     const double t1 = report.elapsed();
     const ReferenceImage img = render_reference(scene, camera, ro);
     const double t2 = report.elapsed();
-    Image8 colour = shade_phong(img, camera, {.background = background});
+    Image8 colour = shade_phong(img, camera, {.background = background, .outlines = a.outlines});
     if (transparent)
       for (std::size_t i = 0; i < img.coverage.size(); ++i) colour.rgba[4 * i + 3] = img.coverage[i] ? 255 : 0;
     write_png(colour, a.out);
@@ -262,6 +263,9 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   ro.shading = a.shading == "envmap" ? render::Shading::envmap
                : a.shading == "npr"  ? render::Shading::npr
                                      : render::Shading::phong;
+  ro.shadows = a.shadows;
+  ro.shadow_map_size = a.shadow_map;
+  ro.outlines = a.outlines;
   // One frame with statistics (counted separately: the counters cost time), then N timed frames.
   ro.statistics = true;
   const render::FrameStats stats = renderer.draw(camera, ro);
@@ -292,6 +296,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
   j["backface_culling_exact"] = backface_culling_is_exact(model, camera);
   j["shading"] = a.shading;
+  j["shadows"] = a.shadows;
+  j["outlines"] = a.outlines;
   j["primitives_drawn"] = stats.primitives - stats.culled;
   j["primitives_culled"] = stats.culled;
   j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
@@ -343,6 +349,11 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
   app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
+  app->add_flag("--shadows", a->shadows, "Shadows of the key light (GL: shadow map with soft edges; cpu: shadow rays)");
+  app->add_option("--shadow-map", a->shadow_map, "Shadow map size in pixels per side (GL)")
+      ->check(number({.lo = 16, .hi = 16384}))
+      ->capture_default_str();
+  app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
   app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
       ->check(number({.lo = 0, .hi = 10}));
   app->add_option("--implicit", a->implicit, "Implicit surface S(x,y,z) = 0 to draw (with MODEL if given), e.g. \"x^4 + y^4 + z^4 - 1\"");

@@ -45,6 +45,12 @@ void begin_gbuffer_draw(const Frame& f) {
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);
   glDisable(GL_CULL_FACE);
+  set_gbuffer_colour_writes(f);
+}
+
+void set_gbuffer_colour_writes(const Frame& f) {
+  const GLboolean on = f.depth_only ? GL_FALSE : GL_TRUE;
+  for (GLuint i = 0; i < 3; ++i) glColorMaski(i, on, on, on, on);
 }
 
 void FrameTargets::resize(int w, int h) {

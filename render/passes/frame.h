@@ -47,6 +47,15 @@ struct FrameTargets {
   void clear() const;
 };
 
+/// The key light's shadow map as the deferred pass reads it (core/lighting.h).
+struct ShadowMap {
+  GLuint depth = 0;                 ///< the light's window depth (GL_DEPTH_COMPONENT32F)
+  Eigen::Matrix4f eye_to_light;     ///< view eye space → the light's clip space
+  float proj22 = 0, proj32 = 0;     ///< the light's projection, to make its depth linear
+  float texel_world = 0;            ///< a map texel's size at the scene, world units
+  int size = 0;                     ///< pixels per side
+};
+
 /// One frame's shared inputs.
 struct Frame {
   const CameraUniforms& camera;
@@ -58,11 +67,20 @@ struct Frame {
   GLuint empty_vao;
   /// Per-quadric SLIM culling as the caller asked: always exact (SLIM patches are one-sided).
   bool slim_cull = true;
+  /// The light's view for the shadow map: the passes write depth only (no colour targets).
+  bool depth_only = false;
+  /// The shadow map the deferred pass reads (RenderOptions::shadows), else null.
+  const ShadowMap* shadow = nullptr;
+  /// Bounding radius of the scene (outline thresholds).
+  float scene_radius = 1.0f;
 };
 
 /// The state every opaque pass draws into the G-buffer with: its framebuffer bound, depth test
-/// GL_LESS with depth writes, no blending, no face culling (a pass that culls enables it after).
+/// GL_LESS with depth writes, no blending, no face culling (a pass that culls enables it after);
+/// colour writes off for a depth-only frame.
 void begin_gbuffer_draw(const Frame& frame);
+/// Colour writes to the G-buffer's three targets: on, unless the frame is depth-only.
+void set_gbuffer_colour_writes(const Frame& frame);
 
 /// One step of a frame. Each pass owns its programs and the GPU data of its primitives, and
 /// sets the GL state it draws with.

@@ -22,6 +22,15 @@ void ShadePass::run(const Frame& f) {
   const Rgb& bg = f.options.background;
   set_camera_uniforms(s, f.camera);
   s.set("u_background", Eigen::Vector3f(bg[0] / 255.f, bg[1] / 255.f, bg[2] / 255.f));
+  const ShadowMap none{.eye_to_light = Eigen::Matrix4f::Identity()};
+  const ShadowMap& m = f.shadow ? *f.shadow : none;
+  s.set("u_shadows", f.shadow ? 1 : 0);
+  s.set("u_eye_to_light", m.eye_to_light);
+  s.set("u_light_proj", Eigen::Vector2f(m.proj22, m.proj32));
+  s.set("u_shadow_texel", m.texel_world);
+  s.set("u_shadow_softness", f.options.shadow_softness);
+  s.set("u_shadow_size", static_cast<float>(m.size));
+  glBindTextureUnit(2, m.depth);
   s.use();
   glBindTextureUnit(0, f.targets.normal_depth.id());
   glBindTextureUnit(1, f.targets.albedo.id());

@@ -75,17 +75,23 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
 }
 
 void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
-  if (acc_fbo_ && acc_half_ == half && acc_generation_ == t.generation) return;
-  acc_half_ = half;
-  acc_generation_ = t.generation;
+  // Reuse the slot made for these targets; else remake the other one (the view's and the
+  // light's targets alternate when shadows are on).
+  Accumulation* a = acc_[0].targets == &t ? &acc_[0] : acc_[1].targets == &t ? &acc_[1]
+                    : current_ == &acc_[0] ? &acc_[1] : &acc_[0];
+  current_ = a;
+  if (a->fbo && a->targets == &t && a->half == half && a->generation == t.generation) return;
+  a->half = half;
+  a->targets = &t;
+  a->generation = t.generation;
   const GLenum format = half ? GL_RGBA16F : GL_RGBA32F;
-  acc_normal_weight_ = gl::make_texture_2d(format, t.width, t.height);
-  acc_depth_colour_ = gl::make_texture_2d(format, t.width, t.height);
+  a->normal_weight = gl::make_texture_2d(format, t.width, t.height);
+  a->depth_colour = gl::make_texture_2d(format, t.width, t.height);
   GLuint fb = 0;
   glCreateFramebuffers(1, &fb);
-  acc_fbo_ = gl::Framebuffer(fb);
-  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT0, acc_normal_weight_.id(), 0);
-  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT1, acc_depth_colour_.id(), 0);
+  a->fbo = gl::Framebuffer(fb);
+  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT0, a->normal_weight.id(), 0);
+  glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT1, a->depth_colour.id(), 0);
   glNamedFramebufferTexture(fb, GL_DEPTH_ATTACHMENT, t.depth.id(), 0);
   const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
   glNamedFramebufferDrawBuffers(fb, 2, bufs);
@@ -123,14 +129,16 @@ void SlimPass::visibility(const Frame& f) {
   set_uniforms(visibility_, f, f.options.statistics ? 1 : 0);
   visibility_.use();
   glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
-  set_colour_writes(GL_TRUE);
+  set_gbuffer_colour_writes(f);
 }
 
 // Pass 2: every hit in front of pass 1's depth adds its weighted normal, depth and colour.
 void SlimPass::accumulate(const Frame& f) {
-  glBindFramebuffer(GL_FRAMEBUFFER, acc_fbo_.id());
-  glClearNamedFramebufferfv(acc_fbo_.id(), GL_COLOR, 0, kZero);
-  glClearNamedFramebufferfv(acc_fbo_.id(), GL_COLOR, 1, kZero);
+  const GLuint fbo = current_->fbo.id();
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  set_colour_writes(GL_TRUE);  // the light's depth-only view still needs the sums for its depth
+  glClearNamedFramebufferfv(fbo, GL_COLOR, 0, kZero);
+  glClearNamedFramebufferfv(fbo, GL_COLOR, 1, kZero);
   glDepthFunc(GL_LEQUAL);
   glDepthMask(GL_FALSE);
   glEnable(GL_BLEND);
@@ -145,12 +153,13 @@ void SlimPass::accumulate(const Frame& f) {
 // Pass 3: divide by Σw into the G-buffer; the deferred pass shades it with the rest.
 void SlimPass::resolve(const Frame& f) {
   glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
+  set_gbuffer_colour_writes(f);
   glDepthFunc(GL_ALWAYS);
   glDepthMask(GL_TRUE);
   set_camera_uniforms(resolve_, f.camera);
   resolve_.use();
-  glBindTextureUnit(0, acc_normal_weight_.id());
-  glBindTextureUnit(1, acc_depth_colour_.id());
+  glBindTextureUnit(0, current_->normal_weight.id());
+  glBindTextureUnit(1, current_->depth_colour.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glDepthFunc(GL_LESS);
 }

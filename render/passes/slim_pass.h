@@ -2,6 +2,7 @@
 /// SLIM patches in three passes ([Stoll06] §5.1.1, DESIGN §6): visibility (pushed-back depth of
 /// the first hit), accumulation (additive weighted normal, depth, colour), resolve (divide by Σw
 /// into the G-buffer, shaded later with everything else). And the debug overlay of their splats.
+#include <array>
 #include <span>
 
 #include "core/model.h"
@@ -31,10 +32,16 @@ private:
   gl::Program visibility_, accumulate_, resolve_;
   gl::Buffer balls_;
   std::size_t count_ = 0;
-  gl::Texture acc_normal_weight_, acc_depth_colour_;
-  gl::Framebuffer acc_fbo_;
-  bool acc_half_ = false;
-  unsigned acc_generation_ = 0;  // the FrameTargets generation acc_fbo_ was made for
+  /// Accumulation targets for one FrameTargets (the view's, and the light's for shadows).
+  struct Accumulation {
+    gl::Texture normal_weight, depth_colour;
+    gl::Framebuffer fbo;
+    bool half = false;
+    const FrameTargets* targets = nullptr;
+    unsigned generation = 0;  // the FrameTargets generation fbo was made for
+  };
+  std::array<Accumulation, 2> acc_;
+  Accumulation* current_ = nullptr;  // the one this frame draws with
 };
 
 /// Debug overlay over the shaded image: the screen bound of every SLIM ball, red where the

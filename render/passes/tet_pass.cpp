@@ -1,5 +1,6 @@
 #include "render/passes/tet_pass.h"
 
+#include <algorithm>
 #include <array>
 
 #include <fmt/format.h>
@@ -69,6 +70,19 @@ void TetPass::upload(std::span<const TetPatch> tets) {
   for (std::size_t t = 0; t < data.size(); ++t)
     for (std::size_t j = 0; j < 12; ++j) indices[12 * t + j] = static_cast<std::uint32_t>(4 * t) + kFace[j];
   indices_ = gl::make_buffer(static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data());
+  // Per-corner colours (binding 2), in the corner order pack() leaves (it may swap corners 1, 2).
+  has_corner_colours_ = std::any_of(tets.begin(), tets.end(), [](const TetPatch& t) { return t.corner_colours.has_value(); });
+  std::vector<std::uint32_t> colours(has_corner_colours_ ? 4 * tets.size() : 4, 0);
+  if (has_corner_colours_)
+    for (std::size_t i = 0; i < tets.size(); ++i) {
+      const TetPatch& t = tets[i];
+      const Rgb c = t.colour.value_or(Rgb{200, 200, 200});
+      std::array<Rgb, 4> cs = t.corner_colours.value_or(std::array<Rgb, 4>{c, c, c, c});
+      const auto& p = t.corners;
+      if ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) < 0) std::swap(cs[1], cs[2]);
+      for (std::size_t k = 0; k < 4; ++k) colours[4 * i + k] = cs[k][0] | (cs[k][1] << 8) | (cs[k][2] << 16);
+    }
+  corner_colours_ = gl::make_buffer(static_cast<GLsizeiptr>(colours.size() * sizeof(std::uint32_t)), colours.data());
   vao_ = gl::make_vertex_array();
   glVertexArrayElementBuffer(vao_.id(), indices_.id());
 }
@@ -84,6 +98,8 @@ void TetPass::run(const Frame& f) {
   program_.set("u_cull", o.cull ? 1 : 0);
   program_.set("u_count_stats", o.statistics ? 1 : 0);
   program_.set("u_clip_eps", o.clip_eps);
+  program_.set("u_corner_colours", has_corner_colours_ ? 1 : 0);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, corner_colours_.id());
   // Statistics frames draw instanced so each tetrahedron is counted exactly once; other frames
   // indexed, 4 vertex-shader runs per tetrahedron instead of 12 (measured on llvmpipe).
   program_.set("u_indexed", o.statistics ? 0 : 1);

@@ -22,6 +22,8 @@ private:
   gl::Buffer tets_;
   gl::Buffer indices_;     // 12 per tetrahedron: its 4 faces over vertices 4·t + corner
   gl::VertexArray vao_;    // holds indices_ as its element buffer
+  gl::Buffer corner_colours_;  // uvec4 per tetrahedron (packed RGB per GPU corner), or 16 bytes
+  bool has_corner_colours_ = false;
   std::size_t count_ = 0;
 };
 

@@ -1,5 +1,6 @@
 // Deferred shading of the G-buffer: Phong (head + key light, as the CPU reference's shade),
-// an environment line map that shows smoothness, or NPR cel shading with Sobel outlines.
+// an environment line map that shows smoothness, or NPR cel shading (its outlines: outline.frag);
+// the key light shadowed from a shadow map.
 in vec2 v_uv;
 layout(binding = 0) uniform sampler2D g_normal_depth;
 layout(binding = 1) uniform sampler2D g_albedo;
@@ -16,45 +17,60 @@ vec3 view_dir_at(vec2 frag) {
   return normalize(vec3(ndc.x / u_proj[0][0], ndc.y / u_proj[1][1], -1.0));
 }
 
-// Outlines [Sigg06]: silhouettes (coverage changes), depth discontinuities (Sobel on eye depth,
-// relative to the centre depth) and creases (Sobel on normals).
-float edge_strength(ivec2 p) {
-  const int kx[9] = int[9](-1, 0, 1, -2, 0, 2, -1, 0, 1);
-  const int ky[9] = int[9](-1, -2, -1, 0, 0, 0, 1, 2, 1);
-  float centre = texelFetch(g_normal_depth, p, 0).w;
-  float gx = 0.0, gy = 0.0;
-  vec3 nx = vec3(0.0), ny = vec3(0.0);
-  int covered = 0;
-  for (int i = 0; i < 9; ++i) {
-    ivec2 q = clamp(p + ivec2(i % 3 - 1, i / 3 - 1), ivec2(0), ivec2(u_viewport) - 1);
-    vec4 s = texelFetch(g_normal_depth, q, 0);
-    covered += s.w > 0.0 ? 1 : 0;
-    float d = s.w > 0.0 ? s.w : centre;
-    gx += float(kx[i]) * d;
-    gy += float(ky[i]) * d;
-    nx += float(kx[i]) * s.xyz;
-    ny += float(ky[i]) * s.xyz;
+// Key-light visibility from the shadow map (core/lighting.h), adaptive PCF [Sigg06] §5: 8 taps on
+// a ring of u_shadow_softness texels; only where they disagree (the penumbra) 64 taps on a grid.
+uniform int u_shadows;
+layout(binding = 2) uniform sampler2D g_shadow_depth;
+uniform mat4 u_eye_to_light;
+uniform vec2 u_light_proj;        // the light's P[2][2], P[3][2]
+uniform float u_shadow_texel;     // a map texel at the scene, world units
+uniform float u_shadow_softness;  // PCF radius, texels
+uniform float u_shadow_size;      // texels per side
+
+float light_depth_at(vec2 uv) {
+  float ndc = 2.0 * texelFetch(g_shadow_depth, ivec2(uv * u_shadow_size), 0).r - 1.0;
+  return u_light_proj.y / (ndc + u_light_proj.x);
+}
+
+float lit_tap(vec2 uv, float depth, float bias) {
+  if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) return 1.0;
+  return depth <= light_depth_at(uv) + bias ? 1.0 : 0.0;
+}
+
+float key_light_visibility(vec3 p_eye, vec3 n_eye) {
+  // Normal offset of 1.5 texels against acne; a texel of slack on the comparison.
+  vec4 c = u_eye_to_light * vec4(p_eye + 1.5 * u_shadow_texel * n_eye, 1.0);
+  if (c.w <= 0.0) return 1.0;
+  vec2 uv = 0.5 * c.xy / c.w + 0.5;
+  float depth = c.w, bias = u_shadow_texel;
+  float r = u_shadow_softness / u_shadow_size;
+  float lit = 0.0;
+  for (int i = 0; i < 8; ++i) {
+    float a = 0.7853982 * float(i) + 0.3926991;
+    lit += lit_tap(uv + r * vec2(cos(a), sin(a)), depth, bias);
   }
-  if (covered != 0 && covered != 9) return 1.0;  // silhouette
-  if (covered == 0) return 0.0;
-  float depth_edge = length(vec2(gx, gy)) / centre;
-  float normal_edge = length(nx) + length(ny);
-  return max(step(0.05, depth_edge), step(1.2, normal_edge));
+  if (lit == 0.0 || lit == 8.0) return lit / 8.0;
+  lit = 0.0;
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i)
+      lit += lit_tap(uv + r * (vec2(float(i), float(j)) - 3.5) / 3.5, depth, bias);
+  return lit / 64.0;
 }
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec4 nd = texelFetch(g_normal_depth, p, 0);
   if (nd.w <= 0.0) {
-    if (SHADING_MODE == 2 && edge_strength(p) > 0.0) { out_colour = vec4(0.0, 0.0, 0.0, 1.0); return; }
     out_colour = vec4(u_background, 1.0);
     return;
   }
   vec3 albedo = texelFetch(g_albedo, p, 0).rgb;
   vec3 n = normalize(u_view_rot * nd.xyz);
-  vec3 to_eye = -view_dir_at(gl_FragCoord.xy);
+  vec3 dir = view_dir_at(gl_FragCoord.xy);
+  vec3 to_eye = -dir;
+  float key = u_shadows != 0 ? key_light_visibility(dir * (nd.w / -dir.z), n) : 1.0;
   vec3 lights[2] = vec3[2](vec3(0.0, 0.0, 1.0), normalize(vec3(-0.5, 0.8, 0.6)));
-  float weights[2] = float[2](0.55, 0.45);
+  float weights[2] = float[2](0.55, 0.45 * key);
   vec3 colour;
   if (SHADING_MODE == 1) {
     // Line map: stripes of the reflected direction; kinks show curvature discontinuities.
@@ -73,7 +89,6 @@ void main() {
       diffuse = diffuse > 0.75 ? 0.95 : diffuse > 0.35 ? 0.6 : 0.3;
       spec = spec > 0.5 ? 0.4 : 0.0;
       colour = albedo * (0.15 + diffuse) + spec;
-      if (edge_strength(p) > 0.0) colour = vec3(0.0);
     } else {
       colour = albedo * (0.15 + diffuse) + 0.35 * spec;
     }

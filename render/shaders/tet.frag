@@ -11,11 +11,14 @@ in vec4 v_plane_v;
 in float v_z_entry;
 flat in vec4 v_bc;
 flat in uint v_colour;
+flat in uvec4 v_corner_colours;
+flat in vec4 v_heights;
 flat in int v_id;
 
 uniform mat4 u_proj;
 uniform int u_cull;
 uniform float u_clip_eps;  // tolerance of the plane tests, in local units
+uniform int u_corner_colours;
 
 layout(depth_greater) out float gl_FragDepth;
 layout(location = 0) out vec4 out_normal_depth;  // world normal (facing the viewer), eye depth
@@ -60,6 +63,14 @@ void main() {
   float z = v_z_entry + t * (v_z_entry * inv_len);
   gl_FragDepth = window_depth(z, u_proj);
   out_normal_depth = vec4(n, -z);
-  out_albedo = vec4(unpack_colour(v_colour), 1.0);
+  vec3 albedo = unpack_colour(v_colour);
+  if (u_corner_colours != 0) {
+    // Barycentric coordinates: each plane's distance over its corner's height.
+    vec4 w = max((v_plane_o + t * plane_d) / v_heights, vec4(0.0));
+    w /= max(w.x + w.y + w.z + w.w, 1e-30);
+    albedo = w.x * unpack_colour(v_corner_colours.x) + w.y * unpack_colour(v_corner_colours.y) +
+             w.z * unpack_colour(v_corner_colours.z) + w.w * unpack_colour(v_corner_colours.w);
+  }
+  out_albedo = vec4(albedo, 1.0);
   out_id = v_id;
 }

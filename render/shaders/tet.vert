@@ -13,6 +13,7 @@ struct Tet {
   vec4 q2;          // b2 c — —
 };
 layout(std430, binding = 0) readonly buffer Tets { Tet tets[]; };
+layout(std430, binding = 2) readonly buffer TetCornerColours { uvec4 corner_colours[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 uniform mat4 u_proj;
@@ -24,6 +25,7 @@ uniform float u_target_distance;   // ‖target − eye‖: the target is at (0,
 uniform int u_cull;        // per-quadric and per-fragment backface culling
 uniform int u_count_stats;
 uniform int u_indexed;
+uniform int u_corner_colours;  // colours per corner (binding 2), blended barycentrically
 
 out vec3 v_o;
 out vec3 v_dir;
@@ -34,6 +36,8 @@ out vec4 v_plane_v;
 out float v_z_entry;
 flat out vec4 v_bc;
 flat out uint v_colour;
+flat out uvec4 v_corner_colours;
+flat out vec4 v_heights;       // each corner's distance from its opposite face (local units)
 flat out int v_id;
 
 // Faces with outward counter-clockwise order for a positively oriented tetrahedron.
@@ -95,7 +99,9 @@ void main() {
     float d = -dot(n, p0);
     v_plane_o[i] = dot(n, o) + d;
     v_plane_v[i] = dot(n, v_dir);
+    v_heights[i] = dot(n, t.corner[i].xyz) + d;
   }
+  v_corner_colours = u_corner_colours != 0 ? corner_colours[tet] : uvec4(0u);
   v_bc = vec4(b, c);
   v_colour = floatBitsToUint(t.centre_lo.w);
   v_id = floatBitsToInt(t.corner[0].w);
