@@ -13,6 +13,7 @@ case ${1:-} in --build|--run|--check) MODE=${1#--}; shift ;; esac
 OUT=${1:-out/fuzz}
 SECONDS_EACH=${2:-20}
 ALL="off obj stl ply xyz pts qxm slim2t mesh tetgen values nrrd nhdr inr inrgz cin pdb csv png pfm implicit"
+CORE_READERS="off obj stl ply xyz pts qxm slim2t png pfm implicit"
 READERS=${3:-all}
 [ "$READERS" = all ] && READERS=$ALL
 CXX=${FUZZ_CXX:-$(command -v clang++ || command -v clang++-14 || true)}
@@ -33,9 +34,14 @@ fi
 FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
        -I"$ROOT" -I/usr/include/eigen3 -DNDEBUG)
 if [ "$MODE" != run ]; then
-  SOURCES=($(cd "$ROOT" && ls core/*.cpp core/io/*.cpp core/implicit/*.cpp)
-           convert/volume.cpp convert/tetmesh_io.cpp convert/balls.cpp convert/molecule.cpp
-           convert/read_molecule.cpp convert/ellipsoids_csv.cpp)
+  # Readers of core alone link without convert/ (and build sooner).
+  SOURCES=($(cd "$ROOT" && ls core/*.cpp core/io/*.cpp core/implicit/*.cpp))
+  CORE_OBJECTS=${#SOURCES[@]}
+  for r in $READERS; do
+    case " $CORE_READERS " in *" $r "*) ;; *) NEED_CONVERT=1 ;; esac
+  done
+  [ -n "${NEED_CONVERT:-}" ] && SOURCES+=(convert/volume.cpp convert/tetmesh_io.cpp convert/balls.cpp convert/molecule.cpp
+                                          convert/read_molecule.cpp convert/ellipsoids_csv.cpp)
   OBJECTS=()
   for s in "${SOURCES[@]}"; do
     o="$OUT/obj/$(echo "$s" | tr / _).o"
@@ -48,8 +54,12 @@ if [ "$MODE" != run ]; then
   done
   for r in $READERS; do
     mkdir -p "$OUT/$r"
-    "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer -DQUADRIX_FUZZ_READER="$r" "$ROOT/tests/fuzz/fuzz_readers.cpp" \
-      "${OBJECTS[@]}" -lfmt -lz -lpng -ltbb -o "$OUT/$r/fuzz_$r"
+    case " $CORE_READERS " in
+      *" $r "*) objects=("${OBJECTS[@]:0:$CORE_OBJECTS}"); core=(-DQUADRIX_FUZZ_CORE_ONLY) ;;
+      *) objects=("${OBJECTS[@]}"); core=() ;;
+    esac
+    "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer "${core[@]}" -DQUADRIX_FUZZ_READER="$r" "$ROOT/tests/fuzz/fuzz_readers.cpp" \
+      "${objects[@]}" -lfmt -lz -lpng -ltbb -o "$OUT/$r/fuzz_$r"
   done
 fi
 [ "$MODE" = build ] && exit 0

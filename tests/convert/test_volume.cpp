@@ -137,7 +137,7 @@ TEST_F(VolumeIo, MalformedVolumesAreFormatErrors) {
   expect_format([&] { read_volume(hdr("type: quaternion\ndimension: 3\nsizes: 2 3 2\ndata file: short.raw\n")); },
                 "quaternion");
   expect_format([&] { read_volume(hdr("type: uint8\ndimension: 3\nsizes: 2 x 2\ndata file: short.raw\n")); },
-                "'x' is not a number");
+                "'x' is not an integer");
   expect_format([&] { read_volume(hdr("type: uint8\ndimension: 3\nsizes: 2 3 2\nencoding: bzip2\ndata file: short.raw\n")); },
                 "bzip2");
   expect_format([&] { read_volume(write("n.nhdr", "P6\n")); }, "NRRD");
@@ -672,7 +672,7 @@ TEST_F(TetMeshIo, MalformedMeshesAndValuesNameFileAndLine) {
   expect_format([&] { read_tet_mesh(f); }, f, {":20:", "degenerate"});
   // Header problems.
   f = mesh(edit("Dimension\n3", "Dimension\n2"));
-  expect_format([&] { read_tet_mesh(f); }, f, {":3:", "Dimension 2"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":4:", "Dimension 2"});
   f = mesh(edit("Corners", "Cornets"));
   expect_format([&] { read_tet_mesh(f); }, f, {":22:", "unknown keyword 'Cornets'"});
   f = mesh(edit("Tetrahedra\n2\n", "Tetrahedra\n-2\n"));

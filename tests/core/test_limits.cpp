@@ -51,11 +51,11 @@ TEST(WorldLimit, ReadersRefuseFiniteCoordinatesPastIt) {
   std::string xyz;
   for (int i = 0; i < 12; ++i) xyz += std::to_string(i) + " " + std::to_string(i * i % 7) + " 1\n";
   put(dir / "ok.xyz", xyz);
-  EXPECT_EQ(io::read_points(dir / "ok.xyz").points.size(), 12u);
+  EXPECT_EQ(read_points(dir / "ok.xyz").points.size(), 12u);
   put(dir / "far.xyz", xyz + "1e300 0 0\n");
-  expect_refused<FormatError>([&] { io::read_points(dir / "far.xyz"); }, "far.xyz:13:", "largest world coordinate");
+  expect_refused<FormatError>([&] { read_points(dir / "far.xyz"); }, "far.xyz:13:", "largest world coordinate");
   put(dir / "far.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 2e12 0\n3 0 1 2\n");
-  expect_refused<FormatError>([&] { io::read_mesh(dir / "far.off"); }, "far.off:5:", "largest world coordinate");
+  expect_refused<FormatError>([&] { read_mesh(dir / "far.off"); }, "far.off:5:", "largest world coordinate");
 }
 
 TEST(WorldLimit, ModelsPastItAreNeitherWrittenNorRead) {

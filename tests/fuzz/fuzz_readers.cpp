@@ -11,10 +11,12 @@
 #include <string>
 #include <string_view>
 
+#ifndef QUADRIX_FUZZ_CORE_ONLY  // readers of core alone: linked without convert/
 #include "convert/balls.h"
 #include "convert/ellipsoids_csv.h"
 #include "convert/tetmesh_io.h"
 #include "convert/volume.h"
+#endif
 #include "core/error.h"
 #include "core/image.h"
 #include "core/implicit/expression.h"
@@ -68,6 +70,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     else if (reader == "pts") io::read_xyz(bytes, "fuzz.pts", true);
     else if (reader == "qxm") read_model(put("fuzz.qxm", bytes));
     else if (reader == "slim2t") read_slim2t(put("fuzz.slim2t", bytes));
+    else if (reader == "png") read_png(put("fuzz.png", bytes));
+    else if (reader == "pfm") read_pfm(put("fuzz.pfm", bytes));
+    else if (reader == "implicit") implicit::Expression::parse(bytes);
+#ifndef QUADRIX_FUZZ_CORE_ONLY
     else if (reader == "mesh") read_tet_mesh(put("fuzz.mesh", bytes));
     else if (reader == "tetgen") {  // NODE@@\nELE
       const auto [node, ele] = split(bytes);
@@ -84,9 +90,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     else if (reader == "cin") read_balls(put("fuzz.cin", bytes), {});
     else if (reader == "pdb") read_balls(put("fuzz.pdb", bytes), {});
     else if (reader == "csv") read_ellipsoids_csv(put("fuzz.csv", bytes));
-    else if (reader == "png") read_png(put("fuzz.png", bytes));
-    else if (reader == "pfm") read_pfm(put("fuzz.pfm", bytes));
-    else if (reader == "implicit") implicit::Expression::parse(bytes);
+#endif
     else std::abort();  // a reader this target does not know
   } catch (const quadrix::Error&) {
   }
