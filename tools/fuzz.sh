@@ -59,7 +59,7 @@ if [ "$MODE" != run ]; then
       *) objects=("${OBJECTS[@]}"); core=() ;;
     esac
     "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer "${core[@]}" -DQUADRIX_FUZZ_READER="$r" "$ROOT/tests/fuzz/fuzz_readers.cpp" \
-      "${objects[@]}" -lfmt -lz -lpng -ltbb -o "$OUT/$r/fuzz_$r"
+      "${objects[@]}" -lOpenMeshCore -lfmt -lz -lpng -ltbb -o "$OUT/$r/fuzz_$r"
   done
 fi
 [ "$MODE" = build ] && exit 0
