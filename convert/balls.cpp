@@ -4,17 +4,16 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "convert/molecule.h"
 #include "core/error.h"
 #include "core/io/file.h"
+#include "core/io/text_reader.h"
+#include "core/limits.h"
 #include "core/log.h"
 
 namespace quadrix {
@@ -70,33 +69,26 @@ std::vector<Ball> read_pdb(const fs::path& path, const BallReadOptions& o, std::
 }
 
 std::vector<Ball> read_columns(const fs::path& path, const BallReadOptions& o, bool weights, std::vector<int>& lines) {
-  std::ifstream in(path);
-  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
+  const std::string text = io::read_file(path);
+  io::TextReader in(text, path);
+  const char* size = weights ? "weight (squared radius)" : "radius";
   std::vector<Ball> balls;
-  int line_no = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    std::istringstream s(line);
+  while (in.next_line()) {
     std::array<double, 4> v{};
-    std::string extra;
-    const std::string where = fmt::format("{}:{}", path.string(), line_no);
     for (auto& x : v) {
-      std::string w;
-      if (!(s >> w)) throw FormatError(fmt::format("{}: expected 4 numbers (x y z {}), got '{}'", where, weights ? "w" : "r", io::echo(line)));
-      const auto r = std::from_chars(w.data(), w.data() + w.size(), x);
-      if (r.ec != std::errc() || r.ptr != w.data() + w.size() || !std::isfinite(x))
-        throw FormatError(fmt::format("{}: '{}' is not a finite number", where, io::echo(w)));
+      const std::string_view w = in.token();
+      if (w.empty()) in.fail("expected 4 numbers (x y z {}), got '{}'", weights ? "w" : "r", io::echo(in.line()));
+      if (!io::TextReader::parse(w, x) || !std::isfinite(x)) in.fail("'{}' is not a finite number", io::echo(w));
     }
-    if (s >> extra) throw FormatError(fmt::format("{}: more than 4 values ('{}')", where, io::echo(extra)));
-    if (!(v[3] > 0))
-      throw FormatError(fmt::format("{}: {} {} must be > 0", where, weights ? "weight (squared radius)" : "radius", v[3]));
+    if (const std::string_view extra = in.token(); !extra.empty()) in.fail("more than 4 values ('{}')", io::echo(extra));
+    if (!(v[3] > 0)) in.fail("{} {} must be > 0", size, v[3]);
     Ball b;
     b.centre = {v[0], v[1], v[2]};
     b.radius = (weights ? std::sqrt(v[3]) : v[3]) * o.radius_scale;
+    if (!is_world_point(b.centre)) in.fail("ball centre ({:g}, {:g}, {:g}) {}", v[0], v[1], v[2], world_fault(b.centre));
+    if (!is_world_value(b.radius)) in.fail("ball radius {:g} ({} {:g}) {}", b.radius, size, v[3], world_fault(b.radius));
     balls.push_back(b);
-    lines.push_back(line_no);
+    lines.push_back(static_cast<int>(in.line_number()));
   }
   return balls;
 }
@@ -146,8 +138,11 @@ Rgb cpk_colour(std::string_view element) {
 void validate_balls(const std::vector<Ball>& balls, std::string_view source) {
   if (balls.empty()) throw InvalidInput(fmt::format("{}: no balls", source));
   for (std::size_t i = 0; i < balls.size(); ++i) {
-    if (!balls[i].centre.allFinite() || !std::isfinite(balls[i].radius))
-      throw InvalidInput(fmt::format("{}: ball {} is not finite", source, i));
+    if (!is_world_point(balls[i].centre) || !is_world_value(balls[i].radius))
+      throw InvalidInput(fmt::format("{}: ball {} (centre ({:g}, {:g}, {:g}), radius {:g}) {}", source, i,
+                                     balls[i].centre.x(), balls[i].centre.y(), balls[i].centre.z(), balls[i].radius,
+                                     world_fault(is_world_point(balls[i].centre) ? Eigen::Vector3d::Constant(balls[i].radius)
+                                                                                 : balls[i].centre)));
     if (!(balls[i].radius > 0)) throw InvalidInput(fmt::format("{}: ball {} has radius {} ≤ 0", source, i, balls[i].radius));
   }
   if (const auto d = find_duplicate(balls, 1e-6 * extent(balls)))
@@ -168,6 +163,13 @@ std::vector<Ball> read_balls(const fs::path& path, const BallReadOptions& option
   else if (ext == ".xyzr") balls = read_columns(path, options, false, lines);
   else throw InvalidInput(fmt::format("'{}': unknown ball file type (.pdb, .ent, .cif, .mmcif, .cin, .xyzr)", path.string()));
   if (balls.empty()) throw FormatError(fmt::format("{}: no atoms or balls found", path.string()));
+  for (std::size_t i = 0; i < balls.size(); ++i)
+    if (!is_world_point(balls[i].centre) || !is_world_value(balls[i].radius))
+      throw FormatError(fmt::format("{}: {} {}: ball at ({:g}, {:g}, {:g}) of radius {:g} {}", path.string(),
+                                    molecule ? "atom with serial number" : "line", lines[i], balls[i].centre.x(),
+                                    balls[i].centre.y(), balls[i].centre.z(), balls[i].radius,
+                                    world_fault(is_world_point(balls[i].centre) ? Eigen::Vector3d::Constant(balls[i].radius)
+                                                                                : balls[i].centre)));
   if (const auto d = find_duplicate(balls, 1e-6 * extent(balls)))
     throw FormatError(fmt::format("{}: {} {} and {}: duplicate ball at ({}, {}, {})", path.string(),
                                   molecule ? "atoms with serial numbers" : "lines", lines[d->first],

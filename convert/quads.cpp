@@ -24,8 +24,8 @@ using Eigen::Vector3d;
 using Corners = std::array<Vector3d, 4>;
 
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-// Stored quadric tetrahedra must be thicker than the .qxm reader's degeneracy limit (1e-12 L³).
-constexpr double kMinTetVolume6 = 4e-12;
+// Stored quadric tetrahedra must be thicker than the .qxm reader's degeneracy limit, with margin.
+constexpr double kMinTetVolume6 = 4 * kDegenerateTetrahedron;
 // Safety factor on the first-order rounding bound of a quadric's coefficients.
 constexpr double kRoundingFactor = 1.0;
 // Smallest relative distance to a paraboloid's second sheet (quadric_quality) that ray casting in

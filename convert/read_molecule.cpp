@@ -8,7 +8,6 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -17,6 +16,7 @@
 
 #include "convert/molecule.h"
 #include "core/error.h"
+#include "core/io/file.h"
 
 namespace quadrix {
 namespace {
@@ -91,15 +91,12 @@ std::vector<std::pair<int, int>> scan_pdb(const fs::path& path, const std::strin
   return conect;
 }
 
+// The whole text through the I/O kit; a gzip file inflates to at most 4 GiB (the largest PDB
+// entries are a few hundred MB of text), checked as the bytes arrive.
 std::string read_text(const fs::path& path) {
+  constexpr std::size_t kMaxInflated = std::size_t{4} << 30;
   gemmi::MaybeGzipped input(path.string());
-  if (input.is_compressed()) {
-    const gemmi::CharArray mem = input.uncompress_into_buffer();
-    return std::string(mem.data(), mem.size());
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("cannot open '{}'", path.string()));
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  return input.is_compressed() ? io::read_gzip(path, kMaxInflated) : io::read_file(path);
 }
 
 }  // namespace

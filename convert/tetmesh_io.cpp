@@ -3,18 +3,19 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <string_view>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
 #include "core/atomic_file.h"
+#include "core/bounds.h"
 #include "core/error.h"
+#include "core/io/file.h"
+#include "core/io/text_reader.h"
+#include "core/limits.h"
 
 namespace quadrix {
 namespace {
@@ -28,53 +29,12 @@ std::string lower(std::string_view s) {
   return out;
 }
 
-struct Token {
-  std::string_view text;
-  int line = 0;
+// A token's place in its file, for messages about it once reading has moved on.
+struct Place {
+  std::size_t line = 0, col = 0;
 };
 
-// Whitespace-separated tokens with their line numbers; `#` comments run to the end of the line.
-class Tokens {
-public:
-  explicit Tokens(std::string_view text) : s_(text) {}
-  std::optional<Token> next() {
-    for (;;) {
-      while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) {
-        if (s_[pos_] == '\n') ++line_;
-        ++pos_;
-      }
-      if (pos_ >= s_.size()) return std::nullopt;
-      if (s_[pos_] != '#') break;
-      while (pos_ < s_.size() && s_[pos_] != '\n') ++pos_;
-    }
-    const std::size_t b = pos_;
-    while (pos_ < s_.size() && !std::isspace(static_cast<unsigned char>(s_[pos_])) && s_[pos_] != '#') ++pos_;
-    return Token{s_.substr(b, pos_ - b), line_};
-  }
-  int line() const { return line_; }
-  std::size_t remaining_bytes() const { return s_.size() - pos_; }
-
-private:
-  std::string_view s_;
-  std::size_t pos_ = 0;
-  int line_ = 1;
-};
-
-std::optional<double> to_double(std::string_view t) {
-  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
-  double v = 0;
-  const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-  if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return std::nullopt;
-  return v;
-}
-
-std::optional<long long> to_integer(std::string_view t) {
-  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
-  long long v = 0;
-  const auto r = std::from_chars(t.data(), t.data() + t.size(), v);
-  if (r.ec != std::errc() || r.ptr != t.data() + t.size()) return std::nullopt;
-  return v;
-}
+Place here(const io::TextReader& in) { return {in.line_number(), in.column()}; }
 
 // The first inconsistency of a mesh: tetrahedron t (or vertex v when is_vertex) and what is wrong.
 struct Problem {
@@ -86,10 +46,10 @@ struct Problem {
 // Indices in range (shown in the file's base), finite coordinates, no degenerate tetrahedron.
 std::optional<Problem> find_problem(const TetMesh& m, int base) {
   for (std::size_t v = 0; v < m.vertices.size(); ++v)
-    if (!m.vertices[v].allFinite())
+    if (!is_world_point(m.vertices[v]))
       return Problem{true, v,
-                     fmt::format("vertex {} has a non-finite coordinate ({}, {}, {})", v + base, m.vertices[v].x(),
-                                 m.vertices[v].y(), m.vertices[v].z())};
+                     fmt::format("vertex {} ({}, {}, {}) {}", v + base, m.vertices[v].x(), m.vertices[v].y(),
+                                 m.vertices[v].z(), world_fault(m.vertices[v]))};
   const long long n = static_cast<long long>(m.vertices.size());
   for (std::size_t t = 0; t < m.tets.size(); ++t) {
     const auto& c = m.tets[t];
@@ -100,9 +60,9 @@ std::optional<Problem> find_problem(const TetMesh& m, int base) {
                                    static_cast<long long>(c[k]) + base, base, n - 1 + base)};
     const Vector3d a = m.vertices[c[0]], e1 = m.vertices[c[1]] - a, e2 = m.vertices[c[2]] - a,
                    e3 = m.vertices[c[3]] - a;
-    double L = std::max({e1.norm(), e2.norm(), e3.norm(), (e2 - e1).norm(), (e3 - e1).norm(), (e3 - e2).norm()});
+    const double L = std::max({e1.norm(), e2.norm(), e3.norm(), (e2 - e1).norm(), (e3 - e1).norm(), (e3 - e2).norm()});
     const double six_v = e1.cross(e2).dot(e3);
-    if (!(std::abs(six_v) > kDegenerateTet * L * L * L))
+    if (is_degenerate_tetrahedron({a, m.vertices[c[1]], m.vertices[c[2]], m.vertices[c[3]]}))
       return Problem{false, t,
                      fmt::format("tetrahedron {} ({} {} {} {}) is degenerate: volume {:.3g} for longest edge {:.3g}",
                                  t + base, c[0] + base, c[1] + base, c[2] + base, c[3] + base, six_v / 6, L)};
@@ -127,116 +87,147 @@ std::optional<int> medit_skip_width(const std::string& kw) {
 }  // namespace
 
 TetMesh read_medit_mesh(const fs::path& path) {
-  const std::string file = path.string();
-  const std::string text = read_file(path);
-  Tokens tok(text);
+  const std::string text = io::read_file(path);
+  io::TextReader in(text, path);
   TetMesh m;
-  m.source = file;
-  std::vector<int> tet_lines;
+  m.source = path.string();
+  std::vector<Place> tet_places;
   bool has_vertices = false, has_tets = false, has_dimension = false;
 
-  // A section's count, then `count` entries of `width` numbers each, read through `take`.
-  const auto section_count = [&](const Token& kw) {
-    const auto t = tok.next();
-    if (!t) throw FormatError(fmt::format("{} line {}: the file ends after '{}' (no count)", file, kw.line, kw.text));
-    const auto n = to_integer(t->text);
-    if (!n || *n < 0 || *n > 0x7fffffff)
-      throw FormatError(fmt::format("{} line {}: '{}' count '{}' is not a non-negative integer", file, t->line,
-                                    kw.text, t->text));
-    return *n;
+  // A keyword's place and name, for messages about its section.
+  struct Keyword {
+    std::string name;
+    Place at;
   };
-  const auto next_in = [&](const Token& kw, long long entry, long long count) {
-    const auto t = tok.next();
-    if (!t)
-      throw FormatError(fmt::format("{}: the file ends inside '{}' (line {}) after {} of its {} entries (truncated?)",
-                                    file, kw.text, kw.line, entry, count));
-    return *t;
+  const auto section_count = [&](const Keyword& kw) {
+    const std::string_view t = in.token_across_lines();
+    if (t.empty()) in.fail("the file ends after '{}' (no count)", kw.name);
+    long long n = 0;
+    if (!io::TextReader::parse(t, n) || n < 0 || n > 0x7fffffff)
+      in.fail("'{}' count '{}' is not a non-negative integer", kw.name, io::echo(t));
+    return n;
   };
-  const auto not_number = [&](const Token& t, const Token& kw, long long entry, long long count) {
-    return FormatError(fmt::format("{} line {}: '{}' is not a number (entry {} of {} in '{}' at line {}; "
-                                   "a count that disagrees with the file?)",
-                                   file, t.line, t.text, entry + 1, count, kw.text, kw.line));
+  const auto next_in = [&](const Keyword& kw, long long entry, long long count) {
+    const std::string_view t = in.token_across_lines();
+    if (t.empty())
+      in.fail("the file ends inside '{}' (line {}) after {} of its {} entries (truncated?)", kw.name, kw.at.line,
+              entry, count);
+    return t;
+  };
+  const auto not_number = [&](std::string_view t, const Keyword& kw, long long entry, long long count) {
+    in.fail("'{}' is not a number (entry {} of {} in '{}' at line {}; a count that disagrees with the file?)",
+            io::echo(t), entry + 1, count, kw.name, kw.at.line);
   };
 
   for (;;) {
-    const auto kw = tok.next();
-    if (!kw) throw FormatError(fmt::format("{}: no 'End' keyword (the file is truncated?)", file));
-    const std::string k = lower(kw->text);
+    const std::string_view word = in.token_across_lines();
+    if (word.empty()) in.fail("no 'End' keyword (the file is truncated?)");
+    const Keyword kw{std::string(io::echo(word)), here(in)};
+    const std::string k = lower(word);
     if (k == "end") break;
     if (k == "meshversionformatted") {
-      const auto t = tok.next();
-      const auto v = t ? to_integer(t->text) : std::nullopt;
-      if (!v || *v < 1 || *v > 4)
-        throw FormatError(fmt::format("{} line {}: MeshVersionFormatted must be 1..4", file, kw->line));
+      const std::string_view t = in.token_across_lines();
+      long long v = 0;
+      if (!io::TextReader::parse(t, v) || v < 1 || v > 4)
+        in.fail("MeshVersionFormatted must be 1..4, not '{}'", io::echo(t));
     } else if (k == "dimension") {
-      const auto t = tok.next();
-      const auto v = t ? to_integer(t->text) : std::nullopt;
-      if (!v || *v != 3)
-        throw FormatError(fmt::format("{} line {}: Dimension {} (only 3-D meshes are supported)", file, kw->line,
-                                      t ? std::string(t->text) : "missing"));
+      const std::string_view t = in.token_across_lines();
+      long long v = 0;
+      if (!io::TextReader::parse(t, v) || v != 3)
+        in.fail("Dimension {} (only 3-D meshes are supported)", t.empty() ? "missing" : io::echo(t));
       has_dimension = true;
     } else if (k == "vertices") {
-      if (has_vertices) throw FormatError(fmt::format("{} line {}: a second 'Vertices' section", file, kw->line));
+      if (has_vertices) in.fail("a second 'Vertices' section");
       has_vertices = true;
-      const long long n = section_count(*kw);
-      m.vertices.reserve(static_cast<std::size_t>(std::min<long long>(n, tok.remaining_bytes() / 8 + 1)));
+      const long long n = section_count(kw);
+      // A vertex takes at least 8 bytes ("0 0 0 0\n"): never reserve past what the file can hold.
+      m.vertices.reserve(static_cast<std::size_t>(std::min<long long>(n, in.bytes_left() / 8 + 1)));
       for (long long i = 0; i < n; ++i) {
         Vector3d x;
         for (int a = 0; a < 4; ++a) {  // x y z ref
-          const Token t = next_in(*kw, i, n);
-          const auto v = to_double(t.text);
-          if (!v) throw not_number(t, *kw, i, n);
+          const std::string_view t = next_in(kw, i, n);
+          double v = 0;
+          if (!io::TextReader::parse(t, v)) not_number(t, kw, i, n);
           if (a < 3) {
-            if (!std::isfinite(*v))
-              throw FormatError(fmt::format("{} line {}: vertex {} has a non-finite coordinate '{}'", file, t.line,
-                                            i + 1, t.text));
-            x[a] = *v;
+            if (!std::isfinite(v)) in.fail("vertex {} has a non-finite coordinate '{}'", i + 1, io::echo(t));
+            if (!is_world_value(v)) in.fail("vertex {} coordinate {:g} {}", i + 1, v, world_fault(v));
+            x[a] = v;
           }
         }
         m.vertices.push_back(x);
       }
     } else if (k == "tetrahedra") {
-      if (has_tets) throw FormatError(fmt::format("{} line {}: a second 'Tetrahedra' section", file, kw->line));
+      if (has_tets) in.fail("a second 'Tetrahedra' section");
       has_tets = true;
-      const long long n = section_count(*kw);
-      m.tets.reserve(static_cast<std::size_t>(std::min<long long>(n, tok.remaining_bytes() / 10 + 1)));
-      tet_lines.reserve(m.tets.capacity());
+      const long long n = section_count(kw);
+      m.tets.reserve(static_cast<std::size_t>(std::min<long long>(n, in.bytes_left() / 10 + 1)));
+      tet_places.reserve(m.tets.capacity());
       for (long long i = 0; i < n; ++i) {
         std::array<int, 4> c{};
-        int line = 0;
+        Place at;
         for (int a = 0; a < 5; ++a) {
-          const Token t = next_in(*kw, i, n);
-          if (a == 0) line = t.line;
-          const auto v = to_integer(t.text);
-          if (!v) throw not_number(t, *kw, i, n);
+          const std::string_view t = next_in(kw, i, n);
+          if (a == 0) at = here(in);
+          long long v = 0;
+          if (!io::TextReader::parse(t, v)) not_number(t, kw, i, n);
           if (a < 4) {
-            if (*v < 1 || *v > 0x7fffffff)
-              throw FormatError(fmt::format("{} line {}: tetrahedron {}: vertex index {} is not a 1-based index",
-                                            file, t.line, i + 1, *v));
-            c[a] = static_cast<int>(*v - 1);
+            if (v < 1 || v > 0x7fffffff) in.fail("tetrahedron {}: vertex index {} is not a 1-based index", i + 1, v);
+            c[a] = static_cast<int>(v - 1);
           }
         }
         m.tets.push_back(c);
-        tet_lines.push_back(line);
+        tet_places.push_back(at);
       }
     } else if (const auto w = medit_skip_width(k)) {
-      const long long n = section_count(*kw);
+      const long long n = section_count(kw);
       for (long long i = 0; i < n; ++i)
         for (int a = 0; a < *w; ++a) {
-          const Token t = next_in(*kw, i, n);
-          if (!to_double(t.text)) throw not_number(t, *kw, i, n);
+          const std::string_view t = next_in(kw, i, n);
+          double v = 0;
+          if (!io::TextReader::parse(t, v)) not_number(t, kw, i, n);
         }
     } else {
-      throw FormatError(fmt::format("{} line {}: unknown keyword '{}'", file, kw->line, kw->text));
+      in.fail("unknown keyword '{}'", kw.name);
     }
   }
-  if (!has_dimension) throw FormatError(fmt::format("{}: no 'Dimension 3' line", file));
-  if (m.vertices.empty()) throw FormatError(fmt::format("{}: no vertices", file));
-  if (m.tets.empty()) throw FormatError(fmt::format("{}: no tetrahedra", file));
-  if (const auto p = find_problem(m, 1))
-    throw FormatError(fmt::format("{} line {}: {}", file, tet_lines[p->index], p->what));
+  if (const std::string_view t = in.token_across_lines(); !t.empty())
+    in.fail("'{}' after 'End' (trailing data)", io::echo(t));
+  if (!has_dimension) in.fail("no 'Dimension 3' line");
+  if (m.vertices.empty()) in.fail("no vertices");
+  if (m.tets.empty()) in.fail("no tetrahedra");
+  if (const auto p = find_problem(m, 1)) {
+    const Place at = p->is_vertex ? Place{} : tet_places[p->index];
+    throw FormatError(io::text_message(path, at.line, at.col, p->what));
+  }
   return m;
 }
+
+namespace {
+
+// The tokens of the reader's current line (at most `max` of them; one more means "too many").
+std::vector<std::string_view> line_tokens(io::TextReader& in, std::size_t max) {
+  std::vector<std::string_view> out;
+  for (std::string_view t = in.token(); !t.empty() && out.size() <= max; t = in.token()) out.push_back(t);
+  return out;
+}
+
+// A TetGen header or row field: a non-negative int.
+long long tetgen_integer(const io::TextReader& in, const std::vector<std::string_view>& tokens, std::size_t k,
+                         const char* what) {
+  long long v = 0;
+  if (k >= tokens.size() || !io::TextReader::parse(tokens[k], v) || v < 0 || v > 0x7fffffff)
+    throw FormatError(io::text_message(in.path(), in.line_number(), 1,
+                                       fmt::format("{} '{}' is not a non-negative integer", what,
+                                                   k < tokens.size() ? io::echo(tokens[k]) : "missing")));
+  return v;
+}
+
+// After the declared rows: anything but comments and blank lines is trailing data.
+void expect_end(io::TextReader& in, long long rows, const char* what) {
+  if (in.next_line()) in.fail("'{}' after the {} {} the header declares (trailing data)", io::echo(in.token()), rows, what);
+}
+
+}  // namespace
 
 TetMesh read_tetgen_mesh(const fs::path& path) {
   fs::path node = path, ele = path;
@@ -245,113 +236,80 @@ TetMesh read_tetgen_mesh(const fs::path& path) {
   TetMesh m;
   m.source = node.string();
 
-  // Non-blank lines split into tokens, with their line numbers.
-  struct Line {
-    int number = 0;
-    std::vector<std::string_view> tokens;
-  };
-  const auto lines_of = [](const std::string& text) {
-    std::vector<Line> out;
-    std::size_t b = 0;
-    int number = 0;
-    while (b < text.size()) {
-      std::size_t e = text.find('\n', b);
-      if (e == std::string::npos) e = text.size();
-      ++number;
-      std::string_view s(text.data() + b, e - b);
-      if (const auto h = s.find('#'); h != std::string_view::npos) s = s.substr(0, h);
-      Line l{number, {}};
-      Tokens t(s);
-      while (const auto x = t.next()) l.tokens.push_back(x->text);
-      if (!l.tokens.empty()) out.push_back(std::move(l));
-      b = e + 1;
-    }
-    return out;
-  };
-  const auto integer = [](const std::string& file, const Line& l, std::size_t k, const char* what) {
-    const auto v = k < l.tokens.size() ? to_integer(l.tokens[k]) : std::nullopt;
-    if (!v || *v < 0 || *v > 0x7fffffff)
-      throw FormatError(fmt::format("{} line {}: {} '{}' is not a non-negative integer", file, l.number, what,
-                                    k < l.tokens.size() ? l.tokens[k] : "missing"));
-    return *v;
-  };
-
-  const std::string node_text = read_file(node), node_file = node.string();
-  const auto nodes = lines_of(node_text);
-  if (nodes.empty()) throw FormatError(fmt::format("{}: empty file", node_file));
-  const long long np = integer(node_file, nodes[0], 0, "point count");
-  const long long dim = nodes[0].tokens.size() > 1 ? integer(node_file, nodes[0], 1, "dimension") : 3;
-  const long long nattr = nodes[0].tokens.size() > 2 ? integer(node_file, nodes[0], 2, "attribute count") : 0;
-  const long long nmark = nodes[0].tokens.size() > 3 ? integer(node_file, nodes[0], 3, "boundary marker flag") : 0;
-  if (dim != 3)
-    throw FormatError(
-        fmt::format("{} line {}: dimension {} (only 3 is supported)", node_file, nodes[0].number, dim));
-  if (np == 0) throw FormatError(fmt::format("{} line {}: no points", node_file, nodes[0].number));
-  if (static_cast<long long>(nodes.size()) - 1 < np)
-    throw FormatError(fmt::format("{}: header (line {}) says {} points, the file holds {} (truncated?)", node_file,
-                                  nodes[0].number, np, nodes.size() - 1));
+  const std::string node_text = io::read_file(node);
+  io::TextReader nodes(node_text, node);
+  if (!nodes.next_line()) throw FormatError(io::text_message(node, 1, 1, "empty file"));
+  const auto head = line_tokens(nodes, 4);
+  const std::size_t head_line = nodes.line_number();
+  const long long np = tetgen_integer(nodes, head, 0, "point count");
+  const long long dim = head.size() > 1 ? tetgen_integer(nodes, head, 1, "dimension") : 3;
+  const long long nattr = head.size() > 2 ? tetgen_integer(nodes, head, 2, "attribute count") : 0;
+  const long long nmark = head.size() > 3 ? tetgen_integer(nodes, head, 3, "boundary marker flag") : 0;
+  if (dim != 3) nodes.fail("dimension {} (only 3 is supported)", dim);
+  if (np == 0) nodes.fail("no points");
   const std::size_t node_width = static_cast<std::size_t>(4 + nattr + (nmark > 0 ? 1 : 0));
   long long base = 0;
-  m.vertices.reserve(static_cast<std::size_t>(np));
+  // A point row takes at least 2 bytes per number: never reserve past what the file can hold.
+  m.vertices.reserve(static_cast<std::size_t>(std::min<long long>(np, nodes.bytes_left() / (2 * node_width) + 1)));
   for (long long i = 0; i < np; ++i) {
-    const Line& l = nodes[static_cast<std::size_t>(i + 1)];
-    if (l.tokens.size() != node_width)
-      throw FormatError(fmt::format("{} line {}: {} numbers, a point has {} here", node_file, l.number,
-                                    l.tokens.size(), node_width));
-    const long long id = integer(node_file, l, 0, "point number");
+    if (!nodes.next_line())
+      throw FormatError(io::text_message(node, head_line, 1,
+                                         fmt::format("the header says {} points, the file holds {} (truncated?)", np, i)));
+    const auto l = line_tokens(nodes, node_width);
+    if (l.size() != node_width) nodes.fail("{} numbers, a point has {} here", l.size(), node_width);
+    const long long id = tetgen_integer(nodes, l, 0, "point number");
     if (i == 0) {
-      if (id > 1)
-        throw FormatError(
-            fmt::format("{} line {}: the first point is number {} (0 or 1)", node_file, l.number, id));
+      if (id > 1) nodes.fail("the first point is number {} (0 or 1)", id);
       base = id;
     } else if (id != base + i) {
-      throw FormatError(fmt::format("{} line {}: point number {}, expected {}", node_file, l.number, id, base + i));
+      nodes.fail("point number {}, expected {}", id, base + i);
     }
     Vector3d x;
     for (int a = 0; a < 3; ++a) {
-      const auto v = to_double(l.tokens[1 + a]);
-      if (!v) throw FormatError(fmt::format("{} line {}: '{}' is not a number", node_file, l.number, l.tokens[1 + a]));
-      if (!std::isfinite(*v))
-        throw FormatError(fmt::format("{} line {}: point {} has a non-finite coordinate '{}'", node_file, l.number,
-                                      id, l.tokens[1 + a]));
-      x[a] = *v;
+      double v = 0;
+      if (!io::TextReader::parse(l[1 + a], v)) nodes.fail("'{}' is not a number", io::echo(l[1 + a]));
+      if (!std::isfinite(v)) nodes.fail("point {} has a non-finite coordinate '{}'", id, io::echo(l[1 + a]));
+      if (!is_world_value(v)) nodes.fail("point {} coordinate {:g} {}", id, v, world_fault(v));
+      x[a] = v;
     }
     m.vertices.push_back(x);
   }
+  expect_end(nodes, np, "points");
 
-  const std::string ele_text = read_file(ele), ele_file = ele.string();
-  const auto eles = lines_of(ele_text);
-  if (eles.empty()) throw FormatError(fmt::format("{}: empty file", ele_file));
-  const long long nt = integer(ele_file, eles[0], 0, "tetrahedron count");
-  const long long per = eles[0].tokens.size() > 1 ? integer(ele_file, eles[0], 1, "nodes per tetrahedron") : 4;
-  const long long eattr = eles[0].tokens.size() > 2 ? integer(ele_file, eles[0], 2, "attribute count") : 0;
-  if (per != 4 && per != 10)
-    throw FormatError(fmt::format("{} line {}: {} nodes per tetrahedron (4 or 10)", ele_file, eles[0].number, per));
-  if (nt == 0) throw FormatError(fmt::format("{} line {}: no tetrahedra", ele_file, eles[0].number));
-  if (static_cast<long long>(eles.size()) - 1 < nt)
-    throw FormatError(fmt::format("{}: header (line {}) says {} tetrahedra, the file holds {} (truncated?)", ele_file,
-                                  eles[0].number, nt, eles.size() - 1));
+  const std::string ele_text = io::read_file(ele);
+  io::TextReader eles(ele_text, ele);
+  if (!eles.next_line()) throw FormatError(io::text_message(ele, 1, 1, "empty file"));
+  const auto ehead = line_tokens(eles, 3);
+  const std::size_t ehead_line = eles.line_number();
+  const long long nt = tetgen_integer(eles, ehead, 0, "tetrahedron count");
+  const long long per = ehead.size() > 1 ? tetgen_integer(eles, ehead, 1, "nodes per tetrahedron") : 4;
+  const long long eattr = ehead.size() > 2 ? tetgen_integer(eles, ehead, 2, "attribute count") : 0;
+  if (per != 4 && per != 10) eles.fail("{} nodes per tetrahedron (4 or 10)", per);
+  if (nt == 0) eles.fail("no tetrahedra");
   const std::size_t ele_width = static_cast<std::size_t>(1 + per + eattr);
-  std::vector<int> tet_lines;
-  m.tets.reserve(static_cast<std::size_t>(nt));
+  std::vector<Place> tet_places;
+  m.tets.reserve(static_cast<std::size_t>(std::min<long long>(nt, eles.bytes_left() / (2 * ele_width) + 1)));
   for (long long i = 0; i < nt; ++i) {
-    const Line& l = eles[static_cast<std::size_t>(i + 1)];
-    if (l.tokens.size() != ele_width)
-      throw FormatError(fmt::format("{} line {}: {} numbers, a tetrahedron has {} here", ele_file, l.number,
-                                    l.tokens.size(), ele_width));
+    if (!eles.next_line())
+      throw FormatError(io::text_message(
+          ele, ehead_line, 1, fmt::format("the header says {} tetrahedra, the file holds {} (truncated?)", nt, i)));
+    const auto l = line_tokens(eles, ele_width);
+    if (l.size() != ele_width) eles.fail("{} numbers, a tetrahedron has {} here", l.size(), ele_width);
     std::array<int, 4> c{};
     for (int a = 0; a < 4; ++a) {
-      const long long v = integer(ele_file, l, 1 + a, "vertex index");
+      const long long v = tetgen_integer(eles, l, 1 + a, "vertex index");
       if (v < base || v >= base + np)
-        throw FormatError(fmt::format("{} line {}: tetrahedron {}: vertex index {} is outside {}..{}", ele_file,
-                                      l.number, i + base, v, base, base + np - 1));
+        eles.fail("tetrahedron {}: vertex index {} is outside {}..{}", i + base, v, base, base + np - 1);
       c[a] = static_cast<int>(v - base);
     }
     m.tets.push_back(c);
-    tet_lines.push_back(l.number);
+    tet_places.push_back({eles.line_number(), 1});
   }
-  if (const auto p = find_problem(m, static_cast<int>(base)))
-    throw FormatError(fmt::format("{} line {}: {}", ele_file, tet_lines[p->index], p->what));
+  expect_end(eles, nt, "tetrahedra");
+  if (const auto p = find_problem(m, static_cast<int>(base))) {
+    const Place at = p->is_vertex ? Place{} : tet_places[p->index];
+    throw FormatError(io::text_message(p->is_vertex ? node : ele, at.line, at.col, p->what));
+  }
   return m;
 }
 
@@ -373,26 +331,19 @@ void write_medit_mesh(const TetMesh& mesh, const fs::path& path) {
 }
 
 std::vector<double> read_vertex_values(const fs::path& path, std::size_t vertex_count) {
-  const std::string file = path.string();
-  const std::string text = read_file(path);
-  Tokens tok(text);
+  const std::string text = io::read_file(path);
+  io::TextReader in(text, path);
   std::vector<double> values;
-  values.reserve(vertex_count);
-  while (const auto t = tok.next()) {
-    const auto v = to_double(t->text);
-    if (!v) throw FormatError(fmt::format("{} line {}: '{}' is not a number (value {})", file, t->line, t->text,
-                                          values.size() + 1));
-    if (!std::isfinite(*v))
-      throw FormatError(fmt::format("{} line {}: value {} ('{}', vertex {}) is not finite", file, t->line,
-                                    values.size() + 1, t->text, values.size() + 1));
-    if (values.size() == vertex_count)
-      throw FormatError(fmt::format("{} line {}: more values than the mesh's {} vertices", file, t->line,
-                                    vertex_count));
-    values.push_back(*v);
+  values.reserve(std::min(vertex_count, text.size() / 2 + 1));
+  for (std::string_view t = in.token_across_lines(); !t.empty(); t = in.token_across_lines()) {
+    double v = 0;
+    if (!io::TextReader::parse(t, v)) in.fail("'{}' is not a number (value {})", io::echo(t), values.size() + 1);
+    if (!std::isfinite(v)) in.fail("value {} ('{}', vertex {}) is not finite", values.size() + 1, io::echo(t), values.size() + 1);
+    if (values.size() == vertex_count) in.fail("more values than the mesh's {} vertices", vertex_count);
+    values.push_back(v);
   }
   if (values.size() != vertex_count)
-    throw FormatError(fmt::format("{}: {} values for {} vertices (the file ends at line {})", file, values.size(),
-                                  vertex_count, tok.line()));
+    in.fail("{} values for {} vertices (the file ends here)", values.size(), vertex_count);
   return values;
 }
 

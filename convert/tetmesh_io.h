@@ -9,7 +9,8 @@
 /// separated, `#` comments.
 ///
 /// Everything is validated before it is trusted: counts against the file, indices in range,
-/// finite coordinates and values, and no degenerate (zero-volume) tetrahedron.
+/// finite coordinates and values, and no degenerate tetrahedron (core/bounds.h
+/// is_degenerate_tetrahedron).
 #include <array>
 #include <cstddef>
 #include <filesystem>
@@ -26,10 +27,6 @@ struct TetMesh {
   std::vector<std::array<int, 4>> tets;
   std::string source = "tet mesh";  ///< names the mesh in messages
 };
-
-/// A tetrahedron whose signed volume is at most this fraction of its longest edge cubed (in
-/// magnitude) is degenerate: 6|V| ≤ kDegenerateTet·L³. A regular tetrahedron has 6V/L³ ≈ 0.71.
-inline constexpr double kDegenerateTet = 1e-12;
 
 /// Reads `.mesh` (Medit) or `.node`/`.ele` (TetGen) by extension.
 /// \throws FormatError naming the file and line: unknown keyword, truncated section, a count that

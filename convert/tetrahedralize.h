@@ -13,6 +13,8 @@
 
 #include <Eigen/Core>
 
+#include "core/bounds.h"
+
 namespace quadrix {
 
 using TetIndices = std::array<int, 4>;
@@ -20,8 +22,9 @@ using TetIndices = std::array<int, 4>;
 struct TetrahedralizeOptions {
   /// Points closer than this fraction of the cell's diameter are merged before TetGen sees them.
   double merge_tolerance = 1e-10;
-  /// Cells whose volume is below this fraction of diameter³ are degenerate (InvalidInput).
-  double min_relative_volume = 1e-14;
+  /// Cells no thicker than this (6·volume of their largest tetrahedron over diameter³) are
+  /// degenerate (InvalidInput): core/bounds.h's limit for one tetrahedron.
+  double min_relative_volume = kDegenerateTetrahedron;
   /// Names the cells' owner in error messages.
   std::string source = "cells";
   /// When TetGen fails or crashes on a cell: false → SolverError; true → the cell is listed in

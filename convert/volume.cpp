@@ -9,10 +9,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <numbers>
-#include <sstream>
 
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -26,6 +24,8 @@
 #include "core/bounds.h"
 #include "core/error.h"
 #include "core/io/file.h"
+#include "core/io/text_reader.h"
+#include "core/limits.h"
 #include "core/log.h"
 
 namespace quadrix {
@@ -37,6 +37,10 @@ using Eigen::Vector3d;
 
 // ---------------------------------------------------------------------------------------------
 // Bytes and headers
+
+// Samples along one axis, at most (decode() and the header checks); bytes a header may skip.
+constexpr int kMaxVolumeSize = 1 << 16;
+constexpr std::size_t kMaxVolumeSkip = std::size_t{1} << 30;
 
 std::string lower(std::string_view s) {
   std::string out(s);
@@ -94,8 +98,8 @@ T load(const char* p, bool swap) {
 Volume decode(std::string_view data, const std::array<int, 3>& dims, VoxelType type, bool big_endian,
               const Vector3d& spacing, const std::string& what) {
   for (int a = 0; a < 3; ++a)
-    if (dims[a] < 1 || dims[a] > (1 << 16))
-      throw FormatError(fmt::format("{}: size {} along axis {} is out of range [1, 65536]", what, dims[a], a));
+    if (dims[a] < 1 || dims[a] > kMaxVolumeSize)
+      throw FormatError(fmt::format("{}: size {} along axis {} is out of range [1, {}]", what, dims[a], a, kMaxVolumeSize));
   const std::size_t n = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   const std::size_t need = n * voxel_bytes(type);
   if (data.size() != need)
@@ -131,27 +135,16 @@ Volume decode(std::string_view data, const std::array<int, 3>& dims, VoxelType t
   return v;
 }
 
-template <typename T>
-T parse_number(std::string_view text, const std::string& what, std::string_view field) {
-  const std::string t = trim(text);
-  T v{};
-  const char* b = t.data();
-  const char* e = b + t.size();
-  if constexpr (std::is_floating_point_v<T>) {
-    // NRRD writes NaN for "unknown" spacing; callers decide what to do with it.
-    if (lower(t) == "nan") return std::numeric_limits<T>::quiet_NaN();
+// The grid's corners inside the world range (core/limits.h): a spacing of 1e308 is refused, not
+// turned into infinite positions. \throws FormatError naming the volume.
+void check_volume_extent(const Volume& v) {
+  for (int a = 0; a < 3; ++a) {
+    const double lo = v.origin[a], hi = v.origin[a] + v.spacing[a] * (v.dims[a] - 1);
+    if (!is_world_value(lo) || !is_world_value(hi))
+      throw FormatError(fmt::format("{}: along axis {} the grid spans [{:g}, {:g}] (spacing {:g}), beyond ±{:g}, the "
+                                    "largest world coordinate Quadrix handles",
+                                    v.source, a, lo, hi, v.spacing[a], kMaxWorldCoordinate));
   }
-  const auto r = std::from_chars(b, e, v);
-  if (r.ec != std::errc() || r.ptr != e)
-    throw FormatError(fmt::format("{}: field '{}': '{}' is not a number", what, field, t));
-  return v;
-}
-
-std::vector<std::string> split_ws(std::string_view s) {
-  std::vector<std::string> out;
-  std::istringstream in{std::string(s)};
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
 }
 
 }  // namespace
@@ -190,15 +183,85 @@ Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
   if (layout.header_bytes > bytes.size())
     throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what,
                                   layout.header_bytes, bytes.size()));
-  return decode(std::string_view(bytes).substr(layout.header_bytes), layout.dims, layout.type, layout.big_endian,
-                layout.spacing, what);
+  Volume v = decode(std::string_view(bytes).substr(layout.header_bytes), layout.dims, layout.type, layout.big_endian,
+                    layout.spacing, what);
+  check_volume_extent(v);
+  return v;
 }
+
+namespace {
+
+// Header values as the text reader's tokens, so a message points at the one at fault.
+template <typename T>
+T header_number(io::TextReader& in, std::string_view field) {
+  const std::string_view tok = in.token();
+  if (tok.empty()) in.fail("field '{}': a number is missing", field);
+  if constexpr (std::is_floating_point_v<T>) {
+    double v = 0;
+    // NRRD writes NaN for "unknown" spacing; callers decide what to do with it.
+    if (lower(tok) == "nan") return std::numeric_limits<T>::quiet_NaN();
+    if (!io::TextReader::parse(tok, v)) in.fail("field '{}': '{}' is not a number", field, io::echo(tok));
+    return static_cast<T>(v);
+  } else {
+    long long v = 0;
+    if (!io::TextReader::parse(tok, v) || v < std::numeric_limits<T>::min() || v > std::numeric_limits<T>::max())
+      in.fail("field '{}': '{}' is not an integer in [{}, {}]", field, io::echo(tok), std::numeric_limits<T>::min(),
+              std::numeric_limits<T>::max());
+    return static_cast<T>(v);
+  }
+}
+
+// The numbers of the rest of the line, read through `(`, `)` and `,` ("(1,0,0) (0,1,0)").
+std::vector<double> header_vectors(io::TextReader& in, std::string_view field) {
+  std::vector<double> out;
+  for (;;) {
+    const std::string_view rest = in.rest_of_line();
+    const std::size_t b = rest.find_first_not_of(" \t\r(),");
+    if (b == std::string_view::npos || out.size() > 64) return out;
+    in.take(b);
+    const std::string_view tok = in.take(std::min(rest.find_first_of(" \t\r(),", b), rest.size()) - b);
+    double v = 0;
+    if (!io::TextReader::parse(tok, v)) in.fail("field '{}': '{}' is not a number", field, io::echo(tok));
+    out.push_back(v);
+  }
+}
+
+// Voxels along the axes of a header: each in [1, 65536] (the size decode() accepts), so the
+// promised byte count never overflows. \throws FormatError naming the file.
+std::size_t promised_bytes(const std::array<int, 3>& dims, VoxelType type, const std::string& what) {
+  for (int a = 0; a < 3; ++a)
+    if (dims[a] < 1 || dims[a] > kMaxVolumeSize)
+      throw FormatError(fmt::format("{}: size {} along axis {} is out of range [1, {}]", what, dims[a], a,
+                                    kMaxVolumeSize));
+  return static_cast<std::size_t>(dims[0]) * dims[1] * dims[2] * voxel_bytes(type);
+}
+
+// The most compressed bytes a gzip stream of n bytes takes (stored blocks and a generous header).
+std::size_t gzip_bound(std::size_t n) { return n + (n >> 3) + (n >> 6) + (std::size_t{1} << 16); }
+
+}  // namespace
 
 Volume read_nrrd(const fs::path& path) {
   const std::string what = path.string();
-  const std::string text = io::read_file(path);
-  if (text.rfind("NRRD000", 0) != 0)
-    throw FormatError(fmt::format("{}: not a NRRD file (no NRRD000x magic on line 1)", what));
+  // The header ends at the first empty line (attached data follows) or with the file (.nhdr).
+  constexpr std::size_t kMaxHeader = std::size_t{1} << 20;
+  const std::string head = io::read_file_prefix(path, kMaxHeader + 1);
+  if (!head.starts_with("NRRD000"))
+    throw FormatError(io::text_message(path, 1, 1, "not a NRRD file (no NRRD000x magic on line 1)"));
+  std::size_t header_bytes = head.size(), data_start = std::string::npos;
+  for (std::size_t b = 0; b < head.size();) {
+    const std::size_t e = head.find('\n', b);
+    if (e == std::string::npos) break;
+    if (e == b || (e == b + 1 && head[b] == '\r')) {
+      header_bytes = b;
+      data_start = e + 1;
+      break;
+    }
+    b = e + 1;
+  }
+  if (data_start == std::string::npos && head.size() > kMaxHeader)
+    throw FormatError(fmt::format("{}: no end of the header (an empty line) in its first {} bytes", what, kMaxHeader));
+
   std::optional<VoxelType> type;
   int dimension = 0;
   std::vector<int> sizes;
@@ -207,75 +270,57 @@ Volume read_nrrd(const fs::path& path) {
   std::string endian, encoding = "raw", data_file;
   long long byte_skip = 0;
   long long line_skip = 0;
-  std::size_t pos = text.find('\n');
-  std::size_t data_start = std::string::npos;
-  int line_no = 1;
-  while (pos != std::string::npos && pos + 1 <= text.size()) {
-    const std::size_t b = pos + 1;
-    const std::size_t e = text.find('\n', b);
-    ++line_no;
-    const std::string line = trim(std::string_view(text).substr(b, (e == std::string::npos ? text.size() : e) - b));
-    pos = e;
-    if (line.empty()) {  // end of header: attached data follows
-      data_start = e == std::string::npos ? text.size() : e + 1;
-      break;
-    }
+  io::TextReader in(std::string_view(head).substr(0, header_bytes), path, '\0');
+  in.next_line();  // the magic
+  while (in.next_line()) {
+    const std::string_view line = in.rest_of_line();
     if (line[0] == '#') continue;
-    if (line.find(":=") != std::string::npos) continue;  // key/value pair
+    if (line.find(":=") != std::string_view::npos) continue;  // key/value pair
     const auto colon = line.find(": ");
-    if (colon == std::string::npos)
-      throw FormatError(fmt::format("{}: line {}: expected 'field: value', got '{}'", what, line_no, line));
-    const std::string field = lower(trim(line.substr(0, colon)));
-    const std::string value = trim(line.substr(colon + 2));
-    const std::string where = fmt::format("{} line {}", what, line_no);
+    if (colon == std::string_view::npos) in.fail("expected 'field: value', got '{}'", io::echo(trim(line)));
+    const std::string field = lower(trim(in.take(colon)));
+    in.take(2);
+    const std::string value = trim(in.rest_of_line());
     if (field == "type") {
       try {
         type = parse_voxel_type(value);
       } catch (const InvalidInput& err) {
-        throw FormatError(fmt::format("{}: {}", where, err.what()));
+        in.fail("{}", err.what());
       }
     } else if (field == "dimension") {
-      dimension = parse_number<int>(value, where, field);
+      dimension = header_number<int>(in, field);
     } else if (field == "sizes") {
-      for (const auto& w : split_ws(value)) sizes.push_back(parse_number<int>(w, where, field));
+      while (!in.at_line_end() && sizes.size() < 4) sizes.push_back(header_number<int>(in, field));
     } else if (field == "spacings") {
-      const auto w = split_ws(value);
-      if (w.size() != 3) throw FormatError(fmt::format("{}: 'spacings' needs 3 values, got '{}'", where, value));
       for (int a = 0; a < 3; ++a) {
-        const double s = parse_number<double>(w[a], where, field);
+        const double s = header_number<double>(in, field);
         spacing[a] = std::isnan(s) ? 1.0 : std::abs(s);
       }
+      if (!in.at_line_end()) in.fail("'spacings' needs 3 values, got '{}'", io::echo(value));
     } else if (field == "space directions") {
       // "(a,b,c) (d,e,f) (g,h,i)": the spacing is each vector's length (axis-aligned grids).
-      std::string v = value;
-      for (auto& c : v)
-        if (c == '(' || c == ')' || c == ',') c = ' ';
-      const auto w = split_ws(v);
-      if (w.size() != 9)
-        throw FormatError(fmt::format("{}: 'space directions' needs three 3-vectors, got '{}'", where, value));
-      for (int a = 0; a < 3; ++a)
-        spacing[a] = Vector3d(parse_number<double>(w[3 * a], where, field), parse_number<double>(w[3 * a + 1], where, field),
-                              parse_number<double>(w[3 * a + 2], where, field))
-                         .norm();
+      const auto w = header_vectors(in, field);
+      if (w.size() != 9) in.fail("'space directions' needs three 3-vectors, got '{}'", io::echo(value));
+      for (int a = 0; a < 3; ++a) spacing[a] = Vector3d(w[3 * a], w[3 * a + 1], w[3 * a + 2]).norm();
     } else if (field == "space origin") {
-      std::string v = value;
-      for (auto& c : v)
-        if (c == '(' || c == ')' || c == ',') c = ' ';
-      const auto w = split_ws(v);
-      if (w.size() != 3) throw FormatError(fmt::format("{}: 'space origin' needs 3 values, got '{}'", where, value));
-      for (int a = 0; a < 3; ++a) origin[a] = parse_number<double>(w[a], where, field);
+      const auto w = header_vectors(in, field);
+      if (w.size() != 3) in.fail("'space origin' needs 3 values, got '{}'", io::echo(value));
+      origin = Vector3d(w[0], w[1], w[2]);
     } else if (field == "endian") {
       endian = lower(value);
-      if (endian != "little" && endian != "big")
-        throw FormatError(fmt::format("{}: endian must be 'little' or 'big', got '{}'", where, value));
+      if (endian != "little" && endian != "big") in.fail("endian must be 'little' or 'big', got '{}'", io::echo(value));
     } else if (field == "encoding") {
       encoding = lower(value);
+      if (encoding != "raw" && encoding != "gzip" && encoding != "gz")
+        in.fail("encoding '{}' is not supported (raw, gzip)", io::echo(value));
     } else if (field == "data file" || field == "datafile") {
       data_file = value;
     } else if (field == "byte skip") {
-      byte_skip = parse_number<long long>(value, where, field);
+      byte_skip = header_number<long long>(in, field);
+      if (byte_skip < -1) in.fail("byte skip {} (−1 or ≥ 0)", byte_skip);
     } else if (field == "line skip") {
-      line_skip = parse_number<long long>(value, where, field);
+      line_skip = header_number<long long>(in, field);
+      if (line_skip < 0) in.fail("line skip {} (≥ 0)", line_skip);
     }
   }
   if (!type) throw FormatError(fmt::format("{}: missing required field 'type'", what));
@@ -286,16 +331,21 @@ Volume read_nrrd(const fs::path& path) {
     throw FormatError(fmt::format("{}: missing field 'endian' for {}-byte type {}", what, voxel_bytes(*type),
                                   voxel_name(*type)));
   const bool gz = encoding == "gzip" || encoding == "gz";
-  if (!gz && encoding != "raw")
-    throw FormatError(fmt::format("{}: encoding '{}' is not supported (raw, gzip)", what, encoding));
-  if (byte_skip < -1 || line_skip < 0)
-    throw FormatError(fmt::format("{}: negative byte skip {} or line skip {}", what, byte_skip, line_skip));
+  if (gz && byte_skip == -1) throw FormatError(fmt::format("{}: 'byte skip: -1' needs raw encoding", what));
+  const std::array<int, 3> dims{sizes[0], sizes[1], sizes[2]};
+  const std::size_t need = promised_bytes(dims, *type, what);
+  const std::size_t skip = byte_skip > 0 ? static_cast<std::size_t>(byte_skip) : 0;
+  if (skip > kMaxVolumeSkip) throw FormatError(fmt::format("{}: byte skip {} is over {}", what, skip, kMaxVolumeSkip));
+  // Raw data are exactly skip + need bytes; gzip data inflate to exactly that (NRRD skips bytes of
+  // the decompressed data), checked as they arrive. Line skips and `byte skip: -1` read the file.
+  const std::size_t bound = byte_skip == -1 || line_skip > 0 ? io::kNoLimit : skip + need;
 
   std::string data;
   std::string data_what = what;
+  bool inflated = false;
   if (!data_file.empty()) {
-    if (data_file.rfind("LIST", 0) == 0 || split_ws(data_file).size() > 1)
-      throw FormatError(fmt::format("{}: multi-file data ('data file: {}') is not supported", what, data_file));
+    if (data_file.rfind("LIST", 0) == 0 || data_file.find_first_of(" \t") != std::string::npos)
+      throw FormatError(fmt::format("{}: multi-file data ('data file: {}') is not supported", what, io::echo(data_file)));
     fs::path df = data_file;
     if (df.is_relative()) df = path.parent_path() / df;
     data_what = fmt::format("{} (data file {})", what, df.string());
@@ -303,11 +353,13 @@ Volume read_nrrd(const fs::path& path) {
     if (fs::exists(df, ec) && !fs::is_directory(df, ec) && !fs::is_regular_file(df, ec))
       throw FormatError(fmt::format("{}: 'data file: {}' is not a regular file (a device or a pipe)", what,
                                     io::echo(data_file)));
-    const double need = static_cast<double>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) * std::max(sizes[2], 0) *
-                        static_cast<double>(voxel_bytes(*type));
-    const bool exact = !gz && line_skip == 0 && byte_skip >= 0 && need < 1e18;
     try {
-      data = io::read_file(df, exact ? static_cast<std::size_t>(byte_skip) + static_cast<std::size_t>(need) : io::kNoLimit);
+      if (gz && line_skip == 0) {
+        data = io::read_gzip(df, bound);
+        inflated = true;
+      } else {
+        data = io::read_file(df, gz ? gzip_bound(need + skip) : bound);
+      }
     } catch (const IoError& e) {  // the header is where the user looks first: name it too
       throw IoError(fmt::format("{}: data file '{}': {}", what, io::echo(data_file), e.what()));
     } catch (const FormatError& e) {
@@ -315,38 +367,37 @@ Volume read_nrrd(const fs::path& path) {
     }
   } else {
     if (data_start == std::string::npos)
-      throw FormatError(fmt::format("{}: no 'data file' field and no attached data after a blank line", what));
-    data = text.substr(data_start);
+      throw FormatError(fmt::format("{}: no 'data file' field and no attached data after an empty line", what));
+    const std::size_t limit = gz ? gzip_bound(need + skip) : bound;
+    data = io::read_file(path, limit == io::kNoLimit ? limit : data_start + limit).substr(data_start);
   }
   std::string_view d = data;
-  for (long long l = 0; l < line_skip; ++l) {
-    const auto nl = d.find('\n');
-    if (nl == std::string_view::npos)
-      throw FormatError(fmt::format("{}: 'line skip: {}' runs past the end of the data", data_what, line_skip));
-    d.remove_prefix(nl + 1);
+  if (!inflated)
+    for (long long l = 0; l < line_skip; ++l) {
+      const auto nl = d.find('\n');
+      if (nl == std::string_view::npos)
+        throw FormatError(fmt::format("{}: 'line skip: {}' runs past the end of the data", data_what, line_skip));
+      d.remove_prefix(nl + 1);
+    }
+  std::string unzipped;
+  if (gz && !inflated) {
+    unzipped = io::gunzip(d, data_what, skip + need);
+    d = unzipped;
   }
-  std::string inflated;
-  if (gz) {
-    if (byte_skip > 0) d.remove_prefix(std::min<std::size_t>(d.size(), static_cast<std::size_t>(byte_skip)));
-    const double need = static_cast<double>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) * std::max(sizes[2], 0) *
-                        static_cast<double>(voxel_bytes(*type));
-    inflated = io::gunzip(d, data_what, need < 1e18 ? static_cast<std::size_t>(need) : io::kNoLimit);
-    d = inflated;
-  } else if (byte_skip == -1) {
-    const std::size_t need = static_cast<std::size_t>(std::max(sizes[0], 0)) * std::max(sizes[1], 0) *
-                             std::max(sizes[2], 0) * voxel_bytes(*type);
+  if (byte_skip == -1) {
     if (d.size() < need)
       throw FormatError(fmt::format("{}: header says {} bytes of data, the file holds {}", data_what, need, d.size()));
     d.remove_prefix(d.size() - need);
   } else {
-    if (static_cast<std::size_t>(byte_skip) > d.size())
-      throw FormatError(fmt::format("{}: 'byte skip: {}' is past the end of the data ({} bytes)", data_what,
-                                    byte_skip, d.size()));
-    d.remove_prefix(static_cast<std::size_t>(byte_skip));
+    if (skip > d.size())
+      throw FormatError(fmt::format("{}: 'byte skip: {}' is past the end of the data ({} bytes)", data_what, skip,
+                                    d.size()));
+    d.remove_prefix(skip);
   }
-  Volume v = decode(d, {sizes[0], sizes[1], sizes[2]}, *type, endian == "big", spacing, data_what);
+  Volume v = decode(d, dims, *type, endian == "big", spacing, data_what);
   v.origin = origin;
   v.source = what;
+  check_volume_extent(v);
   return v;
 }
 
@@ -356,7 +407,7 @@ Volume read_inr(const fs::path& path) {
   const bool gz = ends_with(path, ".gz");
   const std::string bytes = gz ? io::read_gzip(path, 1 << 16, true) : io::read_file_prefix(path, 1 << 16);
   if (bytes.rfind("#INRIMAGE-4#{", 0) != 0)
-    throw FormatError(fmt::format("{}: not an INRIMAGE-4 file (no '#INRIMAGE-4#{{' magic)", what));
+    throw FormatError(io::text_message(path, 1, 1, "not an INRIMAGE-4 file (no '#INRIMAGE-4#{' magic)"));
   const std::size_t end = bytes.find("##}");
   if (end == std::string::npos) throw FormatError(fmt::format("{}: header has no closing '##}}'", what));
   // The header is padded to a multiple of 256 bytes, ending with "##}\n".
@@ -367,24 +418,24 @@ Volume read_inr(const fs::path& path) {
   int vdim = 1, pixsize = 0;
   std::string type_name, cpu = "decm";
   Vector3d spacing = Vector3d::Ones();
-  std::istringstream in(bytes.substr(0, end));
-  int line_no = 0;
-  for (std::string line; std::getline(in, line);) {
-    ++line_no;
+  io::TextReader in(std::string_view(bytes).substr(0, end), path, '#');
+  while (in.next_line()) {
+    const std::string_view line = in.rest_of_line();
     const auto eq = line.find('=');
-    if (line.empty() || line[0] == '#' || eq == std::string::npos) continue;
-    const std::string key = trim(line.substr(0, eq)), value = trim(line.substr(eq + 1));
-    const std::string where = fmt::format("{} header line {}", what, line_no);
-    if (key == "XDIM") dims[0] = parse_number<int>(value, where, key);
-    else if (key == "YDIM") dims[1] = parse_number<int>(value, where, key);
-    else if (key == "ZDIM") dims[2] = parse_number<int>(value, where, key);
-    else if (key == "VDIM") vdim = parse_number<int>(value, where, key);
+    if (eq == std::string_view::npos) continue;
+    const std::string key = trim(in.take(eq));
+    in.take(1);
+    const std::string value = trim(in.rest_of_line());
+    if (key == "XDIM") dims[0] = header_number<int>(in, key);
+    else if (key == "YDIM") dims[1] = header_number<int>(in, key);
+    else if (key == "ZDIM") dims[2] = header_number<int>(in, key);
+    else if (key == "VDIM") vdim = header_number<int>(in, key);
     else if (key == "TYPE") type_name = lower(value);
-    else if (key == "PIXSIZE") pixsize = parse_number<int>(split_ws(value).empty() ? "" : split_ws(value)[0], where, key);
+    else if (key == "PIXSIZE") pixsize = header_number<int>(in, key);
     else if (key == "CPU") cpu = lower(value);
-    else if (key == "VX") spacing[0] = parse_number<double>(value, where, key);
-    else if (key == "VY") spacing[1] = parse_number<double>(value, where, key);
-    else if (key == "VZ") spacing[2] = parse_number<double>(value, where, key);
+    else if (key == "VX") spacing[0] = header_number<double>(in, key);
+    else if (key == "VY") spacing[1] = header_number<double>(in, key);
+    else if (key == "VZ") spacing[2] = header_number<double>(in, key);
   }
   for (int a = 0; a < 3; ++a)
     if (dims[a] < 0) throw FormatError(fmt::format("{}: missing {}DIM", what, "XYZ"[a]));
@@ -399,17 +450,15 @@ Volume read_inr(const fs::path& path) {
   else if (type_name == "signed fixed" && pixsize == 16) type = VoxelType::int16;
   else if (type_name == "signed fixed" && pixsize == 32) type = VoxelType::int32;
   else
-    throw FormatError(fmt::format("{}: unsupported TYPE='{}' with PIXSIZE={} bits", what, type_name, pixsize));
+    throw FormatError(fmt::format("{}: unsupported TYPE='{}' with PIXSIZE={} bits", what, io::echo(type_name), pixsize));
   bool big = false;
   if (cpu == "sun" || cpu == "sgi") big = true;
   else if (cpu != "decm" && cpu != "alpha" && cpu != "pc")
-    throw FormatError(fmt::format("{}: unknown CPU='{}' (decm, alpha, pc, sun, sgi)", what, cpu));
-  double need = static_cast<double>(voxel_bytes(type));
-  for (const int d : dims) need *= std::max(d, 0);
-  need += static_cast<double>(header);
-  const std::size_t bound = need < 1e18 ? static_cast<std::size_t>(need) : io::kNoLimit;
+    throw FormatError(fmt::format("{}: unknown CPU='{}' (decm, alpha, pc, sun, sgi)", what, io::echo(cpu)));
+  const std::size_t bound = header + promised_bytes(dims, type, what);
   const std::string all = gz ? io::read_gzip(path, bound) : io::read_file(path, bound);
   Volume v = decode(std::string_view(all).substr(header), dims, type, big, spacing, what);
+  check_volume_extent(v);
   return v;
 }
 
@@ -630,6 +679,7 @@ VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& op
     if (!(volume.spacing[a] > 0) || !std::isfinite(volume.spacing[a]))
       throw InvalidInput(fmt::format("{}: spacing {} along axis {} must be finite and > 0", what, volume.spacing[a], a));
   }
+  check_volume_extent(volume);
   if (volume.values.size() != static_cast<std::size_t>(d[0]) * d[1] * d[2])
     throw InvalidInput(fmt::format("{}: {} values for a {}x{}x{} grid", what, volume.values.size(), d[0], d[1], d[2]));
   for (std::size_t i = 0; i < volume.values.size(); ++i)

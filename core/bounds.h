@@ -45,8 +45,14 @@ private:
 bool quadric_may_vanish(const std::array<Eigen::Vector3d, 4>& corners, const Quadric& q, const Eigen::Vector3d& origin,
                         int depth = 0);
 
-/// True when the tetrahedron is degenerate: |volume| ≤ rel_eps · diameter³.
-bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = 1e-12);
+/// The one degeneracy limit for tetrahedra (stored patches, tetrahedral meshes, cells, clipped
+/// pieces): a tetrahedron is degenerate when 6|volume| ≤ kDegenerateTetrahedron · L³, L its
+/// longest edge. A regular tetrahedron has 6V/L³ ≈ 0.71.
+inline constexpr double kDegenerateTetrahedron = 1e-12;
+
+/// True when the tetrahedron is degenerate: 6|volume| ≤ rel_eps · L³ (L the longest edge), or
+/// when an edge is not finite.
+bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = kDegenerateTetrahedron);
 
 /// The part of tetrahedron t inside the half-space {x : x[axis]·side ≤ limit·side} (side = ±1)
 /// as 0 to 3 tetrahedra that tile it exactly: 1 corner inside gives one tetrahedron, 2 or 3 give

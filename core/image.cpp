@@ -18,6 +18,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/io/file.h"
 #include "core/log.h"
 
 namespace quadrix {
@@ -28,14 +29,8 @@ namespace fs = std::filesystem;
 constexpr int max_dimension = 65536;
 
 std::vector<std::uint8_t> read_bytes(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw IoError(fmt::format("{}: no such file", path.string()));
-  if (fs::is_directory(path, ec)) throw IoError(fmt::format("{}: is a folder, not an image", path.string()));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
-  return bytes;
+  const std::string bytes = io::read_file(path);
+  return {bytes.begin(), bytes.end()};
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -17,6 +17,7 @@
 #include "core/implicit/surface.h"
 #include "core/io/file.h"
 #include "core/io/ply.h"
+#include "core/limits.h"
 
 namespace quadrix {
 namespace {
@@ -55,7 +56,9 @@ std::string single_line(std::string v) {
 
 void check_finite(bool ok, std::string_view what, std::size_t i, const std::filesystem::path& path) {
   if (!ok)
-    throw InvalidInput(fmt::format("{}: cannot write {} {}: it holds non-finite values", path.string(), what, i));
+    throw InvalidInput(fmt::format("{}: cannot write {} {}: it holds non-finite values or coordinates beyond ±{:g} "
+                                   "(the largest world coordinate Quadrix handles)",
+                                   path.string(), what, i, kMaxWorldCoordinate));
 }
 
 void append_doubles(std::string& out, std::initializer_list<double> vs) {
@@ -100,8 +103,14 @@ public:
     if (!std::isfinite(v)) fail(row, col, fmt::format("value {} is not finite", v));
     return v;
   }
+  /// Reads a world coordinate or length (core/limits.h).
+  double world(std::size_t row, std::size_t col) const {
+    const double v = finite(row, col);
+    if (!is_world_value(v)) fail(row, col, fmt::format("value {:g} {}", v, world_fault(v)));
+    return v;
+  }
   Eigen::Vector3d vec3(std::size_t row, std::size_t col) const {
-    return {finite(row, col), finite(row, col + 1), finite(row, col + 2)};
+    return {world(row, col), world(row, col + 1), world(row, col + 2)};
   }
   QuadricCoefficients coefficients(std::size_t row, std::size_t col) const {
     QuadricCoefficients k;
@@ -174,14 +183,14 @@ void read_slim_rows(const Rows& r, const SlimColumns& cols, std::size_t total, s
   for (std::size_t i = 0; i < r.size(); ++i) {
     SlimPatch& s = out.emplace_back();
     s.centre = r.vec3(i, 0);
-    s.radius = r.finite(i, 3);
+    s.radius = r.world(i, 3);
     if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
     s.local = Quadric::from_coefficients(r.coefficients(i, 4));
     std::size_t c = 14;
     if (cols.clip) {
       ClipPlane p;
       p.n = r.vec3(i, c);
-      p.d = r.finite(i, c + 3);
+      p.d = r.world(i, c + 3);
       if (p.n != Eigen::Vector3d::Zero()) s.clip = p;
       c += 4;
     }
@@ -385,7 +394,7 @@ Model read_qxm(const ply::File& f) {
         r.fail(i, 0, fmt::format("glyph kind {} is not 0 (sphere), 1 (ellipsoid) or 2 (cylinder)", kind));
       g.kind = static_cast<GlyphKind>(static_cast<int>(kind));
       g.centre = r.vec3(i, 1);
-      g.radius = r.finite(i, 4);
+      g.radius = r.world(i, 4);
       for (std::size_t k = 0; k < 3; ++k) g.axes.col(static_cast<Eigen::Index>(k)) = r.vec3(i, 5 + 3 * k);
       if (g.kind != GlyphKind::ellipsoid && !(g.radius > 0))
         r.fail(i, 4, fmt::format("value {} must be > 0", g.radius));
@@ -521,11 +530,18 @@ Model parse_slim2t(const std::string& b, const std::filesystem::path& path) {
       return v;
     };
     SlimPatch& s = balls[i];
-    for (std::size_t j = 0; j < 3; ++j) s.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
+    for (std::size_t j = 0; j < 3; ++j) {
+      s.centre[static_cast<Eigen::Index>(j)] = value(j, "centre");
+      if (!is_world_value(s.centre[static_cast<Eigen::Index>(j)]))
+        fail(static_cast<std::int64_t>(i), at + 4 * j,
+             fmt::format("centre value {:g} {}", s.centre[static_cast<Eigen::Index>(j)], world_fault(s.centre[static_cast<Eigen::Index>(j)])));
+    }
     QuadricCoefficients k;
     for (std::size_t j = 0; j < 10; ++j) k[j] = value(3 + j, "coefficient");
     s.radius = value(13, "radius");
     if (!(s.radius > 0)) fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {} must be > 0", s.radius));
+    if (!is_world_value(s.radius))
+      fail(static_cast<std::int64_t>(i), at + 52, fmt::format("radius {:g} {}", s.radius, world_fault(s.radius)));
     // Coefficients are in y = x − centre, unscaled; the patch wants u = y / R.
     s.local = Quadric::from_coefficients(k).to_local(Eigen::Vector3d::Zero(), s.radius);
     // The parent id is a float32 holding an integer: 1-based, −1 for a root.
@@ -609,19 +625,21 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   const bool hierarchy = !hy.empty();
   for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i) {
     const SlimPatch& s = slim_ball(model, i);
-    check_finite(s.centre.allFinite() && std::isfinite(s.radius) && s.local.is_finite() &&
-                     (!s.clip || (s.clip->n.allFinite() && std::isfinite(s.clip->d))),
+    check_finite(is_world_point(s.centre) && is_world_value(s.radius) && s.local.is_finite() &&
+                     (!s.clip || (is_world_point(s.clip->n) && is_world_value(s.clip->d))),
                  i < model.slims.size() ? "slim patch" : "slim_node", i, path);
   }
   for (std::size_t i = 0; i < model.tets.size(); ++i) {
     const TetPatch& t = model.tets[i];
     bool ok = t.quadric.is_finite();
-    for (const auto& p : t.corners) ok = ok && p.allFinite();
+    for (const auto& p : t.corners) ok = ok && is_world_point(p);
     check_finite(ok, "tet patch", i, path);
   }
   for (std::size_t i = 0; i < model.glyphs.size(); ++i) {
     const Glyph& g = model.glyphs[i];
-    check_finite(g.centre.allFinite() && std::isfinite(g.radius) && g.axes.allFinite(), "glyph", i, path);
+    check_finite(is_world_point(g.centre) && is_world_value(g.radius) &&
+                     g.axes.allFinite() && g.axes.cwiseAbs().maxCoeff() <= kMaxWorldCoordinate,
+                 "glyph", i, path);
   }
 
   // Implicit surfaces: parameter values in the order the expression names them.

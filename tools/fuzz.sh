@@ -1,38 +1,94 @@
 #!/usr/bin/env bash
-# make fuzz: builds one libFuzzer target per I/O kit reader with clang (ASan + UBSan) and runs each
-# for SECONDS (default 20) from the malformed corpus. Findings (crash-*, leak-*, timeout-*) are left
-# in OUT/READER/ and make the script fail: turn each into a corpus file with its expected exit code.
-# Usage: tools/fuzz.sh [OUT=out/fuzz] [SECONDS=20] [READERS="off obj stl ply xyz"]
+# make fuzz: builds one libFuzzer target per reader with Debian's clang (ASan + UBSan, from
+# tests/fuzz/fuzz_readers.cpp) and runs each for SECONDS (default 20) from the malformed corpus
+# (tests/data/malformed/files) plus what earlier runs found (OUT/READER/corpus). Findings (crash-*,
+# leak-*, timeout-*, oom-*) stay in OUT/READER/ and make the script fail: turn each into a corpus
+# file with its expected exit code. Each run's seconds are added to OUT/READER/seconds.
+# Usage: tools/fuzz.sh [--build|--run|--check] [OUT=out/fuzz] [SECONDS=20] [READERS="all"]
+#   --build: only build the targets; --run: only run them (built before); --check: exit 77 (skip)
+#   when clang++ or libFuzzer is missing, 0 when present.
 set -euo pipefail
+MODE=all
+case ${1:-} in --build|--run|--check) MODE=${1#--}; shift ;; esac
 OUT=${1:-out/fuzz}
 SECONDS_EACH=${2:-20}
-READERS=${3:-"off obj stl ply xyz"}
+ALL="off obj stl ply xyz pts qxm slim2t mesh tetgen values nrrd nhdr inr inrgz cin pdb csv png pfm implicit"
+CORE_READERS="off obj stl ply xyz pts qxm slim2t png pfm implicit"
+READERS=${3:-all}
+[ "$READERS" = all ] && READERS=$ALL
 CXX=${FUZZ_CXX:-$(command -v clang++ || command -v clang++-14 || true)}
-[ -n "$CXX" ] || { echo "fuzz: clang++ not found (apt-get install clang)" >&2; exit 2; }
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
+if [ -z "$CXX" ]; then
+  echo "fuzz: SKIPPED: clang++ not found (apt-get install clang libclang-rt-14-dev)" >&2
+  exit 77
+fi
 mkdir -p "$OUT/obj"
-FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -I"$ROOT" -I/usr/include/eigen3)
-SOURCES=(core/io/read_off.cpp core/io/read_obj.cpp core/io/read_stl.cpp core/io/read_ply.cpp core/io/read_xyz.cpp
-         core/io/ply.cpp core/io/file.cpp core/io/text_reader.cpp core/atomic_file.cpp core/log.cpp)
-OBJECTS=()
-for s in "${SOURCES[@]}"; do
-  o="$OUT/obj/$(echo "$s" | tr / _).o"
-  [ "$o" -nt "$ROOT/$s" ] || "$CXX" "${FLAGS[@]}" -c "$ROOT/$s" -o "$o"
-  OBJECTS+=("$o")
-done
+if [ "$MODE" = check ] || [ "$MODE" = build ] || [ "$MODE" = all ]; then
+  printf 'extern "C" int LLVMFuzzerTestOneInput(const unsigned char*, unsigned long) { return 0; }\n' > "$OUT/obj/probe.cpp"
+  if ! "$CXX" -fsanitize=fuzzer,address,undefined "$OUT/obj/probe.cpp" -o "$OUT/obj/probe" 2> "$OUT/obj/probe.log"; then
+    echo "fuzz: SKIPPED: $CXX cannot link libFuzzer (apt-get install libclang-rt-14-dev): $(head -c 300 "$OUT/obj/probe.log")" >&2
+    exit 77
+  fi
+  [ "$MODE" = check ] && exit 0
+fi
+FLAGS=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+       -I"$ROOT" -I/usr/include/eigen3 -DNDEBUG)
+if [ "$MODE" != run ]; then
+  # Readers of core alone link without convert/ (and build sooner).
+  SOURCES=($(cd "$ROOT" && ls core/*.cpp core/io/*.cpp core/implicit/*.cpp))
+  CORE_OBJECTS=${#SOURCES[@]}
+  for r in $READERS; do
+    case " $CORE_READERS " in *" $r "*) ;; *) NEED_CONVERT=1 ;; esac
+  done
+  [ -n "${NEED_CONVERT:-}" ] && SOURCES+=(convert/volume.cpp convert/tetmesh_io.cpp convert/balls.cpp convert/molecule.cpp
+                                          convert/read_molecule.cpp convert/ellipsoids_csv.cpp)
+  OBJECTS=()
+  for s in "${SOURCES[@]}"; do
+    o="$OUT/obj/$(echo "$s" | tr / _).o"
+    # Rebuilt when the source or any header of the tree is newer (coarse but safe).
+    if [ ! -e "$o" ] || [ -n "$(find "$ROOT/$s" "$ROOT/core" "$ROOT/convert" -name '*.h' -newer "$o" -print -quit)" ] ||
+       [ "$ROOT/$s" -nt "$o" ]; then
+      "$CXX" "${FLAGS[@]}" -c "$ROOT/$s" -o "$o"
+    fi
+    OBJECTS+=("$o")
+  done
+  for r in $READERS; do
+    mkdir -p "$OUT/$r"
+    case " $CORE_READERS " in
+      *" $r "*) objects=("${OBJECTS[@]:0:$CORE_OBJECTS}"); core=(-DQUADRIX_FUZZ_CORE_ONLY) ;;
+      *) objects=("${OBJECTS[@]}"); core=() ;;
+    esac
+    "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer "${core[@]}" -DQUADRIX_FUZZ_READER="$r" "$ROOT/tests/fuzz/fuzz_readers.cpp" \
+      "${objects[@]}" -lOpenMeshCore -lfmt -lz -lpng -ltbb -o "$OUT/$r/fuzz_$r"
+  done
+fi
+[ "$MODE" = build ] && exit 0
 status=0
 for r in $READERS; do
+  if [ ! -x "$OUT/$r/fuzz_$r" ]; then
+    echo "fuzz: SKIPPED: $OUT/$r/fuzz_$r is not built (tools/fuzz.sh --build)" >&2
+    exit 77
+  fi
   mkdir -p "$OUT/$r/corpus"
-  "$CXX" "${FLAGS[@]}" -fsanitize=fuzzer -DQUADRIX_FUZZ_READER="$r" "$ROOT/tests/fuzz/fuzz_mesh_readers.cpp" \
-    "${OBJECTS[@]}" -lfmt -lz -o "$OUT/$r/fuzz_$r"
-  case $r in ply) glob='*.ply' ;; xyz) glob='*.xyz' ;; *) glob="*.$r" ;; esac
-  find "$ROOT/tests/data/malformed/files" -maxdepth 1 -type f -name "$glob" -exec cp {} "$OUT/$r/corpus/" \;
+  case $r in
+    ply) glob='*.ply' ;; xyz) glob='*.xyz' ;; pts) glob='*.pts' ;; qxm) glob='*.qxm' ;; slim2t) glob='*.slim2t' ;;
+    mesh) glob='*.mesh' ;; tetgen) glob='*.node' ;; values) glob='values*.txt' ;; nrrd) glob='*.nrrd' ;;
+    nhdr) glob='*.nhdr' ;; inr) glob='*.inr' ;; inrgz) glob='*.inr.gz' ;; cin) glob='*.cin' ;; pdb) glob='*.pdb' ;;
+    csv) glob='*.csv' ;; png) glob='*.png' ;; pfm) glob='*.pfm' ;; implicit) glob='*.implicit' ;; *) glob="*.$r" ;;
+  esac
+  find "$ROOT/tests/data/malformed/files" "$ROOT/tests/data/malformed" -maxdepth 1 -type f -name "$glob" \
+    -exec cp {} "$OUT/$r/corpus/" \;
+  [ -n "$(ls -A "$OUT/$r/corpus")" ] || printf '0\n' > "$OUT/$r/corpus/seed"
   echo "fuzz: $r for ${SECONDS_EACH} s"
-  if ! (cd "$OUT/$r" && ./"fuzz_$r" -max_total_time="$SECONDS_EACH" -max_len=65536 -rss_limit_mb=2048 \
+  start=$(date +%s)
+  if ! (cd "$OUT/$r" && ./"fuzz_$r" -max_total_time="$SECONDS_EACH" -max_len=65536 -rss_limit_mb=2048 -timeout=20 \
         -print_final_stats=1 corpus > log.txt 2>&1); then
     echo "fuzz: $r found a failure, see $OUT/$r/log.txt and $OUT/$r/crash-*" >&2
+    grep -m3 -E "ERROR|runtime error|terminate|deadly" "$OUT/$r/log.txt" >&2 || true
     status=1
   fi
-  grep -E "stat::number_of_executed_units|Done" "$OUT/$r/log.txt" | tail -1
+  echo $(( $(date +%s) - start )) >> "$OUT/$r/seconds"
+  echo "fuzz: $r: $(grep -E "stat::number_of_executed_units" "$OUT/$r/log.txt" | tail -1 | awk '{print $2}') runs, \
+$(awk '{s+=$1} END {print s}' "$OUT/$r/seconds") s in total in $OUT/$r"
 done
 exit $status

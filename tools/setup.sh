@@ -7,7 +7,7 @@ packages=(
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtet1.5-dev libopenmesh-dev
   libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libnanoflann-dev zlib1g-dev gemmi-dev tao-pegtl-dev libosmesa6-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
+  libnanoflann-dev zlib1g-dev gemmi-dev tao-pegtl-dev clang libclang-rt-14-dev libosmesa6-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
   povray  # bench-only peer: `quadrix bench implicit` renders the same surfaces with POV-Ray
 )
 missing=()

@@ -78,6 +78,10 @@ std::string read_gzip(const fs::path& path, std::size_t max_bytes, bool is_prefi
                                     echo(msg)));
     }
     if (n == 0) break;
+    if (out.empty() && gzdirect(f)) {  // zlib passes other bytes through unchanged
+      gzclose(f);
+      throw FormatError(fmt::format("{}: not gzip data (no gzip magic at byte 0)", path.string()));
+    }
     const auto k = static_cast<std::size_t>(n);
     if (k > max_bytes - out.size()) {
       gzclose(f);
@@ -117,7 +121,10 @@ std::string gunzip(std::string_view data, const std::string& what, std::size_t m
       throw FormatError(fmt::format("{}: truncated gzip data after {} decompressed bytes", what, out.size()));
     }
   }
+  const std::size_t left = z.avail_in;
   inflateEnd(&z);
+  if (left > 0)
+    throw FormatError(fmt::format("{}: {} bytes after the end of the gzip data (trailing data)", what, left));
   return out;
 }
 

@@ -28,7 +28,8 @@ std::string read_file_prefix(const std::filesystem::path& path, std::size_t max_
 /// \throws IoError as read_file; FormatError for corrupt or truncated gzip data.
 std::string read_gzip(const std::filesystem::path& path, std::size_t max_bytes, bool is_prefix = false);
 
-/// Inflates an in-memory gzip or zlib stream; `what` names it in messages. Bounded as read_gzip.
+/// Inflates one in-memory gzip or zlib stream; `what` names it in messages. Bounded as read_gzip;
+/// bytes after the end of the stream are a FormatError (trailing data).
 std::string gunzip(std::string_view data, const std::string& what, std::size_t max_bytes);
 
 /// A token cut to 80 characters, control and non-ASCII bytes as \xNN, an ellipsis when cut.

@@ -9,6 +9,7 @@
 #include "core/io/file.h"
 #include "core/io/formats.h"
 #include "core/io/text_reader.h"
+#include "core/limits.h"
 
 namespace quadrix::io {
 
@@ -32,7 +33,8 @@ Surface read_obj(std::string_view text, const std::filesystem::path& path) {
       const std::size_t i = is_v ? mesh.vertices.size() : normals.size();
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = r.number(fmt::format("{} {}", is_v ? "vertex" : "normal", i));
-      if (!p.allFinite()) r.fail("{} {} has a non-finite coordinate ({}, {}, {})", is_v ? "vertex" : "normal", i, p.x(), p.y(), p.z());
+      if (is_v ? !is_world_point(p) : !p.allFinite())
+        r.fail("{} {} ({}, {}, {}) {}", is_v ? "vertex" : "normal", i, p.x(), p.y(), p.z(), world_fault(p));
       if (is_v) {
         mesh.vertices.push_back(p);
       } else {

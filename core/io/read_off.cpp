@@ -7,6 +7,7 @@
 #include "core/io/file.h"
 #include "core/io/formats.h"
 #include "core/io/text_reader.h"
+#include "core/limits.h"
 
 namespace quadrix::io {
 
@@ -39,7 +40,7 @@ Surface read_off(std::string_view text, const std::filesystem::path& path) {
     if (!r.next_line()) r.fail("truncated OFF file: header declares {} vertices, found {}", nv, v);
     Eigen::Vector3d p, n;
     for (int k = 0; k < 3; ++k) p[k] = r.number(fmt::format("vertex {}", v));
-    if (!p.allFinite()) r.fail("vertex {} has a non-finite coordinate ({}, {}, {})", v, p.x(), p.y(), p.z());
+    if (!is_world_point(p)) r.fail("vertex {} ({}, {}, {}) {}", v, p.x(), p.y(), p.z(), world_fault(p));
     s.mesh.vertices.push_back(p);
     if (!has_normals) continue;
     for (int k = 0; k < 3; ++k) n[k] = r.number(fmt::format("vertex {} normal", v));

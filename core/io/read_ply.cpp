@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/io/formats.h"
 #include "core/io/ply.h"
+#include "core/limits.h"
 
 namespace quadrix::io {
 
@@ -38,9 +39,9 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
   if (normal_count == 3) s.normals.resize(t.rows);
   for (std::size_t i = 0; i < t.rows; ++i) {
     for (std::size_t c = 0; c < props.size(); ++c)
-      if (!std::isfinite(t(i, c)))
+      if (c < 3 ? !is_world_value(t(i, c)) : !std::isfinite(t(i, c)))
         throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), props[c], t.byte_offset(i, c),
-                                    fmt::format("value {} is not finite", t(i, c))));
+                                    fmt::format("value {} {}", t(i, c), world_fault(t(i, c)))));
     s.mesh.vertices[i] = {t(i, 0), t(i, 1), t(i, 2)};
     if (normal_count == 3) {
       const Eigen::Vector3d n(t(i, 3), t(i, 4), t(i, 5));

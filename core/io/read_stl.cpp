@@ -12,6 +12,7 @@
 #include "core/io/file.h"
 #include "core/io/formats.h"
 #include "core/io/text_reader.h"
+#include "core/limits.h"
 
 namespace quadrix::io {
 namespace {
@@ -48,10 +49,10 @@ Surface read_binary(std::string_view b, const std::filesystem::path& path) {
     for (std::size_t k = 0; k < 3; ++k) {
       Eigen::Vector3f p;
       std::memcpy(p.data(), b.data() + at + 12 + 12 * k, 12);
-      if (!p.allFinite())
+      if (!is_world_point(p.cast<double>()))
         throw FormatError(byte_message(path, at + 12 + 12 * k,
-                                       fmt::format("triangle {} corner {} is not finite ({}, {}, {})", t, k, p.x(),
-                                                   p.y(), p.z())));
+                                       fmt::format("triangle {} corner ({}, {}, {}) {}", t, p.x(), p.y(), p.z(),
+                                                   world_fault(p.cast<double>()))));
       face[k] = merge.add(p.cast<double>());
     }
     s.mesh.add_face(face);
@@ -85,7 +86,7 @@ Surface read_ascii(std::string_view text, const std::filesystem::path& path) {
       if (tok != "vertex") r.fail("facet {}: expected 'vertex' or 'endloop', found '{}'", t, tok.empty() ? "the end of the file" : echo(tok));
       Eigen::Vector3d p;
       for (int k = 0; k < 3; ++k) p[k] = r.number(fmt::format("facet {} vertex {}", t, face.size()));
-      if (!p.allFinite()) r.fail("facet {} vertex {} is not finite ({}, {}, {})", t, face.size(), p.x(), p.y(), p.z());
+      if (!is_world_point(p)) r.fail("facet {} vertex {} ({}, {}, {}) {}", t, face.size(), p.x(), p.y(), p.z(), world_fault(p));
       face.push_back(merge.add(p));
     }
     if (face.size() < 3) r.fail("facet {} has {} vertices (at least 3 needed)", t, face.size());

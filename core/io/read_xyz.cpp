@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/io/formats.h"
 #include "core/io/text_reader.h"
+#include "core/limits.h"
 
 namespace quadrix::io {
 
@@ -37,7 +38,7 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
       r.fail("{} values but line {} has {} (all lines must have the same count)", n, first_line, columns);
     }
     const Eigen::Vector3d p(v[0], v[1], v[2]);
-    if (!p.allFinite()) r.fail("point ({} {} {}) is not finite", v[0], v[1], v[2]);
+    if (!is_world_point(p)) r.fail("point ({} {} {}) {}", v[0], v[1], v[2], world_fault(p));
     cloud.points.push_back(p);
     if (n == 6) {
       const Eigen::Vector3d nn(v[3], v[4], v[5]);

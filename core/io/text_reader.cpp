@@ -1,5 +1,6 @@
 #include "core/io/text_reader.h"
 
+#include <algorithm>
 #include <charconv>
 
 #include "core/error.h"
@@ -46,6 +47,12 @@ std::string_view TextReader::token() {
   }
   token_col_ = col_;
   while (col_ < line_.size() && !is_blank(line_[col_])) ++col_;
+  return line_.substr(token_col_, col_ - token_col_);
+}
+
+std::string_view TextReader::take(std::size_t n) {
+  token_col_ = col_;
+  col_ = std::min(line_.size(), col_ + n);
   return line_.substr(token_col_, col_ - token_col_);
 }
 

@@ -25,8 +25,13 @@ public:
   std::string_view token_across_lines();
   /// Whether the current line has no token left.
   bool at_line_end();
+  /// The current line (comment removed).
+  std::string_view line() const { return line_; }
   /// The unread rest of the current line (comment removed).
   std::string_view rest_of_line() const { return line_.substr(col_); }
+  /// The next n bytes of the current line (fewer at its end) as the current token, for fields
+  /// that are not blank-separated (`space directions: (1,0,0) …`, `KEY=VALUE`).
+  std::string_view take(std::size_t n);
 
   /// The next token of the line as a finite-or-not double / integer; `what` names it in the
   /// error ("vertex 3 x"): missing, not a number, or (integer) out of the int64 range.

@@ -20,6 +20,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -28,6 +29,7 @@
 
 #include "convert/tetmesh_io.h"
 #include "convert/volume.h"
+#include "core/bounds.h"
 #include "core/camera.h"
 #include "core/error.h"
 #include "core/model_io.h"
@@ -135,7 +137,7 @@ TEST_F(VolumeIo, MalformedVolumesAreFormatErrors) {
   expect_format([&] { read_volume(hdr("type: quaternion\ndimension: 3\nsizes: 2 3 2\ndata file: short.raw\n")); },
                 "quaternion");
   expect_format([&] { read_volume(hdr("type: uint8\ndimension: 3\nsizes: 2 x 2\ndata file: short.raw\n")); },
-                "'x' is not a number");
+                "'x' is not an integer");
   expect_format([&] { read_volume(hdr("type: uint8\ndimension: 3\nsizes: 2 3 2\nencoding: bzip2\ndata file: short.raw\n")); },
                 "bzip2");
   expect_format([&] { read_volume(write("n.nhdr", "P6\n")); }, "NRRD");
@@ -652,52 +654,52 @@ TEST_F(TetMeshIo, MalformedMeshesAndValuesNameFileAndLine) {
   expect_format([&] { read_tet_mesh(f); }, f, {"no 'End'"});
   // A count larger than the section: the next keyword is not a number.
   f = mesh(edit("Vertices\n5\n", "Vertices\n6\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 12", "'Triangles' is not a number", "entry 6 of 6"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":12:", "'Triangles' is not a number", "entry 6 of 6"});
   // Index out of range and zero index.
   f = mesh(edit("2 3 4 5 7\n", "2 3 4 9 7\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 21", "tetrahedron 2", "vertex index 9 is outside 1..5"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":21:", "tetrahedron 2", "vertex index 9 is outside 1..5"});
   f = mesh(edit("1 2 3 4 7\n", "1 2 0 4 7\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 20", "vertex index 0"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":20:", "vertex index 0"});
   // Non-finite coordinate.
   f = mesh(edit("1 0 0 1\n", "1 nan 0 1\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 8", "vertex 2", "non-finite"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":8:", "vertex 2", "non-finite"});
   f = mesh(edit("0 1 0 1\n", "0 1 inf 1\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 9", "non-finite"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":9:", "non-finite"});
   // Degenerate (coplanar and repeated-vertex) tetrahedra.
   f = mesh(edit("1 1 1 2  # apex", "0.5 0.5 0 2"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 21", "tetrahedron 2 (2 3 4 5) is degenerate"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":21:", "tetrahedron 2 (2 3 4 5) is degenerate"});
   f = mesh(edit("1 2 3 4 7\n", "1 2 3 2 7\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 20", "degenerate"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":20:", "degenerate"});
   // Header problems.
   f = mesh(edit("Dimension\n3", "Dimension\n2"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 3", "Dimension 2"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":4:", "Dimension 2"});
   f = mesh(edit("Corners", "Cornets"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 22", "unknown keyword 'Cornets'"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":22:", "unknown keyword 'Cornets'"});
   f = mesh(edit("Tetrahedra\n2\n", "Tetrahedra\n-2\n"));
-  expect_format([&] { read_tet_mesh(f); }, f, {"line 19", "'-2'"});
+  expect_format([&] { read_tet_mesh(f); }, f, {":19:", "'-2'"});
   // TetGen.
   write("t.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
   write("t.ele", "1 4 0\n0 0 1 2 3\n");
   expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.node", {"says 5 points, the file holds 4"});
   write("t.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n");
   write("t.ele", "1 4 0\n0 0 1 2 4\n");
-  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {"line 2", "vertex index 4 is outside 0..3"});
+  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {":2:", "vertex index 4 is outside 0..3"});
   write("t.ele", "1 4 0\n0 0 1 2\n");
-  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {"line 2", "4 numbers, a tetrahedron has 5"});
+  expect_format([&] { read_tet_mesh(dir_ / "t.ele"); }, dir_ / "t.ele", {":2:", "4 numbers, a tetrahedron has 5"});
   write("t.node", "4 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 nan 1\n");
-  expect_format([&] { read_tet_mesh(dir_ / "t.node"); }, dir_ / "t.node", {"line 5", "non-finite"});
+  expect_format([&] { read_tet_mesh(dir_ / "t.node"); }, dir_ / "t.node", {":5:", "non-finite"});
 
   // Values: wrong count (short, long), NaN, Inf, not a number.
   fs::path v = write("v.txt", "1 2\n3\n");
-  expect_format([&] { read_vertex_values(v, 5); }, v, {"3 values for 5 vertices", "line 3"});
+  expect_format([&] { read_vertex_values(v, 5); }, v, {"3 values for 5 vertices", ":2:"});
   v = write("v.txt", "1 2 3\n4 5\n# trailing\n6\n");
-  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 4", "more values than the mesh's 5 vertices"});
+  expect_format([&] { read_vertex_values(v, 5); }, v, {":4:", "more values than the mesh's 5 vertices"});
   v = write("v.txt", "1 2\n3 nan 5\n");
-  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 2", "value 4 ('nan', vertex 4) is not finite"});
+  expect_format([&] { read_vertex_values(v, 5); }, v, {":2:", "value 4 ('nan', vertex 4) is not finite"});
   v = write("v.txt", "1 2\n3 4\n-inf\n");
-  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 3", "not finite"});
+  expect_format([&] { read_vertex_values(v, 5); }, v, {":3:", "not finite"});
   v = write("v.txt", "1 2\n3 4,5\n");
-  expect_format([&] { read_vertex_values(v, 5); }, v, {"line 2", "'4,5' is not a number"});
+  expect_format([&] { read_vertex_values(v, 5); }, v, {":2:", "'4,5' is not a number"});
   EXPECT_THROW(read_tet_mesh(dir_ / "missing.mesh"), IoError);
   EXPECT_THROW(read_tet_mesh(dir_ / "mesh.obj"), InvalidInput);
 }
@@ -881,7 +883,7 @@ TEST_F(VolumeCli, ConvertVolumeTets) {
   r = quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --values " + quoted(dir_ / "short.txt") +
                   " --iso 0.5 -o " + quoted(out));
   EXPECT_EQ(r.code, 3) << r.out;
-  EXPECT_NE(r.out.find("short.txt: 3 values for 216 vertices"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("3 values for 216 vertices"), std::string::npos) << r.out;
   r = quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --values " + quoted(dir_ / "v.txt") +
                   " --iso 7 -o " + quoted(out));
   EXPECT_EQ(r.code, 3) << r.out;
@@ -890,12 +892,45 @@ TEST_F(VolumeCli, ConvertVolumeTets) {
   r = quadrix_run("convert volume --tets " + quoted(dir_ / "bad.mesh") + " --values " + quoted(dir_ / "v.txt") +
                   " --iso 0.5 -o " + quoted(out));
   EXPECT_EQ(r.code, 3) << r.out;
-  EXPECT_NE(r.out.find("line 8"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("bad.mesh:8:"), std::string::npos) << r.out;
   EXPECT_EQ(quadrix_run("convert volume --tets " + quoted(dir_ / "m.mesh") + " --iso 0.5 -o " + quoted(out)).code, 2);
   EXPECT_EQ(quadrix_run("convert volume --synth marschner-lobb --tets " + quoted(dir_ / "m.mesh") + " --values " +
                         quoted(dir_ / "v.txt") + " --iso 0.5 -o " + quoted(out))
                 .code,
             2);
+}
+
+// Extreme but finite grids are refused by the one world limit (core/limits.h), never turned into
+// infinite positions and an empty model.
+TEST(VolumeLimits, GridsPastTheWorldLimitAreRefused) {
+  Volume v = marschner_lobb_volume(5);
+  EXPECT_GT(convert_volume(v, {.iso = 0.5}).model.tets.size(), 0u);
+  for (const Vector3d& spacing : {Vector3d(1, 1e308, 1), Vector3d(1e12, 1, 1)}) {
+    v.spacing = spacing;
+    try {
+      convert_volume(v, {.iso = 0.5});
+      ADD_FAILURE() << "accepted spacing " << spacing.transpose();
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("largest world coordinate"), std::string::npos) << e.what();
+    }
+  }
+  v.spacing = Vector3d::Ones();
+  v.origin = Vector3d(0, 0, -1e300);
+  EXPECT_THROW(convert_volume(v, {.iso = 0.5}), InvalidInput);
+}
+
+// The tetrahedral-mesh readers apply the same limit and the same degeneracy rule as the model
+// reader (core/bounds.h kDegenerateTetrahedron).
+TEST_F(TetMeshIo, OneLimitForCoordinatesAndDegenerateTetrahedra) {
+  const auto mesh_with = [&](const std::string& apex) {
+    return write("l.mesh", "MeshVersionFormatted 1\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n" + apex +
+                               " 0\nTetrahedra\n1\n1 2 3 4 0\nEnd\n");
+  };
+  const double L3 = std::pow(std::sqrt(2.0), 3);  // longest edge √2; 6V = the apex height
+  EXPECT_EQ(read_tet_mesh(mesh_with(fmt::format("0.2 0.2 {:.17g}", 2 * kDegenerateTetrahedron * L3))).tets.size(), 1u);
+  expect_format([&] { read_tet_mesh(mesh_with(fmt::format("0.2 0.2 {:.17g}", 0.5 * kDegenerateTetrahedron * L3))); },
+                dir_ / "l.mesh", {":11:", "degenerate"});
+  expect_format([&] { read_tet_mesh(mesh_with("0.2 0.2 1e13")); }, dir_ / "l.mesh", {":8:", "largest world coordinate"});
 }
 
 }  // namespace

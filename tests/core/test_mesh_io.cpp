@@ -136,11 +136,11 @@ TEST(MeshIoData, FandiskOff) {
 namespace {
 PolygonMesh mixed_mesh() {
   // A pyramid with a quad base plus a pentagon fan to mix face sizes; awkward coordinates
-  // to check lossless printing.
+  // to check lossless printing (up to 1e12, the largest world coordinate: core/limits.h).
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1e3, 1e3);
   PolygonMesh m;
-  for (int i = 0; i < 9; ++i) m.vertices.emplace_back(u(rng), u(rng) * 1e-9, u(rng) * 1e12);
+  for (int i = 0; i < 9; ++i) m.vertices.emplace_back(u(rng), u(rng) * 1e-9, u(rng) * 1e9);
   m.vertices.emplace_back(0.1, 1.0 / 3.0, -0.0);
   m.add_face(std::vector<int>{0, 1, 2, 3});
   m.add_face(std::vector<int>{0, 4, 1});

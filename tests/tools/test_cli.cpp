@@ -506,6 +506,7 @@ TEST(Cli, MalformedCorpusGivesTheManifestsExitCodeAndMessage) {
     else if (kind == "volume") c.args = "convert volume " + f + " --iso 0.5 -o " + out;
     else if (kind == "tets") c.args = "convert volume --tets " + f + " --values " + q(root / "files" / "values4.txt") + " --iso 0.5 -o " + out;
     else if (kind == "skin") c.args = "convert skin " + f + " -o " + out;
+    else if (kind == "render") c.args = "render --backend cpu " + f + " --size 16x16 -o " + q(dir / "out.png");
     else FAIL() << "unknown command kind '" << kind << "' in: " << line;
     cases.push_back(c);
   }

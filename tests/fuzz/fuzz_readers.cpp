@@ -1,0 +1,98 @@
+// libFuzzer targets for every reader (one per build: -DQUADRIX_FUZZ_READER=NAME, see tools/fuzz.sh).
+// In-memory readers get the bytes; path-based readers get them through a file of the right
+// extension in a per-process folder. Every input must either parse or throw one of
+// core/error.h's errors; a crash, a sanitizer report or another exception is a finding.
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#ifndef QUADRIX_FUZZ_CORE_ONLY  // readers of core alone: linked without convert/
+#include "convert/balls.h"
+#include "convert/ellipsoids_csv.h"
+#include "convert/tetmesh_io.h"
+#include "convert/volume.h"
+#endif
+#include "core/error.h"
+#include "core/image.h"
+#include "core/implicit/expression.h"
+#include "core/io/formats.h"
+#include "core/model_io.h"
+
+#define QUADRIX_STR2(x) #x
+#define QUADRIX_STR(x) QUADRIX_STR2(x)
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path& folder() {
+  static const fs::path dir = [] {
+    fs::path d = fs::temp_directory_path() / ("quadrix-fuzz-" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+fs::path put(const std::string& name, std::string_view bytes) {
+  const fs::path p = folder() / name;
+  std::FILE* f = std::fopen(p.c_str(), "wb");
+  if (!f) std::abort();
+  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) std::abort();
+  std::fclose(f);
+  return p;
+}
+
+// Two files from one input: the part before the first "@@\n" and the part after it.
+std::pair<std::string_view, std::string_view> split(std::string_view bytes) {
+  const auto at = bytes.find("@@\n");
+  if (at == std::string_view::npos) return {bytes, {}};
+  return {bytes.substr(0, at), bytes.substr(at + 3)};
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace quadrix;
+  const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  const std::string_view reader = QUADRIX_STR(QUADRIX_FUZZ_READER);
+  try {
+    if (reader == "off") io::read_off(bytes, "fuzz.off");
+    else if (reader == "obj") io::read_obj(bytes, "fuzz.obj");
+    else if (reader == "stl") io::read_stl(bytes, "fuzz.stl");
+    else if (reader == "ply") io::read_ply(std::string(bytes), "fuzz.ply");
+    else if (reader == "xyz") io::read_xyz(bytes, "fuzz.xyz", false);
+    else if (reader == "pts") io::read_xyz(bytes, "fuzz.pts", true);
+    else if (reader == "qxm") read_model(put("fuzz.qxm", bytes));
+    else if (reader == "slim2t") read_slim2t(put("fuzz.slim2t", bytes));
+    else if (reader == "png") read_png(put("fuzz.png", bytes));
+    else if (reader == "pfm") read_pfm(put("fuzz.pfm", bytes));
+    else if (reader == "implicit") implicit::Expression::parse(bytes);
+#ifndef QUADRIX_FUZZ_CORE_ONLY
+    else if (reader == "mesh") read_tet_mesh(put("fuzz.mesh", bytes));
+    else if (reader == "tetgen") {  // NODE@@\nELE
+      const auto [node, ele] = split(bytes);
+      put("fuzz.ele", ele);
+      read_tet_mesh(put("fuzz.node", node));
+    } else if (reader == "values") read_vertex_values(put("fuzz.txt", bytes), 8);
+    else if (reader == "nrrd") read_volume(put("fuzz.nrrd", bytes));
+    else if (reader == "nhdr") {  // NHDR@@\nDATA, the data file named "fuzz.raw" or "fuzz.raw.gz"
+      const auto [head, body] = split(bytes);
+      put("fuzz.raw", body);
+      read_volume(put("fuzz.nhdr", head));
+    } else if (reader == "inr") read_volume(put("fuzz.inr", bytes));
+    else if (reader == "inrgz") read_volume(put("fuzz.inr.gz", bytes));
+    else if (reader == "cin") read_balls(put("fuzz.cin", bytes), {});
+    else if (reader == "pdb") read_balls(put("fuzz.pdb", bytes), {});
+    else if (reader == "csv") read_ellipsoids_csv(put("fuzz.csv", bytes));
+#endif
+    else std::abort();  // a reader this target does not know
+  } catch (const quadrix::Error&) {
+  }
+  return 0;
+}
