@@ -94,7 +94,8 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).
   RenderOptions exact = o;
   exact.cull = o.cull && backface_culling_is_exact(I.box, I.closed, camera);
-  const Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
+  const bool after_tets = I.glyph.needed(o) || I.mesh.needed(o) || I.implicit.needed(o) || I.slim.needed(o);
+  const Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull, after_tets};
 
   glViewport(0, 0, I.targets.width, I.targets.height);
   glBindFramebuffer(GL_FRAMEBUFFER, I.targets.gbuffer.id());
@@ -122,6 +123,11 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   glFinish();
   gl::check_error("draw");
   if (o.statistics) I.statistics.read(st);
+  if (I.tet.needed(o)) {
+    st.chunks = I.tet.chunk_count();
+    st.chunks_culled = I.tet.culled_chunks();
+    st.culled_in_chunks = I.tet.culled_in_chunks();
+  }
   st.ms_total = ms_since(start);
   return st;
 }

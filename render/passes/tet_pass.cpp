@@ -1,6 +1,7 @@
 #include "render/passes/tet_pass.h"
 
 #include <array>
+#include <cstdint>
 
 #include <fmt/format.h>
 
@@ -51,15 +52,24 @@ GpuTet pack(const TetPatch& t, std::int32_t id) {
 
 }  // namespace
 
-TetPass::TetPass() : program_("tet", shader_source("tet.vert"), shader_source("tet.frag")) {}
+TetPass::TetPass()
+    : program_("tet", shader_source("tet.vert"), shader_source("tet.frag"), "#define TET_EXACT_DEPTH 1\n"),
+      early_program_("tet (entry-face depth)", shader_source("tet.vert"), shader_source("tet.frag")),
+      depth_program_("depth from G-buffer", shader_source("fullscreen.vert"), shader_source("depth_from_gbuffer.frag")) {}
 
 void TetPass::upload(std::span<const TetPatch> tets) {
   if (tets.size() > kMaxPrimitiveIndex + 1)
     throw InvalidInput(fmt::format("{} tetrahedron patches: the GL renderer draws at most 2^{}", tets.size(),
                                    kPrimitiveIndexBits));
+  std::vector<Box3> boxes;
+  boxes.reserve(tets.size());
+  for (const TetPatch& t : tets) boxes.push_back(bounds(t));
+  chunks_ = make_chunks(boxes);
+  selection_ = {};
+  // GPU slots in chunk order; each patch keeps its own id.
   std::vector<GpuTet> data;
   data.reserve(tets.size());
-  for (std::size_t i = 0; i < tets.size(); ++i) data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i)));
+  for (const std::uint32_t i : chunks_.order) data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i)));
   tets_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuTet)), data.data());
   count_ = data.size();
   // Faces with outward counter-clockwise order for a positively oriented tetrahedron (pack()
@@ -75,28 +85,67 @@ void TetPass::upload(std::span<const TetPatch> tets) {
 
 void TetPass::run(const Frame& f) {
   const RenderOptions& o = f.options;
+  selection_ = select_chunks(chunks_, f.camera.world);
+  const gl::Program& program = o.tet_early_depth ? early_program_ : program_;
   begin_gbuffer_draw(f);
   // Front faces of each tetrahedron only: every covered pixel gets exactly one ray.
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);
-  set_camera_uniforms(program_, f.camera);
-  program_.set("u_cull", o.cull ? 1 : 0);
-  program_.set("u_count_stats", o.statistics ? 1 : 0);
-  program_.set("u_clip_eps", o.clip_eps);
+  set_camera_uniforms(program, f.camera);
+  program.set("u_cull", o.cull ? 1 : 0);
+  program.set("u_count_stats", o.statistics ? 1 : 0);
+  program.set("u_clip_eps", o.clip_eps);
+  program.set("u_base", 0);
   // Statistics frames draw instanced so each tetrahedron is counted exactly once; other frames
   // indexed, 4 vertex-shader runs per tetrahedron instead of 12 (measured on llvmpipe).
-  program_.set("u_indexed", o.statistics ? 0 : 1);
-  program_.use();
+  program.set("u_indexed", o.statistics ? 0 : 1);
+  program.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tets_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
+  // The visible chunks, nearest first.
   if (o.statistics) {
     glBindVertexArray(f.empty_vao);
-    glDrawArraysInstanced(GL_TRIANGLES, 0, 12, static_cast<GLsizei>(count_));
+    for (const std::uint32_t c : selection_.chunks) {
+      program.set("u_base", static_cast<int>(chunks_.first[c]));
+      glDrawArraysInstanced(GL_TRIANGLES, 0, 12, static_cast<GLsizei>(chunks_.count[c]));
+    }
   } else {
+    draw_counts_.clear();
+    draw_offsets_.clear();
+    for (const std::uint32_t c : selection_.chunks) {
+      draw_counts_.push_back(static_cast<GLsizei>(12 * chunks_.count[c]));
+      draw_offsets_.push_back(reinterpret_cast<const void*>(std::uintptr_t{12} * chunks_.first[c] * sizeof(std::uint32_t)));
+    }
     glBindVertexArray(vao_.id());
-    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(12 * count_), GL_UNSIGNED_INT, nullptr);
+    glMultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
+                        static_cast<GLsizei>(draw_counts_.size()));
   }
+  if (o.tet_early_depth && f.depth_needed_after_tets) depth_from_gbuffer(f);
+}
+
+void TetPass::depth_from_gbuffer(const Frame& f) {
+  const FrameTargets& t = f.targets;
+  if (!depth_fbo_ || depth_generation_ != t.generation) {
+    GLuint fb = 0;
+    glCreateFramebuffers(1, &fb);
+    depth_fbo_ = gl::Framebuffer(fb);
+    depth_generation_ = t.generation;
+    glNamedFramebufferTexture(fb, GL_DEPTH_ATTACHMENT, t.depth.id(), 0);
+    glNamedFramebufferDrawBuffer(fb, GL_NONE);
+    if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GlError("depth-only framebuffer incomplete");
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, depth_fbo_.id());
+  glDisable(GL_CULL_FACE);
+  glDepthFunc(GL_ALWAYS);
+  set_camera_uniforms(depth_program_, f.camera);
+  depth_program_.use();
+  glBindTextureUnit(0, t.normal_depth.id());
+  glBindVertexArray(f.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthFunc(GL_LESS);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.gbuffer.id());
 }
 
 }  // namespace quadrix::render

@@ -24,6 +24,7 @@ uniform float u_target_distance;   // ‖target − eye‖: the target is at (0,
 uniform int u_cull;        // per-quadric and per-fragment backface culling
 uniform int u_count_stats;
 uniform int u_indexed;
+uniform int u_base;         // instanced: the first tetrahedron of this draw
 
 out vec3 v_o;
 out vec3 v_dir;
@@ -43,7 +44,7 @@ void main() {
   // Indexed: 4 vertices per tetrahedron (gl_VertexID = 4·tet + corner) shared by its 4 faces
   // through the element buffer, so each corner is shaded once, not three times. Instanced (the
   // statistics frame): 12 vertices per instance, each counted exactly once.
-  int tet = u_indexed != 0 ? gl_VertexID >> 2 : gl_InstanceID;
+  int tet = u_indexed != 0 ? gl_VertexID >> 2 : u_base + gl_InstanceID;
   int k = u_indexed != 0 ? gl_VertexID & 3 : kFace[gl_VertexID];
   Tet t = tets[tet];
   mat3 A = mat3(t.q0.x, t.q0.w, t.q1.y,
