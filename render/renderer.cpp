@@ -68,7 +68,8 @@ Renderer::~Renderer() = default;
 void Renderer::set_model(const Model& model) { set_model(model, AmpOptions{}); }
 
 void Renderer::set_model(const Model& model, const AmpOptions& amp) {
-  impl_->tet.upload(model.tets);
+  const auto tetrahedra = model.metadata.find("tetrahedra");
+  impl_->tet.upload(model.tets, tetrahedra != model.metadata.end() && tetrahedra->second == "tessellation");
   impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model.slims);
   impl_->box = bounds(model);
@@ -127,6 +128,8 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
     st.chunks = I.tet.chunk_count();
     st.chunks_culled = I.tet.culled_chunks();
     st.culled_in_chunks = I.tet.culled_in_chunks();
+    st.chunks_occluded = I.tet.occluded_chunks();
+    st.occluded_in_chunks = I.tet.occluded_in_chunks();
   }
   st.ms_total = ms_since(start);
   return st;

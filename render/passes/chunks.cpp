@@ -86,4 +86,51 @@ ChunkSelection select_chunks(const Chunks& chunks, const Camera& cam) {
   return sel;
 }
 
+DepthTiles depth_tiles(std::span<const float> depth, int width, int height, int tile) {
+  DepthTiles t;
+  t.width = width, t.height = height, t.tile = tile;
+  t.tiles_x = (width + tile - 1) / tile, t.tiles_y = (height + tile - 1) / tile;
+  t.max_depth.assign(static_cast<std::size_t>(t.tiles_x) * t.tiles_y, 0.0f);
+  for (int y = 0; y < height; ++y) {
+    float* row = t.max_depth.data() + static_cast<std::size_t>(y / tile) * t.tiles_x;
+    const float* d = depth.data() + static_cast<std::size_t>(y) * width;
+    for (int x = 0; x < width; ++x) {
+      // NaN (never written) counts as the far plane.
+      const float v = d[x] == d[x] ? d[x] : 1.0f;
+      row[x / tile] = std::max(row[x / tile], v);
+    }
+  }
+  return t;
+}
+
+bool box_occluded(const Box3& b, const Camera& cam, const DepthTiles& t) {
+  if (t.tiles_x == 0) return false;
+  const Eigen::Matrix4d V = cam.view(), P = cam.projection();
+  const Eigen::Matrix3d R = V.topLeftCorner<3, 3>();
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, nearest = INFINITY;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d w((k & 1) ? b.max.x() : b.min.x(), (k & 2) ? b.max.y() : b.min.y(),
+                            (k & 4) ? b.max.z() : b.min.z());
+    const Eigen::Vector3d p = R * (w - cam.eye);
+    const double depth = -p.z();
+    if (!(depth > cam.near_plane)) return false;
+    const double px = (0.5 * P(0, 0) * p.x() / depth + 0.5) * t.width;
+    const double py = (0.5 * P(1, 1) * p.y() / depth + 0.5) * t.height;
+    x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+    nearest = std::min(nearest, 0.5 * (P(2, 2) * p.z() + P(2, 3)) / depth + 0.5);
+  }
+  // Pixels whose centres the bound may cover, one more on each side for rasterisation rules.
+  const int ix0 = std::max(0, static_cast<int>(std::floor(x0)) - 1);
+  const int ix1 = std::min(t.width - 1, static_cast<int>(std::ceil(x1)) + 1);
+  const int iy0 = std::max(0, static_cast<int>(std::floor(y0)) - 1);
+  const int iy1 = std::min(t.height - 1, static_cast<int>(std::ceil(y1)) + 1);
+  if (ix0 > ix1 || iy0 > iy1) return true;  // covers no pixel
+  // A margin of a few float steps of the depth buffer.
+  const double limit = nearest - 1e-6;
+  for (int ty = iy0 / t.tile; ty <= iy1 / t.tile; ++ty)
+    for (int tx = ix0 / t.tile; tx <= ix1 / t.tile; ++tx)
+      if (!(double(t.max_depth[static_cast<std::size_t>(ty) * t.tiles_x + tx]) < limit)) return false;
+  return true;
+}
+
 }  // namespace quadrix::render

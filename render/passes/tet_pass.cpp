@@ -57,7 +57,8 @@ TetPass::TetPass()
       early_program_("tet (entry-face depth)", shader_source("tet.vert"), shader_source("tet.frag")),
       depth_program_("depth from G-buffer", shader_source("fullscreen.vert"), shader_source("depth_from_gbuffer.frag")) {}
 
-void TetPass::upload(std::span<const TetPatch> tets) {
+void TetPass::upload(std::span<const TetPatch> tets, bool tessellation) {
+  tessellation_ = tessellation;
   if (tets.size() > kMaxPrimitiveIndex + 1)
     throw InvalidInput(fmt::format("{} tetrahedron patches: the GL renderer draws at most 2^{}", tets.size(),
                                    kPrimitiveIndexBits));
@@ -66,6 +67,8 @@ void TetPass::upload(std::span<const TetPatch> tets) {
   for (const TetPatch& t : tets) boxes.push_back(bounds(t));
   chunks_ = make_chunks(boxes);
   selection_ = {};
+  drawn_last_.assign(chunks_.size(), 0);
+  has_history_ = false;
   // GPU slots in chunk order; each patch keeps its own id.
   std::vector<GpuTet> data;
   data.reserve(tets.size());
@@ -86,7 +89,8 @@ void TetPass::upload(std::span<const TetPatch> tets) {
 void TetPass::run(const Frame& f) {
   const RenderOptions& o = f.options;
   selection_ = select_chunks(chunks_, f.camera.world);
-  const gl::Program& program = o.tet_early_depth ? early_program_ : program_;
+  const bool early_depth = o.tet_early_depth && tessellation_;
+  const gl::Program& program = early_depth ? early_program_ : program_;
   begin_gbuffer_draw(f);
   // Front faces of each tetrahedron only: every covered pixel gets exactly one ray.
   glEnable(GL_CULL_FACE);
@@ -103,25 +107,65 @@ void TetPass::run(const Frame& f) {
   program.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tets_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
-  // The visible chunks, nearest first.
-  if (o.statistics) {
+  // The visible chunks, nearest first. With occlusion: first those drawn last frame (or, with
+  // no history, the nearest eighth), then the rest that the depth drawn so far does not hide.
+  const auto& visible = selection_.chunks;
+  if (!o.tet_occlusion || visible.size() < kMinChunksForOcclusion) {
+    draw_chunks(f, program, visible);
+  } else {
+    std::vector<std::uint32_t> first, rest;
+    const std::size_t guess = std::max<std::size_t>(1, visible.size() / 8);
+    for (std::size_t i = 0; i < visible.size(); ++i)
+      ((has_history_ ? drawn_last_[visible[i]] != 0 : i < guess) ? first : rest).push_back(visible[i]);
+    draw_chunks(f, program, first);
+    const DepthTiles tiles = read_depth_tiles(f.targets);
+    const Camera& cam = f.camera.world;
+    std::fill(drawn_last_.begin(), drawn_last_.end(), std::uint8_t{0});
+    // Chunks drawn in the first round that turn out hidden are not guessed again next frame.
+    for (const std::uint32_t c : first) drawn_last_[c] = !box_occluded(chunks_.boxes[c], cam, tiles);
+    std::vector<std::uint32_t> shown;
+    for (const std::uint32_t c : rest) {
+      if (box_occluded(chunks_.boxes[c], cam, tiles)) {
+        ++selection_.occluded_chunks;
+        selection_.occluded_primitives += chunks_.count[c];
+      } else {
+        shown.push_back(c);
+        drawn_last_[c] = 1;
+      }
+    }
+    draw_chunks(f, program, shown);
+    has_history_ = true;
+  }
+  if (early_depth && f.depth_needed_after_tets) depth_from_gbuffer(f);
+}
+
+void TetPass::draw_chunks(const Frame& f, const gl::Program& program, std::span<const std::uint32_t> chunks) {
+  if (chunks.empty()) return;
+  if (f.options.statistics) {
+    // Instanced, so each tetrahedron's faces are counted exactly once.
     glBindVertexArray(f.empty_vao);
-    for (const std::uint32_t c : selection_.chunks) {
+    for (const std::uint32_t c : chunks) {
       program.set("u_base", static_cast<int>(chunks_.first[c]));
       glDrawArraysInstanced(GL_TRIANGLES, 0, 12, static_cast<GLsizei>(chunks_.count[c]));
     }
-  } else {
-    draw_counts_.clear();
-    draw_offsets_.clear();
-    for (const std::uint32_t c : selection_.chunks) {
-      draw_counts_.push_back(static_cast<GLsizei>(12 * chunks_.count[c]));
-      draw_offsets_.push_back(reinterpret_cast<const void*>(std::uintptr_t{12} * chunks_.first[c] * sizeof(std::uint32_t)));
-    }
-    glBindVertexArray(vao_.id());
-    glMultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
-                        static_cast<GLsizei>(draw_counts_.size()));
+    return;
   }
-  if (o.tet_early_depth && f.depth_needed_after_tets) depth_from_gbuffer(f);
+  draw_counts_.clear();
+  draw_offsets_.clear();
+  for (const std::uint32_t c : chunks) {
+    draw_counts_.push_back(static_cast<GLsizei>(12 * chunks_.count[c]));
+    draw_offsets_.push_back(reinterpret_cast<const void*>(std::uintptr_t{12} * chunks_.first[c] * sizeof(std::uint32_t)));
+  }
+  glBindVertexArray(vao_.id());
+  glMultiDrawElements(GL_TRIANGLES, draw_counts_.data(), GL_UNSIGNED_INT, draw_offsets_.data(),
+                      static_cast<GLsizei>(draw_counts_.size()));
+}
+
+DepthTiles TetPass::read_depth_tiles(const FrameTargets& t) {
+  depth_pixels_.resize(static_cast<std::size_t>(t.width) * t.height);
+  glGetTextureImage(t.depth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, static_cast<GLsizei>(depth_pixels_.size() * sizeof(float)),
+                    depth_pixels_.data());
+  return depth_tiles(depth_pixels_, t.width, t.height);
 }
 
 void TetPass::depth_from_gbuffer(const Frame& f) {
