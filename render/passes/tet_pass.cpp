@@ -21,7 +21,8 @@ struct GpuTet {
 };
 static_assert(sizeof(GpuTet) == 144);
 
-GpuTet pack(const TetPatch& t, std::int32_t id) {
+// `origin`: the chunk's origin, which the stored centre is relative to.
+GpuTet pack(const TetPatch& t, std::int32_t id, const Eigen::Vector3d& origin) {
   const Eigen::Vector3d c = t.centroid();
   std::array<Eigen::Vector3d, 4> p = t.corners;
   if ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) < 0) std::swap(p[1], p[2]);
@@ -30,7 +31,7 @@ GpuTet pack(const TetPatch& t, std::int32_t id) {
   // Relative to the centroid already; scaled by s so local coordinates are O(1).
   const Quadric local = t.quadric.to_local(Eigen::Vector3d::Zero(), s).normalized();
   GpuTet g{};
-  const Split cs = split(c);
+  const Split cs = split(c - origin);
   for (int i = 0; i < 3; ++i) {
     g.centre_hi[i] = cs.hi[i];
     g.centre_lo[i] = cs.lo[i];
@@ -65,14 +66,22 @@ void TetPass::upload(std::span<const TetPatch> tets, bool tessellation) {
   std::vector<Box3> boxes;
   boxes.reserve(tets.size());
   for (const TetPatch& t : tets) boxes.push_back(bounds(t));
-  chunks_ = make_chunks(boxes);
+  chunks_ = make_chunks(boxes, {.chunk_size = kChunkSize});
   selection_ = {};
   drawn_last_.assign(chunks_.size(), 0);
   has_history_ = false;
   // GPU slots in chunk order; each patch keeps its own id.
   std::vector<GpuTet> data;
   data.reserve(tets.size());
-  for (const std::uint32_t i : chunks_.order) data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i)));
+  for (std::size_t c = 0; c < chunks_.size(); ++c)
+    for (std::uint32_t s = chunks_.first[c]; s < chunks_.first[c] + chunks_.count[c]; ++s) {
+      const std::uint32_t i = chunks_.order[s];
+      data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i), chunks_.boxes[c].centre()));
+    }
+  chunk_offsets_ = chunks_.size() ? gl::make_buffer(static_cast<GLsizeiptr>(chunks_.size() * 4 * sizeof(float)), nullptr,
+                                                    GL_DYNAMIC_STORAGE_BIT)
+                                  : gl::Buffer{};
+  offsets_.assign(4 * chunks_.size(), 0.0f);
   tets_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuTet)), data.data());
   count_ = data.size();
   // Faces with outward counter-clockwise order for a positively oriented tetrahedron (pack()
@@ -97,6 +106,15 @@ void TetPass::run(const Frame& f) {
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);
   set_camera_uniforms(program, f.camera);
+  // Each chunk's origin relative to the view target, in double, then float.
+  for (std::size_t c = 0; c < chunks_.size(); ++c) {
+    const Eigen::Vector3d d = chunks_.boxes[c].centre() - f.camera.world.target;
+    for (int k = 0; k < 3; ++k) offsets_[4 * c + k] = static_cast<float>(d[k]);
+  }
+  if (!offsets_.empty())
+    glNamedBufferSubData(chunk_offsets_.id(), 0, static_cast<GLsizeiptr>(offsets_.size() * sizeof(float)), offsets_.data());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, chunk_offsets_.id());
+  program.set("u_chunk_size", static_cast<int>(kChunkSize));
   program.set("u_cull", o.cull ? 1 : 0);
   program.set("u_count_stats", o.statistics ? 1 : 0);
   program.set("u_clip_eps", o.clip_eps);

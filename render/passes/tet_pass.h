@@ -37,6 +37,7 @@ private:
   DepthTiles read_depth_tiles(const FrameTargets& targets);
   /// Below this many visible chunks the occlusion round trip is not worth its stall.
   static constexpr std::size_t kMinChunksForOcclusion = 64;
+  static constexpr std::size_t kChunkSize = 1024;
 
   gl::Program program_, early_program_, depth_program_;
   Chunks chunks_;
@@ -49,6 +50,8 @@ private:
   bool has_history_ = false;
   bool tessellation_ = false;
   std::vector<float> depth_pixels_;
+  gl::Buffer chunk_offsets_;        // per chunk: origin − view target (vec4), rewritten each frame
+  std::vector<float> offsets_;
   gl::Buffer tets_;
   gl::Buffer indices_;     // 12 per tetrahedron: its 4 faces over vertices 4·t + corner
   gl::VertexArray vao_;    // holds indices_ as its element buffer
