@@ -1,10 +1,10 @@
 // Tetrahedron pass, fragment stage ([Stoll06] §5): solve along x(λ) = o + λ·v from the entry
 // point on the front face, visit roots nearest first (eq. 15), clip against the four planes,
-// write the G-buffer and a depth. TET_EXACT_DEPTH: the hit's depth (never nearer than the face: depth_greater keeps
-// early-Z conservative where the driver honours it). Otherwise the face's own depth is tested and
-// written, which needs no gl_FragDepth write, so every driver tests it before the shader runs:
-// exact for the tetrahedra of one tessellation, whose order along a ray is that of their entry
-// faces; a later pass turns the G-buffer's eye depth into the depth buffer.
+// write the G-buffer and a depth. TET_EXACT_DEPTH: the hit's depth (never nearer than the face:
+// depth_greater keeps early-Z conservative where the driver honours it). Otherwise the face's own
+// depth is tested and written, which needs no gl_FragDepth write, so every driver tests it before
+// the shader runs: exact for the tetrahedra of one tessellation, whose order along a ray is that
+// of their entry faces; a later pass turns the G-buffer's eye depth into the depth buffer.
 in vec3 v_o;
 in vec3 v_dir;
 in vec3 v_Aob;
