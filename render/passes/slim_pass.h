@@ -17,6 +17,10 @@ public:
   std::size_t count() const { return count_; }
   /// The packed balls (SSBO, `Ball` in slim.vert).
   GLuint balls() const { return balls_.id(); }
+  /// The balls' origin relative to the view target (double, then float): positions relative to eye.
+  Eigen::Vector3f origin_minus_target(const Frame& frame) const {
+    return (origin_ - frame.camera.world.target).cast<float>();
+  }
   bool needed(const RenderOptions&) const override { return count_ > 0; }
   void run(const Frame& frame) override;
 
@@ -31,6 +35,7 @@ private:
   gl::Program visibility_, accumulate_, resolve_;
   gl::Buffer balls_;
   std::size_t count_ = 0;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
   gl::Texture acc_normal_weight_, acc_depth_colour_;
   gl::Framebuffer acc_fbo_;
   bool acc_half_ = false;

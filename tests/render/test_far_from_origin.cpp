@@ -1,4 +1,5 @@
-// Relative-to-eye rendering: tetrahedron patches (per-chunk origins) and meshes, moved 10⁴ and 10⁶ of its diagonals from the
+// Relative-to-eye rendering: tetrahedron patches (per-chunk origins), SLIM patches and glyphs
+// (one origin per model) and meshes, moved 10⁴ and 10⁶ of its diagonals from the
 // origin with the camera framed on it, renders as the CPU reference (double) does: depth p99
 // ≤ 1e-5 of the depth range, normals p99 ≤ 0.1°, coverage agreement ≥ 99.9 % away from the
 // silhouette. Meshes (not in the CPU reference) against their own render at the origin.
@@ -75,9 +76,7 @@ TEST_P(FarFromOrigin, MatchesTheCpuReference) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinds, FarFromOrigin,
-                         // SLIM patches and glyphs still send split hi/lo positions (not yet per-chunk
-                         // origins); measured at 10⁶ diagonals: depth p99 0.25 / 0.66, so not listed.
-                         ::testing::Values("hyperboloid1", "quad-blob"),
+                         ::testing::Values("hyperboloid1", "quad-blob", "slim-sphere", "glyphs"),
                          [](const auto& info) {
                            std::string n = info.param;
                            for (char& ch : n)
