@@ -109,7 +109,8 @@ Renderer::~Renderer() = default;
 void Renderer::set_model(const Model& model) { set_model(model, AmpOptions{}); }
 
 void Renderer::set_model(const Model& model, const AmpOptions& amp) {
-  impl_->tet.upload(model.tets);
+  const auto tetrahedra = model.metadata.find("tetrahedra");
+  impl_->tet.upload(model.tets, tetrahedra != model.metadata.end() && tetrahedra->second == "tessellation");
   impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model.slims);
   impl_->box = bounds(model);
@@ -142,6 +143,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   Box3 scene = I.box;
   if (I.mesh.needed(o)) scene.extend(I.mesh_box);
   Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
+  frame.depth_needed_after_tets = I.glyph.needed(o) || I.mesh.needed(o) || I.implicit.needed(o) || I.slim.needed(o);
   frame.scene_radius = scene.empty() ? 1.0f : static_cast<float>(0.5 * scene.diagonal());
   ShadowMap shadow;
   if (o.shadows && !scene.empty()) {
@@ -180,6 +182,13 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   glFinish();
   gl::check_error("draw");
   if (o.statistics) I.statistics.read(st);
+  if (I.tet.needed(o)) {
+    st.chunks = I.tet.chunk_count();
+    st.chunks_culled = I.tet.culled_chunks();
+    st.culled_in_chunks = I.tet.culled_in_chunks();
+    st.chunks_occluded = I.tet.occluded_chunks();
+    st.occluded_in_chunks = I.tet.occluded_in_chunks();
+  }
   st.ms_total = ms_since(start);
   return st;
 }

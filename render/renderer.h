@@ -44,6 +44,16 @@ struct RenderOptions {
   bool slim_tight_splats = true;
   /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
   bool slim_outlines = false;
+  /// Tetrahedra drawn nearest chunk first, testing and writing their entry faces' depth, so the
+  /// depth test runs before the fragment shader on every driver. Exact for the tetrahedra of one
+  /// tessellation (any two overlap in at most a face), so used only for models whose metadata says
+  /// so (`comment tetrahedra tessellation`, written by `convert volume`). Otherwise, or false: each
+  /// fragment writes its hit's depth (the depth test runs after the shader on llvmpipe).
+  bool tet_early_depth = true;
+  /// Tetrahedron chunks hidden behind what the frame has drawn are skipped: the chunks drawn last
+  /// frame go first, the depth buffer is read back as tiles, and every other chunk whose box lies
+  /// behind all its tiles is not drawn (exact: nothing skipped could show).
+  bool tet_occlusion = true;
   /// Debug: glyphs write every fragment of their proxy polygon, flat, without ray casting.
   bool glyph_proxies = false;
   /// Shadows of the key light (core/lighting.h) from a shadow map of every primitive kind, with
@@ -61,6 +71,11 @@ struct RenderOptions {
 struct FrameStats {
   std::uint64_t primitives = 0;        ///< tetrahedron patches, SLIM balls and glyphs submitted
   std::uint64_t culled = 0;            ///< removed by the per-quadric test (statistics only)
+  std::uint64_t chunks = 0;            ///< spatial chunks of tetrahedron patches
+  std::uint64_t chunks_culled = 0;     ///< of those, skipped whole (outside the view frustum)
+  std::uint64_t culled_in_chunks = 0;  ///< patches in the skipped chunks (not in `culled`)
+  std::uint64_t chunks_occluded = 0;   ///< tetrahedron chunks skipped as hidden (tet_occlusion)
+  std::uint64_t occluded_in_chunks = 0;  ///< patches in those chunks
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
   std::uint64_t slim_splat_fragments = 0;  ///< SLIM pass 1 fragments: the splats' area [Toledo04] A_RTA

@@ -29,16 +29,21 @@ struct Row {
   std::string name;
   double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
+  std::uint64_t chunks = 0, chunks_culled = 0, culled_in_chunks = 0;  // tetrahedron chunks
+  std::uint64_t chunks_occluded = 0, occluded_in_chunks = 0;
   double slim_waste = 0;
   double glyph_waste = 0;  // glyph proxy fragments outside their glyph over those run
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
-            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false) {
+            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false,
+            bool tet_early_depth = true, bool tet_occlusion = true) {
   render::RenderOptions o;
+  o.tet_occlusion = tet_occlusion;
   o.cull = cull;
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
+  o.tet_early_depth = tet_early_depth;
   o.slim_tight_splats = tight_splats;
   o.slim_offset = static_cast<float>(slim_offset);
   o.statistics = true;
@@ -47,6 +52,11 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   Row row{name};
   row.primitives = st.primitives;
   row.culled = st.culled;
+  row.chunks = st.chunks;
+  row.chunks_culled = st.chunks_culled;
+  row.culled_in_chunks = st.culled_in_chunks;
+  row.chunks_occluded = st.chunks_occluded;
+  row.occluded_in_chunks = st.occluded_in_chunks;
   row.fragments = st.fragments;
   row.slim_waste = st.slim_waste();
   row.glyph_waste = st.glyph_waste();
@@ -187,6 +197,12 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           if (!model.glyphs.empty())
                             rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
                                                    slim_offset_of(model), true, true));
+                          if (!model.tets.empty()) {  // without chunk occlusion; with each fragment writing its hit's depth
+                            rows.push_back(measure("quadrics, no occlusion", r, cam, true, a->frames,
+                                                   slim_offset_of(model), true, false, true, false));
+                            rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
+                                                   slim_offset_of(model), true, false, false, false));
+                          }
                           if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
                                                    slim_offset_of(model), false));
@@ -216,7 +232,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                             {"camera", camera_json(cam)}};
                         const std::string model_name = std::filesystem::path(a->input).stem().string();
                         std::string csv = "model,configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
-                                          "covered_pixels,invocations_per_covered_pixel,slim_splat_waste,glyph_proxy_waste\n";
+                                          "covered_pixels,invocations_per_covered_pixel,slim_splat_waste,glyph_proxy_waste,chunks,chunks_culled,"
+                                          "culled_in_chunks,chunks_occluded,occluded_in_chunks\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
@@ -227,16 +244,25 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"covered_pixels", r.covered},
                                                {"invocations_per_covered_pixel", r.invocations_per_covered()},
                                                {"slim_splat_waste", r.slim_waste},
-                                               {"glyph_proxy_waste", r.glyph_waste}});
-                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f}\n", model_name, r.name,
-                                             r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments, r.covered,
-                                             r.invocations_per_covered(), r.slim_waste, r.glyph_waste);
+                                               {"glyph_proxy_waste", r.glyph_waste}, {"chunks", r.chunks},
+                                               {"chunks_culled", r.chunks_culled},
+                                               {"culled_in_chunks", r.culled_in_chunks},
+                                               {"chunks_occluded", r.chunks_occluded},
+                                               {"occluded_in_chunks", r.occluded_in_chunks}});
+                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f},{},{},{},{},{}\n", model_name,
+                                             r.name, r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments,
+                                             r.covered, r.invocations_per_covered(), r.slim_waste, r.glyph_waste,
+                                             r.chunks, r.chunks_culled, r.culled_in_chunks, r.chunks_occluded,
+                                             r.occluded_in_chunks);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
                                       "shading %.1f)  %7llu culled  %6.2f invocations/covered px",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
                                       r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
                           if (!model.slims.empty()) std::printf("  waste %.1f %%", 100.0 * r.slim_waste);
                           if (!model.glyphs.empty()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
+                          if (r.chunks)
+                            std::printf("  chunks %llu: %llu outside, %llu hidden", (unsigned long long)r.chunks,
+                                        (unsigned long long)r.chunks_culled, (unsigned long long)r.chunks_occluded);
                           std::printf("\n");
                         }
                         j["ratio_culling_off_over_on"] = rows[1].ms_median / rows[0].ms_median;
@@ -249,9 +275,15 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         const Row* ball = row_named("quadrics, ball splats");
                         if (tri) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / tri->ms_median;
                         if (ball) j["ratio_ball_over_tight_splats"] = ball->ms_median / rows[0].ms_median;
+                        const Row* hit_depth = row_named("quadrics, hit depth");
+                        const Row* no_occ = row_named("quadrics, no occlusion");
+                        if (hit_depth) j["ratio_hit_depth_over_early_depth"] = hit_depth->ms_median / rows[0].ms_median;
+                        if (no_occ) j["ratio_no_occlusion_over_occlusion"] = no_occ->ms_median / rows[0].ms_median;
                         std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
                         if (tri) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / tri->ms_median);
                         if (ball) std::printf(", ball/tight splats %.2f", ball->ms_median / rows[0].ms_median);
+                        if (no_occ) std::printf(", no occlusion/occlusion %.2f", no_occ->ms_median / rows[0].ms_median);
+                        if (hit_depth) std::printf(", hit depth/early depth and occlusion %.2f", hit_depth->ms_median / rows[0].ms_median);
                         std::printf("\n");
                         std::filesystem::create_directories(a->out);
                         write_file_atomically(std::filesystem::path(a->out) / "bench_render.json",

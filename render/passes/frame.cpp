@@ -25,7 +25,8 @@ CameraUniforms::CameraUniforms(const Camera& camera)
       target_distance(static_cast<float>((camera.target - camera.eye).norm())),
       near_plane(static_cast<float>(camera.near_plane)),
       viewport(float(camera.width), float(camera.height)),
-      target_world(camera.target) {}
+      target_world(camera.target),
+      world(camera) {}
 
 void set_camera_uniforms(const gl::Program& p, const CameraUniforms& c) {
   p.set("u_proj", c.proj);

@@ -28,6 +28,7 @@ struct CameraUniforms {
   float near_plane;
   Eigen::Vector2f viewport;  ///< pixels
   Eigen::Vector3d target_world;
+  Camera world;  ///< the camera itself (double), for work done on the CPU per frame
 };
 
 /// Sets every camera uniform (u_proj, u_view_rot, u_target_hi, u_target_lo, u_target_minus_eye,
@@ -73,6 +74,8 @@ struct Frame {
   const ShadowMap* shadow = nullptr;
   /// Bounding radius of the scene (outline thresholds).
   float scene_radius = 1.0f;
+  /// Whether passes after the tetrahedron pass draw into the G-buffer (and so need its depth).
+  bool depth_needed_after_tets = true;
 };
 
 /// The state every opaque pass draws into the G-buffer with: its framebuffer bound, depth test

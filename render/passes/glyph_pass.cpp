@@ -29,7 +29,8 @@ Eigen::Vector3d orthogonal(const Eigen::Vector3d& a) {
   return a.cross(t).normalized();
 }
 
-GpuGlyph pack(const Glyph& g, std::size_t index) {
+// `origin`: the glyphs' origin, which the stored centre is relative to.
+GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) {
   // M maps the parameter space (unit sphere, or unit cylinder |u_z| ≤ 1) to world offsets.
   Eigen::Matrix3d M;
   Eigen::Matrix3d S;  // M Mᵀ, or one end disc's for a cylinder
@@ -58,7 +59,7 @@ GpuGlyph pack(const Glyph& g, std::size_t index) {
   if (!inv.allFinite() || !(std::abs(M.determinant()) > 0))
     throw InvalidInput(fmt::format("glyph {}: its axes are singular (no volume)", index));
   GpuGlyph p{};
-  const Split cs = split(g.centre);
+  const Split cs = split(g.centre - origin);
   for (int i = 0; i < 3; ++i) {
     p.centre_hi[i] = cs.hi[i];
     p.centre_lo[i] = cs.lo[i];
@@ -82,13 +83,16 @@ void GlyphPass::upload(std::span<const Glyph> glyphs) {
   if (glyphs.size() > kMaxPrimitiveIndex + 1)
     throw InvalidInput(
         fmt::format("{} glyphs: the GL renderer draws at most 2^{}", glyphs.size(), kPrimitiveIndexBits));
+  Box3 box;
+  for (const Glyph& g : glyphs) box.extend(g.centre);
+  origin_ = box.empty() ? Eigen::Vector3d::Zero() : box.centre();
   std::vector<GpuGlyph> data;
   data.reserve(glyphs.size());
   cylinders_ = 0;
   for (const bool cylinders : {false, true})
     for (std::size_t i = 0; i < glyphs.size(); ++i)
       if ((glyphs[i].kind == GlyphKind::cylinder) == cylinders) {
-        data.push_back(pack(glyphs[i], i));
+        data.push_back(pack(glyphs[i], i, origin_));
         cylinders_ += cylinders;
       }
   glyphs_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuGlyph)), data.data());
@@ -99,6 +103,7 @@ void GlyphPass::run(const Frame& f) {
   const RenderOptions& o = f.options;
   begin_gbuffer_draw(f);
   set_camera_uniforms(program_, f.camera);
+  program_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
   program_.set("u_cull", o.cull ? 1 : 0);
   program_.set("u_count_stats", o.statistics ? 1 : 0);
   program_.set("u_proxy", o.glyph_proxies ? 1 : 0);

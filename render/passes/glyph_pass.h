@@ -23,6 +23,7 @@ private:
   gl::Program program_;
   gl::Buffer glyphs_;      // spheres and ellipsoids first, then cylinders (ids keep the model's order)
   std::size_t count_ = 0;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
   std::size_t cylinders_ = 0;
 };
 

@@ -20,9 +20,10 @@ struct GpuBall {
 };
 static_assert(sizeof(GpuBall) == 112);
 
-GpuBall pack(const SlimPatch& b, std::int32_t id) {
+// `origin`: the model's origin, which the stored centre is relative to.
+GpuBall pack(const SlimPatch& b, std::int32_t id, const Eigen::Vector3d& origin) {
   GpuBall g{};
-  const Split cs = split(b.centre);
+  const Split cs = split(b.centre - origin);
   for (int i = 0; i < 3; ++i) {
     g.centre_hi[i] = cs.hi[i];
     g.centre_lo[i] = cs.lo[i];
@@ -66,10 +67,13 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
   if (patches.size() > kMaxPrimitiveIndex + 1)
     throw InvalidInput(fmt::format("{} SLIM patches: the GL renderer draws at most 2^{}", patches.size(),
                                    kPrimitiveIndexBits));
+  Box3 box;
+  for (const SlimPatch& p : patches) box.extend(p.centre);
+  origin_ = box.empty() ? Eigen::Vector3d::Zero() : box.centre();
   std::vector<GpuBall> data;
   data.reserve(patches.size());
   for (std::size_t i = 0; i < patches.size(); ++i)
-    data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i)));
+    data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i), origin_));
   balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
   count_ = data.size();
 }
@@ -101,6 +105,7 @@ void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
 
 void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stats) const {
   set_camera_uniforms(p, f.camera);
+  p.set("u_origin_minus_target", origin_minus_target(f));
   p.set("u_offset", f.options.slim_offset);
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
@@ -174,6 +179,7 @@ void SlimOutlinePass::run(const Frame& f) {
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
   set_camera_uniforms(program_, f.camera);
+  program_.set("u_origin_minus_target", slim_.origin_minus_target(f));
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.set("u_tight", 0);

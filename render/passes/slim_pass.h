@@ -18,6 +18,10 @@ public:
   std::size_t count() const { return count_; }
   /// The packed balls (SSBO, `Ball` in slim.vert).
   GLuint balls() const { return balls_.id(); }
+  /// The balls' origin relative to the view target (double, then float): positions relative to eye.
+  Eigen::Vector3f origin_minus_target(const Frame& frame) const {
+    return (origin_ - frame.camera.world.target).cast<float>();
+  }
   bool needed(const RenderOptions&) const override { return count_ > 0; }
   void run(const Frame& frame) override;
 
@@ -42,6 +46,7 @@ private:
   };
   std::array<Accumulation, 2> acc_;
   Accumulation* current_ = nullptr;  // the one this frame draws with
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
 };
 
 /// Debug overlay over the shaded image: the screen bound of every SLIM ball, red where the

@@ -28,8 +28,7 @@ layout(std430, binding = 0) readonly buffer Glyphs { Glyph glyphs[]; };
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_target_hi;
-uniform vec3 u_target_lo;
+uniform vec3 u_origin_minus_target;  // the glyphs' common origin − the view target, from double
 uniform float u_target_distance;
 uniform float u_near;
 uniform vec2 u_viewport;
@@ -70,7 +69,7 @@ float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 *
 void main() {
   Glyph g = glyphs[u_first + gl_InstanceID];
   uint kind = uint(g.centre_hi.w);
-  vec3 C = u_view_rot * camera_relative(g.centre_hi.xyz, g.centre_lo.xyz, u_target_hi, u_target_lo) +
+  vec3 C = u_view_rot * (u_origin_minus_target + (g.centre_hi.xyz + g.centre_lo.xyz)) +
            vec3(0.0, 0.0, -u_target_distance);
   mat3 Sw = mat3(g.s0.x, g.s0.w, g.s1.y,
                  g.s0.w, g.s0.y, g.s1.x,

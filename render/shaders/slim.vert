@@ -27,8 +27,7 @@ layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_f
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_target_hi;
-uniform vec3 u_target_lo;
+uniform vec3 u_origin_minus_target;  // the balls' common origin − the view target, from double
 uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
@@ -55,7 +54,7 @@ flat out int v_culled;  // debug overlay ([Stoll06] Fig. 3): culled balls drawn 
 void main() {
   Ball ball = balls[gl_InstanceID];
   float R = ball.centre_hi.w;
-  vec3 C = u_view_rot * camera_relative(ball.centre_hi.xyz, ball.centre_lo.xyz, u_target_hi, u_target_lo) +
+  vec3 C = u_view_rot * (u_origin_minus_target + (ball.centre_hi.xyz + ball.centre_lo.xyz)) +
            vec3(0.0, 0.0, -u_target_distance);
   mat3 A = mat3(ball.q0.x, ball.q0.w, ball.q1.y,
                 ball.q0.w, ball.q0.y, ball.q1.x,

@@ -1,7 +1,10 @@
 // Tetrahedron pass, fragment stage ([Stoll06] §5): solve along x(λ) = o + λ·v from the entry
 // point on the front face, visit roots nearest first (eq. 15), clip against the four planes,
-// write depth (never nearer than the face: depth_greater keeps early-Z conservative) and the
-// G-buffer.
+// write the G-buffer and a depth. TET_EXACT_DEPTH: the hit's depth (never nearer than the face:
+// depth_greater keeps early-Z conservative where the driver honours it). Otherwise the face's own
+// depth is tested and written, which needs no gl_FragDepth write, so every driver tests it before
+// the shader runs: exact for the tetrahedra of one tessellation, whose order along a ray is that
+// of their entry faces; a later pass turns the G-buffer's eye depth into the depth buffer.
 in vec3 v_o;
 in vec3 v_dir;
 in vec3 v_Aob;
@@ -20,7 +23,9 @@ uniform int u_cull;
 uniform float u_clip_eps;  // tolerance of the plane tests, in local units
 uniform int u_corner_colours;
 
+#ifdef TET_EXACT_DEPTH
 layout(depth_greater) out float gl_FragDepth;
+#endif
 layout(location = 0) out vec4 out_normal_depth;  // world normal (facing the viewer), eye depth
 layout(location = 1) out vec4 out_albedo;
 layout(location = 2) out int out_id;
@@ -61,7 +66,9 @@ void main() {
   if (dot(n, d) > 0.0) n = -n;  // two-sided when culling is off
   // Eye-space z: the entry point's z plus t local units along d (z_entry/‖v‖ per local unit).
   float z = v_z_entry + t * (v_z_entry * inv_len);
+#ifdef TET_EXACT_DEPTH
   gl_FragDepth = window_depth(z, u_proj);
+#endif
   out_normal_depth = vec4(n, -z);
   vec3 albedo = unpack_colour(v_colour);
   if (u_corner_colours != 0) {

@@ -5,8 +5,8 @@
 // size s, so float keeps its precision (DESIGN §5).
 
 struct Tet {
-  vec4 centre_hi;   // xyz: centroid (float part), w: scale s
-  vec4 centre_lo;   // xyz: centroid − float(centroid), w: colour bits
+  vec4 centre_hi;   // xyz: centroid − its chunk's origin (float part), w: scale s
+  vec4 centre_lo;   // xyz: the rest of that difference, w: colour bits
   vec4 corner[4];   // local corners (p − c)/s; w: primitive index bits
   vec4 q0;          // A00 A11 A22 A01
   vec4 q1;          // A12 A02 b0 b1
@@ -14,18 +14,20 @@ struct Tet {
 };
 layout(std430, binding = 0) readonly buffer Tets { Tet tets[]; };
 layout(std430, binding = 2) readonly buffer TetCornerColours { uvec4 corner_colours[]; };
+// Per chunk: its origin − the view target, from double on the CPU each frame (relative to eye).
+layout(std430, binding = 3) readonly buffer ChunkOffsets { vec4 chunk_offset[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_target_hi;          // the point the camera looks at, split hi + lo
-uniform vec3 u_target_lo;
+uniform int u_chunk_size;          // tetrahedra per chunk (GPU slots in chunk order)
 uniform vec3 u_target_minus_eye;   // (target − eye), from double
 uniform float u_target_distance;   // ‖target − eye‖: the target is at (0, 0, −distance) in eye space
 uniform int u_cull;        // per-quadric and per-fragment backface culling
 uniform int u_count_stats;
 uniform int u_indexed;
 uniform int u_corner_colours;  // colours per corner (binding 2), blended barycentrically
+uniform int u_base;         // instanced: the first tetrahedron of this draw
 
 out vec3 v_o;
 out vec3 v_dir;
@@ -47,7 +49,7 @@ void main() {
   // Indexed: 4 vertices per tetrahedron (gl_VertexID = 4·tet + corner) shared by its 4 faces
   // through the element buffer, so each corner is shaded once, not three times. Instanced (the
   // statistics frame): 12 vertices per instance, each counted exactly once.
-  int tet = u_indexed != 0 ? gl_VertexID >> 2 : gl_InstanceID;
+  int tet = u_indexed != 0 ? gl_VertexID >> 2 : u_base + gl_InstanceID;
   int k = u_indexed != 0 ? gl_VertexID & 3 : kFace[gl_VertexID];
   Tet t = tets[tet];
   mat3 A = mat3(t.q0.x, t.q0.w, t.q1.y,
@@ -57,8 +59,9 @@ void main() {
   float c = t.q2.y;
   float s = t.centre_hi.w;
   // Positions relative to the view target, then to the eye: a far eye puts only the view-axis
-  // component far away, so screen positions keep float precision (DESIGN §5).
-  vec3 centre_from_target = camera_relative(t.centre_hi.xyz, t.centre_lo.xyz, u_target_hi, u_target_lo);
+  // component far away, so screen positions keep float precision (DESIGN §5). No large float
+  // coordinate appears: the chunk's offset from the target was taken in double.
+  vec3 centre_from_target = chunk_offset[tet / u_chunk_size].xyz + (t.centre_hi.xyz + t.centre_lo.xyz);
   vec3 rel_centre = centre_from_target + u_target_minus_eye;
 
   // Per-quadric backface culling, [Stoll06] eq. 19 rewritten about each corner so no large
