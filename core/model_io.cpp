@@ -178,7 +178,8 @@ public:
     const double v0 = volume(t.corners), v1 = volume(r.corners);
     if (is_degenerate_tetrahedron(r.corners) || !(std::abs(v1 - v0) <= 1e-2 * std::abs(v0)))
       return fmt::format("float32 changes its volume from {:g} to {:g}", v0 / 6, v1 / 6);
-    return coefficients_problem(t.quadric.coefficients(), r.quadric.coefficients());
+    const Quadric moved = t.quadric.translated_to_origin(r.centroid() - t.centroid());
+    return coefficients_problem(moved.coefficients(), r.quadric.coefficients());
   }
   std::string glyph_problem(const Glyph& g) const {
     const Glyph r = glyph(g);
