@@ -172,14 +172,17 @@ public:
       for (std::size_t j = i + 1; j < 4; ++j) edge = std::max(edge, (t.corners[i] - t.corners[j]).norm());
     for (std::size_t k = 0; k < 4; ++k)
       if (std::string why = moved_problem(t.corners[k], r.corners[k], edge); !why.empty()) return why;
+    const Quadric moved = t.quadric.translated_to_origin(r.centroid() - t.centroid());
+    return coefficients_problem(moved.coefficients(), r.quadric.coefficients());
+  }
+  /// Whether float32 turns the tetrahedron flat or inside out: a sliver whose height is below
+  /// the rounding of its corners.
+  bool turns_flat(const TetPatch& t) const {
+    const TetPatch r = tet(t);
     const auto volume = [](const std::array<Eigen::Vector3d, 4>& p) {
       return (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
     };
-    const double v0 = volume(t.corners), v1 = volume(r.corners);
-    if (is_degenerate_tetrahedron(r.corners) || !(std::abs(v1 - v0) <= 1e-2 * std::abs(v0)))
-      return fmt::format("float32 changes its volume from {:g} to {:g}", v0 / 6, v1 / 6);
-    const Quadric moved = t.quadric.translated_to_origin(r.centroid() - t.centroid());
-    return coefficients_problem(moved.coefficients(), r.quadric.coefficients());
+    return is_degenerate_tetrahedron(r.corners) || !(volume(t.corners) * volume(r.corners) > 0);
   }
   std::string glyph_problem(const Glyph& g) const {
     const Glyph r = glyph(g);
@@ -196,8 +199,9 @@ public:
       return "its axes do not fit float32";
     return {};
   }
-  /// The first primitive of the model that does not survive the rounding, or empty.
-  std::string first_problem(const Model& m) const {
+  /// The first primitive of the model that does not survive the rounding, or empty. Tetrahedra
+  /// that turn flat are marked in flat (sized to the tets) instead: they are left out.
+  std::string first_problem(const Model& m, std::vector<char>& flat) const {
     const SlimHierarchy& hy = m.slim_hierarchy;
     for (std::size_t i = 0; i < m.slims.size() + hy.others.size(); ++i) {
       std::string why = slim_problem(slim_ball(m, i));
@@ -207,8 +211,14 @@ public:
         return i < m.slims.size() ? fmt::format("slim patch {}: {}", i, why)
                                   : fmt::format("slim_node {}: {}", i - m.slims.size(), why);
     }
-    for (std::size_t i = 0; i < m.tets.size(); ++i)
+    flat.assign(m.tets.size(), 0);
+    for (std::size_t i = 0; i < m.tets.size(); ++i) {
       if (std::string why = tet_problem(m.tets[i]); !why.empty()) return fmt::format("tet patch {}: {}", i, why);
+      flat[i] = turns_flat(m.tets[i]);
+    }
+    const auto dropped = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
+    if (dropped > m.tets.size() / 1000)
+      return fmt::format("{} of {} tetrahedra turn flat in float32 (more than 1 in 1000)", dropped, m.tets.size());
     for (std::size_t i = 0; i < m.glyphs.size(); ++i)
       if (std::string why = glyph_problem(m.glyphs[i]); !why.empty()) return fmt::format("glyph {}: {}", i, why);
     return {};
@@ -832,16 +842,24 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
   const Box3 box = bounds(model);
   const Eigen::Vector3d origin = box.empty() || !box.centre().allFinite() ? Eigen::Vector3d::Zero() : box.centre();
   const CompactRounding rounding(origin);
+  std::vector<char> flat;  // compact: tetrahedra left out (float32 turns them flat)
   if (options.encoding == ModelEncoding::compact) {
-    if (std::string why = rounding.first_problem(model); !why.empty()) {
+    if (std::string why = rounding.first_problem(model, flat); !why.empty()) {
       if (!options.fallback_to_full)
         throw InvalidInput(fmt::format("{}: cannot write the compact encoding: {} (the double encoding can)",
                                        path.string(), why));
       log::warn("{}: written in the double encoding: {}", path.string(), why);
       result.encoding = ModelEncoding::full;
       result.fallback = std::move(why);
+      flat.clear();
     }
   }
+  flat.resize(model.tets.size(), 0);
+  result.dropped_tets = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
+  if (result.dropped_tets > 0)
+    log::warn("{}: left out {} of {} tetrahedra that float32 turns flat (slivers thinner than the rounding of "
+              "their corners)",
+              path.string(), result.dropped_tets, model.tets.size());
   const bool compact = result.encoding == ModelEncoding::compact;
   const ply::Type real = compact ? ply::Type::float32 : ply::Type::float64;
   const auto append_reals = [&](std::string& out, std::initializer_list<double> vs) {
@@ -891,7 +909,8 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
   if (hierarchy && !hy.others.empty())
     h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour));
   if (all || !model.tets.empty())
-    h.elements.push_back(element("tet", model.tets.size(), names({kCornerNames, kCoefficientNames}), tet_colour, real));
+    h.elements.push_back(element("tet", model.tets.size() - result.dropped_tets,
+                                 names({kCornerNames, kCoefficientNames}), tet_colour, real));
   if (all || !model.glyphs.empty()) {
     auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kAxisNames});
     h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, real, true));
@@ -927,7 +946,9 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
       ply::append_le(out, real, hy.error[i]);
     }
   }
-  for (const TetPatch& exact : model.tets) {
+  for (std::size_t i = 0; i < model.tets.size(); ++i) {
+    if (flat[i]) continue;
+    const TetPatch& exact = model.tets[i];
     const TetPatch& t = compact ? rounding.tet(exact) : exact;
     for (const auto& p : exact.corners) append_position(out, p);
     for (double v : t.quadric.coefficients()) ply::append_le(out, real, v);

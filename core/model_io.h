@@ -80,8 +80,8 @@ struct WriteModelOptions {
   ModelEncoding encoding = ModelEncoding::compact;
   /// Compact only: when a primitive would not survive float32 (a value out of float range, a
   /// quadric whose coefficients all underflow, a radius rounded to 0, a position moved by more
-  /// than 1/1000 of its primitive's size, a tetrahedron that turns flat, inverts or changes its
-  /// volume by more than 1 %), write the full encoding instead (true), or throw (false).
+  /// than 1/1000 of its primitive's size, more than 1 in 1000 tetrahedra turning flat), write
+  /// the full encoding instead (true), or throw (false).
   bool fallback_to_full = true;
 };
 
@@ -89,6 +89,9 @@ struct WriteModelResult {
   ModelEncoding encoding = ModelEncoding::compact;  ///< the encoding written
   std::size_t bytes = 0;                            ///< the file's size
   std::string fallback;  ///< why compact fell back to full (the first primitive at fault), or empty
+  /// Compact: tetrahedra left out because float32 turns them flat or inside out (slivers thinner
+  /// than the rounding of their corners; more than 1 in 1000 of them makes it fall back instead).
+  std::size_t dropped_tets = 0;
 };
 
 /// The name used on the command line and in the header: "compact" or "double".

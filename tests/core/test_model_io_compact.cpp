@@ -337,3 +337,33 @@ TEST(ModelIoCompact, MalformedCompactHeadersAreFormatErrors) {
 
 }  // namespace
 }  // namespace quadrix
+
+namespace quadrix {
+namespace {
+
+TEST(ModelIoCompact, SliversFloat32FlattensAreLeftOutUpToOneInAThousand) {
+  ScratchDir dir("compact");
+  Model m = synth_model("hyperboloid1", {});
+  ASSERT_GE(m.tets.size(), 1000u);
+  // Height 1e-9 over a unit triangle: valid in double, flat once its corners are float32.
+  const Eigen::Vector3d o(0.25, -0.5, 0.7);
+  const TetPatch sliver = TetPatch::from_world(
+      {o, o + Eigen::Vector3d(1, 0, 0), o + Eigen::Vector3d(0, 1, 0), o + Eigen::Vector3d(0.3, 0.3, 1e-9)},
+      Quadric::plane(Eigen::Vector3d::UnitX(), -0.5));
+  m.tets.push_back(sliver);
+  const WriteModelResult w = write(m, dir / "m.qxm");
+  EXPECT_EQ(w.encoding, ModelEncoding::compact);
+  EXPECT_EQ(w.dropped_tets, 1u);
+  EXPECT_EQ(read_model(dir / "m.qxm").tets.size(), m.tets.size() - 1);
+  // Too many slivers: the double encoding, all of them kept.
+  Model few;
+  few.tets = {m.tets[0], sliver};
+  const WriteModelResult f = write_model(few, dir / "f.qxm");
+  EXPECT_EQ(f.encoding, ModelEncoding::full);
+  EXPECT_NE(f.fallback.find("1 of 2 tetrahedra turn flat in float32"), std::string::npos) << f.fallback;
+  EXPECT_EQ(f.dropped_tets, 0u);
+  EXPECT_EQ(read_model(dir / "f.qxm").tets.size(), 2u);
+}
+
+}  // namespace
+}  // namespace quadrix
