@@ -1,11 +1,12 @@
 #pragma once
-/// Tetrahedralisation of convex cells with TetGen 1.5 (AGPL: linked only into the
+/// Tetrahedralisation of convex cells and of closed surfaces with TetGen 1.5 (AGPL: linked only into the
 /// `quadrix_tetgen` library, convert/tetrahedralize_tetgen.cpp).
 ///
 /// TetGen 1.5 crashes (double free, segfault) on some invalid inputs, so no input reaches it
 /// unchecked and every call runs in a forked child process: the input is validated first
-/// (finite coordinates, at least 4 distinct points, positive volume), and a TetGen crash or
-/// error in the child becomes a SolverError in the caller that names the cell, never a crash.
+/// (cells: finite coordinates, at least 4 distinct points, positive volume; surfaces: closed,
+/// edge-manifold, consistently oriented, no degenerate triangle), and a TetGen crash or error in
+/// the child becomes a SolverError in the caller that names the input, never a crash.
 #include <array>
 #include <span>
 #include <string>
@@ -44,5 +45,37 @@ struct Tetrahedralization {
 ///         flat cell; SolverError naming the cell when TetGen fails or crashes (unless skip_failed).
 Tetrahedralization tetrahedralize_convex_cells(std::span<const std::vector<Eigen::Vector3d>> cells,
                                                const TetrahedralizeOptions& options = {});
+
+struct SurfaceTetrahedralizeOptions {
+  /// TetGen's bound on the tetrahedra's radius–edge ratio (`-q`), ≥ 1.1: smaller gives rounder
+  /// tetrahedra and more points inside; 0 refines nothing (the constrained Delaunay mesh).
+  double quality = 2.0;
+  /// Largest tetrahedron volume (`-a`), world units³; 0: unbounded.
+  double max_volume = 0;
+  /// Names the surface in error messages.
+  std::string source = "surface";
+};
+
+/// The tetrahedra filling a closed surface.
+struct SurfaceTetrahedralization {
+  std::vector<Eigen::Vector3d> points;  ///< the surface's vertices (same indices), then added points
+  std::vector<TetIndices> tets;         ///< positively oriented
+};
+
+/// Checks that the triangles (indices into vertices) bound a volume: finite coordinates, indices
+/// in range, no triangle of zero area, and every edge in exactly two triangles, once in each
+/// direction (closed, edge-manifold, consistently oriented; either orientation as a whole).
+/// \throws InvalidInput naming the source, the triangle or edge (vertex indices) and the fault.
+void validate_closed_surface(std::span<const Eigen::Vector3d> vertices, std::span<const std::array<int, 3>> triangles,
+                             const std::string& source);
+
+/// Fills a closed triangle surface with tetrahedra (TetGen `-p`, with `-q`/`-a` as asked), in a
+/// child process after validate_closed_surface; the boundary is kept (refinement may add points
+/// on it).
+/// \throws InvalidInput as validate_closed_surface; SolverError when TetGen fails or crashes
+///         (a self-intersecting surface, for one).
+SurfaceTetrahedralization tetrahedralize_closed_surface(std::span<const Eigen::Vector3d> vertices,
+                                                        std::span<const std::array<int, 3>> triangles,
+                                                        const SurfaceTetrahedralizeOptions& options = {});
 
 }  // namespace quadrix

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -199,6 +200,165 @@ Tetrahedralization tetrahedralize_convex_cells(std::span<const std::vector<Vecto
     next = batch.done + 1;
   }
   return out;
+}
+
+}  // namespace quadrix
+
+// ---------------------------------------------------------------- closed surfaces
+
+namespace quadrix {
+namespace {
+
+// Child side: TetGen on a closed surface; the result as int64 point count, points (3 doubles
+// each), int64 tetrahedron count, tetrahedra (4 int32 each). Returns false on a TetGen error.
+bool run_tetgen_surface(std::span<const Vector3d> vertices, std::span<const std::array<int, 3>> triangles,
+                        const SurfaceTetrahedralizeOptions& o, int fd) {
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(vertices.size());
+  in.pointlist = new REAL[3 * vertices.size()];
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    for (int a = 0; a < 3; ++a) in.pointlist[3 * i + a] = vertices[i][a];
+  in.numberoffacets = static_cast<int>(triangles.size());
+  in.facetlist = new tetgenio::facet[triangles.size()];
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    tetgenio::facet& facet = in.facetlist[f];
+    tetgenio::init(&facet);
+    facet.numberofpolygons = 1;
+    facet.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&facet.polygonlist[0]);
+    facet.polygonlist[0].numberofvertices = 3;
+    facet.polygonlist[0].vertexlist = new int[3]{triangles[f][0], triangles[f][1], triangles[f][2]};
+  }
+  std::string switches = "pzQ";  // PLC, zero-based, quiet
+  if (o.quality > 0) switches += fmt::format("q{:.6g}", o.quality);
+  if (o.max_volume > 0) switches += fmt::format("a{:.17g}", o.max_volume);
+  try {
+    tetrahedralize(switches.data(), &in, &out);
+  } catch (...) {
+    return false;
+  }
+  if (out.numberofpoints <= 0 || out.numberoftetrahedra <= 0 || out.numberofcorners < 4) return false;
+  const std::int64_t np = out.numberofpoints, nt = out.numberoftetrahedra;
+  if (!write_all(fd, &np, sizeof np) || !write_all(fd, out.pointlist, sizeof(REAL) * 3 * out.numberofpoints) ||
+      !write_all(fd, &nt, sizeof nt))
+    return false;
+  std::vector<std::int32_t> tets(4 * static_cast<std::size_t>(nt));
+  for (std::int64_t t = 0; t < nt; ++t)
+    for (int a = 0; a < 4; ++a) tets[4 * t + a] = out.tetrahedronlist[t * out.numberofcorners + a];
+  return write_all(fd, tets.data(), tets.size() * sizeof(std::int32_t));
+}
+
+}  // namespace
+
+void validate_closed_surface(std::span<const Vector3d> vertices, std::span<const std::array<int, 3>> triangles,
+                             const std::string& source) {
+  if (triangles.empty()) throw InvalidInput(fmt::format("{}: no faces: a closed surface is needed", source));
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    if (!vertices[i].allFinite()) throw InvalidInput(fmt::format("{}: vertex {} is not finite", source, i));
+  const long long n = static_cast<long long>(vertices.size());
+  // Directed edges (a, b) → the triangle that has it, with a count per undirected edge.
+  std::map<std::pair<int, int>, std::size_t> directed;
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    const auto& t = triangles[f];
+    for (int a = 0; a < 3; ++a)
+      if (t[a] < 0 || t[a] >= n)
+        throw InvalidInput(fmt::format("{}: triangle {} has vertex index {} outside [0, {})", source, f, t[a], n));
+    const Vector3d& p = vertices[t[0]];
+    const double area2 = (vertices[t[1]] - p).cross(vertices[t[2]] - p).norm();
+    const double scale = std::max({(vertices[t[1]] - p).squaredNorm(), (vertices[t[2]] - p).squaredNorm(),
+                                   (vertices[t[2]] - vertices[t[1]]).squaredNorm()});
+    if (!(area2 > 1e-14 * scale))
+      throw InvalidInput(fmt::format("{}: face {} (vertices {} {} {}) has zero area", source, f, t[0], t[1], t[2]));
+    for (int a = 0; a < 3; ++a) {
+      const std::pair<int, int> e{t[a], t[(a + 1) % 3]};
+      const auto [it, fresh] = directed.emplace(e, f);
+      if (!fresh)
+        throw InvalidInput(fmt::format(
+            "{}: edge ({}, {}) runs the same way in faces {} and {}: not consistently oriented or not manifold", source,
+            e.first, e.second, it->second, f));
+    }
+  }
+  for (const auto& [e, f] : directed)
+    if (!directed.count({e.second, e.first}))
+      throw InvalidInput(fmt::format("{}: edge ({}, {}) of face {} has no face on its other side: the surface is "
+                                     "open (a closed surface is needed)",
+                                     source, e.first, e.second, f));
+}
+
+SurfaceTetrahedralization tetrahedralize_closed_surface(std::span<const Vector3d> vertices,
+                                                        std::span<const std::array<int, 3>> triangles,
+                                                        const SurfaceTetrahedralizeOptions& o) {
+  validate_closed_surface(vertices, triangles, o.source);
+  if (o.quality != 0 && !(o.quality >= 1.1 && std::isfinite(o.quality)))
+    throw InvalidInput(fmt::format("{}: quality {} is not 0 or ≥ 1.1", o.source, o.quality));
+  if (!(o.max_volume >= 0 && std::isfinite(o.max_volume)))
+    throw InvalidInput(fmt::format("{}: max volume {} is not ≥ 0", o.source, o.max_volume));
+  int fds[2];
+  if (::pipe(fds) != 0)
+    throw SolverError(fmt::format("{}: cannot create a pipe for TetGen: {}", o.source, std::strerror(errno)));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw SolverError(fmt::format("{}: cannot fork the TetGen process: {}", o.source, std::strerror(errno)));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    const bool ok = run_tetgen_surface(vertices, triangles, o, fds[1]);
+    ::close(fds[1]);
+    ::_exit(ok ? 0 : 2);
+  }
+  ::close(fds[1]);
+  std::string bytes;
+  std::array<char, 1 << 16> chunk{};
+  for (;;) {
+    const ssize_t n = ::read(fds[0], chunk.data(), chunk.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    bytes.append(chunk.data(), static_cast<std::size_t>(n));
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw SolverError(fmt::format(
+        "{}: {} (a self-intersecting surface, or one TetGen cannot mesh)", o.source,
+        WIFSIGNALED(status) ? fmt::format("TetGen crashed (signal {})", WTERMSIG(status))
+        : WIFEXITED(status) && WEXITSTATUS(status) == 2 ? std::string("TetGen reported an error or no tetrahedra")
+                                                         : std::string("the TetGen process failed")));
+  // Parse and check what the child sent.
+  const auto fail = [&](std::string_view what) -> SolverError {
+    return SolverError(fmt::format("{}: bad TetGen output: {}", o.source, what));
+  };
+  std::size_t pos = 0;
+  const auto take = [&](void* dst, std::size_t n) {
+    if (bytes.size() - pos < n) throw fail("truncated");
+    std::memcpy(dst, bytes.data() + pos, n);
+    pos += n;
+  };
+  std::int64_t np = 0, nt = 0;
+  take(&np, sizeof np);
+  if (np < static_cast<std::int64_t>(vertices.size()) || static_cast<std::uint64_t>(np) > bytes.size() / 24)
+    throw fail(fmt::format("{} points", np));
+  SurfaceTetrahedralization r;
+  r.points.resize(static_cast<std::size_t>(np));
+  for (auto& p : r.points) take(p.data(), 3 * sizeof(double));
+  take(&nt, sizeof nt);
+  if (nt <= 0 || static_cast<std::uint64_t>(nt) > bytes.size() / 16) throw fail(fmt::format("{} tetrahedra", nt));
+  r.tets.resize(static_cast<std::size_t>(nt));
+  for (auto& t : r.tets) {
+    std::array<std::int32_t, 4> v;
+    take(v.data(), sizeof v);
+    for (int a = 0; a < 4; ++a) {
+      if (v[a] < 0 || v[a] >= np) throw fail(fmt::format("vertex index {}", v[a]));
+      t[a] = v[a];
+    }
+    if (orient(r.points[t[0]], r.points[t[1]], r.points[t[2]], r.points[t[3]]) < 0) std::swap(t[1], t[2]);
+  }
+  if (pos != bytes.size()) throw fail("trailing bytes");
+  return r;
 }
 
 }  // namespace quadrix

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 
 #include <Eigen/LU>
 #include <fmt/format.h>
@@ -18,6 +19,7 @@
 #include "core/io/file.h"
 #include "core/io/ply.h"
 #include "core/limits.h"
+#include "core/log.h"
 
 namespace quadrix {
 namespace {
@@ -42,6 +44,11 @@ std::vector<std::string> names(std::initializer_list<std::span<const char* const
   return out;
 }
 
+/// Header comments that are part of the format, not metadata.
+bool is_reserved_key(std::string_view key) {
+  return key == "quadrix-format" || key == "quadrix-encoding" || key == "quadrix-origin";
+}
+
 bool has_whitespace(std::string_view s) {
   return std::any_of(s.begin(), s.end(), [](unsigned char c) { return std::isspace(c) != 0; });
 }
@@ -61,26 +68,170 @@ void check_finite(bool ok, std::string_view what, std::size_t i, const std::file
                                    path.string(), what, i, kMaxWorldCoordinate));
 }
 
-void append_doubles(std::string& out, std::initializer_list<double> vs) {
-  for (double v : vs) ply::append_le(out, ply::Type::float64, v);
-}
-
 void append_colour(std::string& out, const std::optional<Rgb>& c) {
   const Rgb rgb = c.value_or(Rgb{0, 0, 0});
   for (auto v : rgb) out.push_back(static_cast<char>(v));
 }
 
-ply::Element element(std::string name, std::size_t count, const std::vector<std::string>& doubles, bool colour,
-                     bool glyph_kind = false) {
+ply::Element element(std::string name, std::size_t count, const std::vector<std::string>& reals, bool colour,
+                     ply::Type real, bool glyph_kind = false) {
   ply::Element e;
   e.name = std::move(name);
   e.count = count;
   if (glyph_kind) e.properties.push_back({"kind", ply::Type::uint8});
-  for (const auto& n : doubles) e.properties.push_back({n, ply::Type::float64});
+  for (const auto& n : reals) e.properties.push_back({n, real});
   if (colour)
     for (const char* n : kColourNames) e.properties.push_back({n, ply::Type::uint8});
   return e;
 }
+
+// ---------------------------------------------------------------- compact encoding
+
+/// What a reader rebuilds from the compact encoding (float32 values, positions relative to a
+/// float64 origin): the writer stores exactly these values, so it can check them first.
+class CompactRounding {
+public:
+  explicit CompactRounding(const Eigen::Vector3d& origin) : origin_(origin) {}
+
+  static double round(double v) {
+    if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max()))
+      return std::copysign(std::numeric_limits<double>::infinity(), v);
+    return static_cast<double>(static_cast<float>(v));
+  }
+  static Eigen::Vector3d round(const Eigen::Vector3d& v) { return {round(v.x()), round(v.y()), round(v.z())}; }
+  static QuadricCoefficients round(const QuadricCoefficients& k) {
+    QuadricCoefficients r;
+    for (std::size_t i = 0; i < k.size(); ++i) r[i] = round(k[i]);
+    return r;
+  }
+  /// The float32 offset stored for a world position.
+  Eigen::Vector3d offset(const Eigen::Vector3d& p) const { return round(Eigen::Vector3d(p - origin_)); }
+  /// The position a reader rebuilds from it.
+  Eigen::Vector3d position(const Eigen::Vector3d& p) const { return origin_ + offset(p); }
+
+  SlimPatch slim(const SlimPatch& s) const {
+    SlimPatch r = s;
+    r.centre = position(s.centre);
+    r.radius = round(s.radius);
+    r.local = Quadric::from_coefficients(round(s.local.coefficients()));
+    if (s.clip) r.clip = ClipPlane{round(s.clip->n), round(s.clip->d)};
+    return r;
+  }
+  /// The quadric is relative to the corners' centroid, which moves with the rounded corners:
+  /// it is re-expressed about the new centroid (in double) before its own rounding.
+  TetPatch tet(const TetPatch& t) const {
+    TetPatch r = t;
+    for (std::size_t k = 0; k < 4; ++k) r.corners[k] = position(t.corners[k]);
+    r.quadric = Quadric::from_coefficients(
+        round(t.quadric.translated_to_origin(r.centroid() - t.centroid()).coefficients()));
+    return r;
+  }
+  Glyph glyph(const Glyph& g) const {
+    Glyph r = g;
+    r.centre = position(g.centre);
+    r.radius = round(g.radius);
+    for (Eigen::Index k = 0; k < 3; ++k) r.axes.col(k) = round(Eigen::Vector3d(g.axes.col(k)));
+    return r;
+  }
+
+  /// Why a primitive does not survive the rounding, or empty (see WriteModelOptions).
+  static std::string coefficients_problem(const QuadricCoefficients& a, const QuadricCoefficients& b) {
+    double top = 0, moved = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      top = std::max(top, std::abs(a[i]));
+      moved = std::max(moved, std::abs(b[i] - a[i]));
+    }
+    if (!(moved <= 1e-6 * top))
+      return fmt::format("its quadric's coefficients (largest {:g}) do not fit float32", top);
+    return {};
+  }
+  static std::string moved_problem(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double size) {
+    const double moved = (b - a).norm();
+    if (!(moved <= 1e-3 * size))
+      return fmt::format("float32 moves its position {} by {:g}, more than 1/1000 of its size {:g}",
+                         fmt::format("({:g}, {:g}, {:g})", a.x(), a.y(), a.z()), moved, size);
+    return {};
+  }
+  static std::string scalar_problem(double a, double b, std::string_view what) {
+    if (!(std::abs(b - a) <= 1e-6 * std::abs(a)) || (a > 0 && !(b > 0)))
+      return fmt::format("its {} {:g} does not fit float32", what, a);
+    return {};
+  }
+  std::string slim_problem(const SlimPatch& s) const {
+    const SlimPatch r = slim(s);
+    std::string why = scalar_problem(s.radius, r.radius, "radius");
+    if (why.empty()) why = moved_problem(s.centre, r.centre, s.radius);
+    if (why.empty()) why = coefficients_problem(s.local.coefficients(), r.local.coefficients());
+    if (why.empty() && s.clip) {
+      const Eigen::Vector4d a(s.clip->n.x(), s.clip->n.y(), s.clip->n.z(), s.clip->d);
+      const Eigen::Vector4d b(r.clip->n.x(), r.clip->n.y(), r.clip->n.z(), r.clip->d);
+      if (!((b - a).cwiseAbs().maxCoeff() <= 1e-6 * a.cwiseAbs().maxCoeff()) || r.clip->n == Eigen::Vector3d::Zero())
+        why = "its clip plane does not fit float32";
+    }
+    return why;
+  }
+  std::string tet_problem(const TetPatch& t) const {
+    const TetPatch r = tet(t);
+    double edge = 0;
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = i + 1; j < 4; ++j) edge = std::max(edge, (t.corners[i] - t.corners[j]).norm());
+    for (std::size_t k = 0; k < 4; ++k)
+      if (std::string why = moved_problem(t.corners[k], r.corners[k], edge); !why.empty()) return why;
+    const Quadric moved = t.quadric.translated_to_origin(r.centroid() - t.centroid());
+    return coefficients_problem(moved.coefficients(), r.quadric.coefficients());
+  }
+  /// Whether float32 turns the tetrahedron flat or inside out: a sliver whose height is below
+  /// the rounding of its corners.
+  bool turns_flat(const TetPatch& t) const {
+    const TetPatch r = tet(t);
+    const auto volume = [](const std::array<Eigen::Vector3d, 4>& p) {
+      return (p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]);
+    };
+    return is_degenerate_tetrahedron(r.corners) || !(volume(t.corners) * volume(r.corners) > 0);
+  }
+  std::string glyph_problem(const Glyph& g) const {
+    const Glyph r = glyph(g);
+    double size = g.kind == GlyphKind::ellipsoid ? 0.0 : g.radius;
+    for (Eigen::Index k = 0; k < 3; ++k) size = std::max(size, g.axes.col(k).norm());
+    if (std::string why = moved_problem(g.centre, r.centre, size); !why.empty()) return why;
+    if (g.kind != GlyphKind::ellipsoid)
+      if (std::string why = scalar_problem(g.radius, r.radius, "radius"); !why.empty()) return why;
+    const double moved = (r.axes - g.axes).cwiseAbs().maxCoeff();
+    if (!(moved <= 1e-6 * g.axes.cwiseAbs().maxCoeff()) ||
+        (g.kind == GlyphKind::cylinder && r.axes.col(0) == Eigen::Vector3d::Zero()) ||
+        (g.kind == GlyphKind::ellipsoid && !(std::abs(r.axes.determinant() - g.axes.determinant()) <=
+                                             1e-2 * std::abs(g.axes.determinant()))))
+      return "its axes do not fit float32";
+    return {};
+  }
+  /// The first primitive of the model that does not survive the rounding, or empty. Tetrahedra
+  /// that turn flat are marked in flat (sized to the tets) instead: they are left out.
+  std::string first_problem(const Model& m, std::vector<char>& flat) const {
+    const SlimHierarchy& hy = m.slim_hierarchy;
+    for (std::size_t i = 0; i < m.slims.size() + hy.others.size(); ++i) {
+      std::string why = slim_problem(slim_ball(m, i));
+      if (why.empty() && !hy.empty() && !std::isfinite(round(hy.error[i])))
+        why = fmt::format("its error {:g} does not fit float32", hy.error[i]);
+      if (!why.empty())
+        return i < m.slims.size() ? fmt::format("slim patch {}: {}", i, why)
+                                  : fmt::format("slim_node {}: {}", i - m.slims.size(), why);
+    }
+    flat.assign(m.tets.size(), 0);
+    for (std::size_t i = 0; i < m.tets.size(); ++i) {
+      if (std::string why = tet_problem(m.tets[i]); !why.empty()) return fmt::format("tet patch {}: {}", i, why);
+      flat[i] = turns_flat(m.tets[i]);
+    }
+    const auto dropped = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
+    if (dropped > m.tets.size() / 1000)
+      return fmt::format("{} of {} tetrahedra turn flat in float32 (more than 1 in 1000)", dropped, m.tets.size());
+    for (std::size_t i = 0; i < m.glyphs.size(); ++i)
+      if (std::string why = glyph_problem(m.glyphs[i]); !why.empty()) return fmt::format("glyph {}: {}", i, why);
+    return {};
+  }
+
+private:
+  Eigen::Vector3d origin_;
+};
 
 // ---------------------------------------------------------------- reader
 
@@ -111,6 +262,12 @@ public:
   }
   Eigen::Vector3d vec3(std::size_t row, std::size_t col) const {
     return {world(row, col), world(row, col + 1), world(row, col + 2)};
+  }
+  /// A position stored relative to origin (the file's quadrix-origin).
+  Eigen::Vector3d position(std::size_t row, std::size_t col, const Eigen::Vector3d& origin) const {
+    const Eigen::Vector3d p = origin + vec3(row, col);
+    if (!p.allFinite()) fail(row, col, "position is not finite after adding the origin");
+    return p;
   }
   QuadricCoefficients coefficients(std::size_t row, std::size_t col) const {
     QuadricCoefficients k;
@@ -177,12 +334,12 @@ SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarc
 }
 
 /// Appends the rows' patches to out and, with a hierarchy, their parent ids (< total) and errors.
-void read_slim_rows(const Rows& r, const SlimColumns& cols, std::size_t total, std::vector<SlimPatch>& out,
-                    SlimHierarchy& hierarchy) {
+void read_slim_rows(const Rows& r, const SlimColumns& cols, const Eigen::Vector3d& origin, std::size_t total,
+                    std::vector<SlimPatch>& out, SlimHierarchy& hierarchy) {
   out.reserve(out.size() + r.size());
   for (std::size_t i = 0; i < r.size(); ++i) {
     SlimPatch& s = out.emplace_back();
-    s.centre = r.vec3(i, 0);
+    s.centre = r.position(i, 0, origin);
     s.radius = r.world(i, 3);
     if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
     s.local = Quadric::from_coefficients(r.coefficients(i, 4));
@@ -257,11 +414,34 @@ void read_implicit_rows(const ply::File& f, const ply::Table& t, bool colour, st
   }
 }
 
+/// "X Y Z": three finite numbers.
+Eigen::Vector3d parse_origin(const ply::File& f, const std::string& text) {
+  Eigen::Vector3d o;
+  const char* p = text.data();
+  const char* end = text.data() + text.size();
+  for (int a = 0; a < 3; ++a) {
+    while (p < end && (*p == ' ' || *p == '\t')) ++p;
+    const auto [next, ec] = std::from_chars(p, end, o[a]);
+    if (ec != std::errc() || !std::isfinite(o[a]) || (next < end && *next != ' ' && *next != '\t')) p = nullptr;
+    if (!p) break;
+    p = next;
+  }
+  while (p && p < end && (*p == ' ' || *p == '\t')) ++p;
+  if (!p || p != end)
+    throw FormatError(f.message({}, -1, {}, ply::kNoByte,
+                                fmt::format("bad 'comment quadrix-origin {}' line (three finite numbers)",
+                                            text.substr(0, 80))));
+  return o;
+}
+
 Model read_qxm(const ply::File& f) {
   const ply::Header& h = f.header();
   Model model;
-  // Format version and metadata from the comments.
-  bool has_version = false;
+  // Format version, encoding, origin and metadata from the comments.
+  bool has_version = false, has_origin = false;
+  int format_version = 0;
+  std::string encoding;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (const auto& c : h.comments) {
     const std::size_t sp = std::min(c.find_first_of(" \t"), c.size());
     const std::string key = c.substr(0, sp);
@@ -278,12 +458,33 @@ Model read_qxm(const ply::File& f) {
             {}, -1, {}, ply::kNoByte,
             fmt::format("unsupported quadrix-format {} (this build reads 1..{})", version, kQxmFormatVersion)));
       has_version = true;
+      format_version = version;
+      continue;
+    }
+    if (key == "quadrix-encoding") {
+      if (value != "compact" && value != "double")
+        throw FormatError(f.message({}, -1, {}, ply::kNoByte,
+                                    fmt::format("bad 'comment quadrix-encoding {}' line (compact or double)", value)));
+      encoding = value;
+      continue;
+    }
+    if (key == "quadrix-origin") {
+      if (has_origin) throw FormatError(f.message({}, -1, {}, ply::kNoByte, "two 'comment quadrix-origin' lines"));
+      origin = parse_origin(f, value);
+      has_origin = true;
       continue;
     }
     model.metadata[key] = std::move(value);
   }
   if (!has_version)
     throw FormatError(f.message({}, -1, {}, ply::kNoByte, "not a .qxm file (no 'comment quadrix-format' line)"));
+  if (format_version < 3 && (has_origin || !encoding.empty()))
+    throw FormatError(f.message({}, -1, {}, ply::kNoByte,
+                                fmt::format("'comment quadrix-{}' needs quadrix-format 3 or later, the file says {}",
+                                            has_origin ? "origin" : "encoding", format_version)));
+  if (encoding == "compact" && !has_origin)
+    throw FormatError(f.message({}, -1, {}, ply::kNoByte,
+                                "the compact encoding needs a 'comment quadrix-origin X Y Z' line"));
 
   // Which elements and optional groups are present.
   const ply::Element* es = h.find("slim");
@@ -341,8 +542,8 @@ Model read_qxm(const ply::File& f) {
   if (is >= 0) {
     const Rows r(f, tables[is]);
     const std::size_t total = r.size() + (in >= 0 ? tables[in].rows : 0);
-    read_slim_rows(r, slim_columns, total, model.slims, model.slim_hierarchy);
-    if (in >= 0) read_slim_rows(Rows(f, tables[in]), node_columns, total, model.slim_hierarchy.others,
+    read_slim_rows(r, slim_columns, origin, total, model.slims, model.slim_hierarchy);
+    if (in >= 0) read_slim_rows(Rows(f, tables[in]), node_columns, origin, total, model.slim_hierarchy.others,
                                 model.slim_hierarchy);
     if (slim_columns.hierarchy) {
       // A forest: following parents from any ball reaches a root.
@@ -373,7 +574,7 @@ Model read_qxm(const ply::File& f) {
     model.tets.resize(r.size());
     for (std::size_t i = 0; i < r.size(); ++i) {
       TetPatch& t = model.tets[i];
-      for (std::size_t k = 0; k < 4; ++k) t.corners[k] = r.vec3(i, 3 * k);
+      for (std::size_t k = 0; k < 4; ++k) t.corners[k] = r.position(i, 3 * k, origin);
       t.quadric = Quadric::from_coefficients(r.coefficients(i, 12));
       if (is_degenerate_tetrahedron(t.corners)) r.fail_row(i, "degenerate tetrahedron (zero volume)");
       if (tet_colour) t.colour = r.colour(i, 22);
@@ -393,7 +594,7 @@ Model read_qxm(const ply::File& f) {
       if (kind != 0 && kind != 1 && kind != 2)
         r.fail(i, 0, fmt::format("glyph kind {} is not 0 (sphere), 1 (ellipsoid) or 2 (cylinder)", kind));
       g.kind = static_cast<GlyphKind>(static_cast<int>(kind));
-      g.centre = r.vec3(i, 1);
+      g.centre = r.position(i, 1, origin);
       g.radius = r.world(i, 4);
       for (std::size_t k = 0; k < 3; ++k) g.axes.col(static_cast<Eigen::Index>(k)) = r.vec3(i, 5 + 3 * k);
       if (g.kind != GlyphKind::ellipsoid && !(g.radius > 0))
@@ -618,7 +819,11 @@ Model read_model(const std::filesystem::path& path) {
 
 Model read_slim2t(const std::filesystem::path& path) { return parse_slim2t(io::read_file(path), path); }
 
-void write_model(const Model& model, const std::filesystem::path& path) {
+std::string_view encoding_name(ModelEncoding encoding) {
+  return encoding == ModelEncoding::compact ? "compact" : "double";
+}
+
+WriteModelResult write_model(const Model& model, const std::filesystem::path& path, const WriteModelOptions& options) {
   const SlimHierarchy& hy = model.slim_hierarchy;
   if (const std::string why = validate_slim_hierarchy(model); !why.empty())
     throw InvalidInput(fmt::format("{}: cannot write the SLIM hierarchy: {}", path.string(), why));
@@ -658,6 +863,40 @@ void write_model(const Model& model, const std::filesystem::path& path) {
       throw InvalidInput(fmt::format("{}: cannot write implicit surface {}: more than 255 parameters", path.string(), i));
   }
 
+  // The compact encoding when every primitive survives float32 about the bounding-box centre.
+  WriteModelResult result;
+  result.encoding = options.encoding;
+  const Box3 box = bounds(model);
+  const Eigen::Vector3d origin = box.empty() || !box.centre().allFinite() ? Eigen::Vector3d::Zero() : box.centre();
+  const CompactRounding rounding(origin);
+  std::vector<char> flat;  // compact: tetrahedra left out (float32 turns them flat)
+  if (options.encoding == ModelEncoding::compact) {
+    if (std::string why = rounding.first_problem(model, flat); !why.empty()) {
+      if (!options.fallback_to_full)
+        throw InvalidInput(fmt::format("{}: cannot write the compact encoding: {} (the double encoding can)",
+                                       path.string(), why));
+      log::warn("{}: written in the double encoding: {}", path.string(), why);
+      result.encoding = ModelEncoding::full;
+      result.fallback = std::move(why);
+      flat.clear();
+    }
+  }
+  flat.resize(model.tets.size(), 0);
+  result.dropped_tets = static_cast<std::size_t>(std::count(flat.begin(), flat.end(), 1));
+  if (result.dropped_tets > 0)
+    log::warn("{}: left out {} of {} tetrahedra that float32 turns flat (slivers thinner than the rounding of "
+              "their corners)",
+              path.string(), result.dropped_tets, model.tets.size());
+  const bool compact = result.encoding == ModelEncoding::compact;
+  const ply::Type real = compact ? ply::Type::float32 : ply::Type::float64;
+  const auto append_reals = [&](std::string& out, std::initializer_list<double> vs) {
+    for (double v : vs) ply::append_le(out, real, v);
+  };
+  const auto append_position = [&](std::string& out, const Eigen::Vector3d& p) {
+    const Eigen::Vector3d v = compact ? rounding.offset(p) : p;
+    append_reals(out, {v.x(), v.y(), v.z()});
+  };
+
   const auto has_clip = [](const SlimPatch& s) { return s.clip.has_value(); };
   const auto has_colour = [](const SlimPatch& s) { return s.colour.has_value(); };
   const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), has_clip);
@@ -674,11 +913,12 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   ply::Header h;
   h.encoding = ply::Encoding::binary_little_endian;
   h.comments.push_back(fmt::format("quadrix-format {}", kQxmFormatVersion));
+  h.comments.push_back(fmt::format("quadrix-encoding {}", encoding_name(result.encoding)));
+  if (compact) h.comments.push_back(fmt::format("quadrix-origin {:.17g} {:.17g} {:.17g}", origin.x(), origin.y(), origin.z()));
   for (const auto& [key, value] : model.metadata) {
-    if (key.empty() || has_whitespace(key) || key == "quadrix-format" || key == "bbox") continue;
+    if (key.empty() || has_whitespace(key) || key == "bbox" || is_reserved_key(key)) continue;
     h.comments.push_back(value.empty() ? key : key + " " + single_line(value));
   }
-  const Box3 box = bounds(model);
   if (!box.empty())
     h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
                                      box.max.y(), box.max.z()));
@@ -686,10 +926,10 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   const auto slim_element = [&](std::string name, std::size_t count, bool clip, bool colour) {
     auto props = names({std::span<const char* const>(kSlimNames), kCoefficientNames});
     if (clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
-    ply::Element e = element(std::move(name), count, props, colour);
+    ply::Element e = element(std::move(name), count, props, colour, real);
     if (hierarchy) {
       e.properties.push_back({"parent", ply::Type::int32});
-      e.properties.push_back({"error", ply::Type::float64});
+      e.properties.push_back({"error", real});
     }
     return e;
   };
@@ -698,45 +938,52 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   if (hierarchy && !hy.others.empty())
     h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour));
   if (all || !model.tets.empty()) {
-    h.elements.push_back(element("tet", model.tets.size(), names({kCornerNames, kCoefficientNames}), tet_colour));
+    h.elements.push_back(element("tet", model.tets.size() - result.dropped_tets,
+                                 names({kCornerNames, kCoefficientNames}), tet_colour, real));
     if (tet_corner_colours)
       for (const char* n : kCornerColourNames) h.elements.back().properties.push_back({n, ply::Type::uint8});
   }
   if (all || !model.glyphs.empty()) {
     auto props = names({std::span<const char* const>(std::array<const char*, 4>{"x", "y", "z", "radius"}), kAxisNames});
-    h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, true));
+    h.elements.push_back(element("glyph", model.glyphs.size(), props, glyph_colour, real, true));
   }
 
   const bool implicit_colour = std::any_of(model.implicits.begin(), model.implicits.end(),
                                            [](const ImplicitSurface& s) { return s.colour.has_value(); });
   if (!model.implicits.empty()) {
-    ply::Element e = element("implicit", model.implicits.size(), names({kBoundsNames}), implicit_colour);
+    ply::Element e = element("implicit", model.implicits.size(), names({kBoundsNames}), implicit_colour,
+                                 ply::Type::float64);  // world coordinates in either encoding
     e.properties.insert(e.properties.begin(), {{"expression", ply::Type::uint8, true, ply::Type::uint32},
                                                {"parameters", ply::Type::float64, true, ply::Type::uint8}});
     h.elements.push_back(std::move(e));
   }
 
   std::string out = ply::header_text(h);
-  out.reserve(out.size() + (model.slims.size() + hy.others.size()) * 160 + model.tets.size() * 180 +
-              model.glyphs.size() * 110);
+  const std::size_t r = ply::type_size(real);
+  out.reserve(out.size() + (model.slims.size() + hy.others.size()) * (20 * r + 7) +
+              model.tets.size() * (22 * r + 3) + model.glyphs.size() * (13 * r + 4));
   for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i) {
-    const SlimPatch& s = slim_ball(model, i);
+    const SlimPatch& s = compact ? rounding.slim(slim_ball(model, i)) : slim_ball(model, i);
     const bool drawn = i < model.slims.size();
-    append_doubles(out, {s.centre.x(), s.centre.y(), s.centre.z(), s.radius});
-    for (double v : s.local.coefficients()) ply::append_le(out, ply::Type::float64, v);
+    append_position(out, slim_ball(model, i).centre);
+    append_reals(out, {s.radius});
+    for (double v : s.local.coefficients()) ply::append_le(out, real, v);
     if (drawn ? slim_clip : node_clip) {
       const ClipPlane p = s.clip.value_or(ClipPlane{});
-      append_doubles(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
+      append_reals(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
     }
     if (drawn ? slim_colour : node_colour) append_colour(out, s.colour);
     if (hierarchy) {
       ply::append_le(out, ply::Type::int32, hy.parent[i]);
-      ply::append_le(out, ply::Type::float64, hy.error[i]);
+      ply::append_le(out, real, hy.error[i]);
     }
   }
-  for (const TetPatch& t : model.tets) {
-    for (const auto& p : t.corners) append_doubles(out, {p.x(), p.y(), p.z()});
-    for (double v : t.quadric.coefficients()) ply::append_le(out, ply::Type::float64, v);
+  for (std::size_t i = 0; i < model.tets.size(); ++i) {
+    if (flat[i]) continue;
+    const TetPatch& exact = model.tets[i];
+    const TetPatch& t = compact ? rounding.tet(exact) : exact;
+    for (const auto& p : exact.corners) append_position(out, p);
+    for (double v : t.quadric.coefficients()) ply::append_le(out, real, v);
     if (tet_colour) append_colour(out, t.colour);
     if (tet_corner_colours) {
       // A patch without its own corner colours repeats its colour at every corner.
@@ -747,8 +994,9 @@ void write_model(const Model& model, const std::filesystem::path& path) {
   }
   for (const Glyph& g : model.glyphs) {
     out.push_back(static_cast<char>(static_cast<std::uint8_t>(g.kind)));
-    append_doubles(out, {g.centre.x(), g.centre.y(), g.centre.z(), g.radius});
-    for (int k = 0; k < 3; ++k) append_doubles(out, {g.axes(0, k), g.axes(1, k), g.axes(2, k)});
+    append_position(out, g.centre);
+    append_reals(out, {g.radius});
+    for (int k = 0; k < 3; ++k) append_reals(out, {g.axes(0, k), g.axes(1, k), g.axes(2, k)});
     if (glyph_colour) append_colour(out, g.colour);
   }
   for (std::size_t i = 0; i < model.implicits.size(); ++i) {
@@ -757,12 +1005,15 @@ void write_model(const Model& model, const std::filesystem::path& path) {
     out += s.expression;
     ply::append_le(out, ply::Type::uint8, static_cast<double>(implicit_parameters[i].size()));
     for (double v : implicit_parameters[i]) ply::append_le(out, ply::Type::float64, v);
-    append_doubles(out, {s.bounds.min.x(), s.bounds.min.y(), s.bounds.min.z(), s.bounds.max.x(), s.bounds.max.y(),
-                         s.bounds.max.z()});
+    for (double v : {s.bounds.min.x(), s.bounds.min.y(), s.bounds.min.z(), s.bounds.max.x(), s.bounds.max.y(),
+                     s.bounds.max.z()})
+      ply::append_le(out, ply::Type::float64, v);
     if (implicit_colour) append_colour(out, s.colour);
   }
   write_file_atomically(path,
                         [&](std::ostream& os) { os.write(out.data(), static_cast<std::streamsize>(out.size())); });
+  result.bytes = out.size();
+  return result;
 }
 
 }  // namespace quadrix

@@ -56,6 +56,16 @@ void add_common_options(CLI::App& app, CommonOptions& o) {
   app.add_option("--report", o.report, "Write the measured figures as JSON to this file");
 }
 
+void add_encoding_option(CLI::App& app, WriteModelOptions& o) {
+  app.add_option_function<std::string>(
+         "--encoding",
+         [&o](const std::string& name) { o.encoding = name == "double" ? ModelEncoding::full : ModelEncoding::compact; },
+         "Model encoding: compact (float32, positions relative to an origin in the header; falls back to double "
+         "for a model float32 cannot hold) or double (lossless)")
+      ->check(CLI::IsMember({"compact", "double"}))
+      ->default_str(std::string(encoding_name(o.encoding)));
+}
+
 nlohmann::json camera_json(const Camera& c) {
   const auto vec = [](const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
   return {{"eye", vec(c.eye)},       {"target", vec(c.target)}, {"up", vec(c.up)},

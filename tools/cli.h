@@ -15,6 +15,7 @@
 
 #include "core/camera.h"
 #include "core/model.h"
+#include "core/model_io.h"
 
 namespace quadrix::cli {
 
@@ -72,6 +73,10 @@ using Commands = std::vector<Command>;
 
 /// Adds --quiet, --verbose and --report to a subcommand.
 void add_common_options(CLI::App& app, CommonOptions& options);
+
+/// Adds --encoding compact|double (the .qxm encoding, core/model_io.h) to a command that writes
+/// a model; the default is WriteModelOptions's.
+void add_encoding_option(CLI::App& app, WriteModelOptions& options);
 
 /// The view as reports record it, enough for another tool to reproduce it: eye, target, up
 /// (world units), fov_y_deg (vertical), width and height (pixels), near and far (world units).

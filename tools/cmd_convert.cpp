@@ -24,12 +24,14 @@ void add_convert(CLI::App& root, Commands& commands) {
   add_convert_curvature(*convert, commands);
   auto* app = convert->add_subcommand("quads", "Quad mesh (OBJ, OFF, PLY) to tetrahedron-clipped quadrics");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string mesh, out, colour;
     QuadConvertOptions options;
   };
   auto a = std::make_shared<Args>();
   app->add_option("MESH", a->mesh, "Input polygon mesh")->required();
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--colour", a->colour, "Constant colour R,G,B (0..255) for every patch");
   app->add_option("--planar-threshold", a->options.planar_threshold,
                   "Store a quad as two flat triangles when its patch is within this fraction of its diameter of them")
@@ -60,7 +62,7 @@ void add_convert(CLI::App& root, Commands& commands) {
                         meta["degenerate_skipped"] = fmt::format("{}", c.degenerate_skipped);
                         meta["planar_threshold"] = fmt::format("{:g}", a->options.planar_threshold);
                         meta["max_error"] = fmt::format("{:.3g}", conv.max_relative_deviation);
-                        write_model(conv.model, a->out);
+                        write_model(conv.model, a->out, a->write);
                         report.json["convert"] = {{"kind", "quads"},
                                                   {"mesh", a->mesh},
                                                   {"out", a->out},

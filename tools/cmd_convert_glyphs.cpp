@@ -16,6 +16,7 @@ namespace quadrix::cli {
 void add_convert_glyphs(CLI::App& convert, Commands& commands) {
   auto* app = convert.add_subcommand("glyphs", "Molecule (.pdb, .cif, optionally .gz) to sphere and cylinder glyphs");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string input, ellipsoids, out, style = "balls-sticks", colour_by = "element";
     bool no_water = false;
   };
@@ -28,6 +29,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
   molecule->excludes(ellipsoids);
   ellipsoids->excludes(molecule);
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--style", a->style, "spacefill, balls-sticks (default) or licorice")
       ->check(CLI::IsMember({"spacefill", "balls-sticks", "licorice"}));
   app->add_option("--colour-by", a->colour_by, "element (CPK, default), chain or residue")
@@ -40,7 +42,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                           m.metadata["producer"] =
                               fmt::format("quadrix convert glyphs --ellipsoids {} -o {}", a->ellipsoids, a->out);
                           m.metadata["source"] = a->ellipsoids;
-                          write_model(m, a->out);
+                          write_model(m, a->out, a->write);
                           report.json["convert"] = {{"kind", "ellipsoids"}, {"input", a->ellipsoids}, {"out", a->out},
                                                     {"glyphs", m.glyphs.size()}};
                           log::info("wrote {}: {} ellipsoids", a->out, m.glyphs.size());
@@ -56,7 +58,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                                                        a->input, a->out, a->style, a->colour_by,
                                                        a->no_water ? " --no-water" : "");
                         meta["source"] = a->input;
-                        write_model(g.model, a->out);
+                        write_model(g.model, a->out, a->write);
                         report.json["convert"] = {{"kind", "glyphs"},
                                                   {"input", a->input},
                                                   {"out", a->out},

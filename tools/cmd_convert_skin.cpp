@@ -16,6 +16,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   auto* app = convert.add_subcommand(
       "skin", "Skin surface of a ball set (.pdb, .cin, .xyzr) to tetrahedron-clipped quadrics (CGAL + TetGen)");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string input, out, radii = "vdw", tetrahedra = "regular";
     double shrink = 0.5, radius_scale = 1.0;
     bool no_water = false;
@@ -24,6 +25,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   app->add_option("INPUT", a->input, "Balls: PDB atoms (.pdb, .ent), weighted points (.cin: x y z r²) or .xyzr")
       ->required();
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--shrink", a->shrink, "Skin shrink factor s in (0, 1) (default 0.5)")
       ->check(number({.lo = 0, .hi = 1, .open_lo = true, .open_hi = true}));
   app->add_option("--radii", a->radii, "PDB atom radii: vdw (default), covalent or unit")
@@ -64,7 +66,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                         meta["tetrahedra"] = a->tetrahedra;
                         if (o.tetrahedra != SkinTetrahedra::regular)  // checked against CGAL's value()
                           meta["quadric_disagreement"] = fmt::format("{:.3g}", conv.max_quadric_disagreement);
-                        write_model(conv.model, a->out);
+                        write_model(conv.model, a->out, a->write);
                         report.json["convert"] = {{"kind", "skin"},
                                                   {"input", a->input},
                                                   {"out", a->out},

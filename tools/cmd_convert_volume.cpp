@@ -74,7 +74,7 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
   meta["reconstruction"] = midpoints;
   meta["tetrahedra"] = "tessellation";  // the input mesh's cells: no two overlap
   meta["value_range"] = fmt::format("{:g},{:g}", conv.value_min, conv.value_max);
-  write_model(conv.model, a.out);
+  write_model(conv.model, a.out, a.write);
   report.json["convert"] = {{"kind", "volume"},
                             {"tets_file", a.tets},
                             {"values_file", a.values},
@@ -104,6 +104,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
       "volume", "Volume (.nhdr/.nrrd, .inr[.gz], raw; or a .mesh/.node tet mesh with --values) to quadratic "
                 "iso-surface patches clipped by tetrahedra");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string volume, out, dims, type, spacing, colour, reconstruction = "catmull-rom", synth, write_volume, tets,
         values;
     double iso = 0;
@@ -115,6 +116,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
   app->add_option("VOLUME", a->volume, "Input volume: .nhdr/.nrrd, .inr/.inr.gz, or raw with --dims and --type");
   app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range)")->required()->check(finite());
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest), each in [1, 2^30]");
   app->add_option("--type", a->type, "Raw volume: uint8|int8|uint16|int16|uint32|int32|float|double");
   app->add_flag("--big-endian", a->big_endian, "Raw volume: big-endian samples (default little)");
@@ -185,7 +187,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                         meta["patches"] = a->linear ? "linear" : "quadratic";
                         meta["reconstruction"] = a->linear ? "none" : a->reconstruction;
                         meta["value_range"] = fmt::format("{:g},{:g}", conv.value_min, conv.value_max);
-                        write_model(conv.model, a->out);
+                        write_model(conv.model, a->out, a->write);
                         report.json["convert"] = {{"kind", "volume"},
                                                   {"volume", input},
                                                   {"out", a->out},

@@ -18,6 +18,7 @@ namespace quadrix::cli {
 void add_fit(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("fit", "Fit a SLIM surface (sparse low-degree implicits) to a point cloud");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string points, out;
     double max_error = 1e-3;
     double max_error_abs = 0;
@@ -28,6 +29,7 @@ void add_fit(CLI::App& root, Commands& commands) {
   auto a = std::make_shared<Args>();
   app->add_option("POINTS", a->points, "Point cloud (PLY, XYZ with 3 or 6 columns) or mesh (PLY, OFF, OBJ, STL: its faces give the normals)")->required();
   app->add_option("-o,--out", a->out, "Output .qxm")->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
       ->check(number({.lo = 1e-7, .hi = 0.5}));
   app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error)")
@@ -120,7 +122,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                           j["holdout"] = {{"points", e.points}, {"misses", e.misses}, {"max_abs", e.max},
                                           {"rms_abs", e.rms}, {"max_rel", e.max / s.diagonal}};
                         }
-                        write_model(r.model, a->out);
+                        write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;
                         log::info("{} patches for {} points in {:.2f} s; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
                                   "(E = {:.3g})", s.patches, s.points, s.time_total, s.max_blend, s.surface_max,

@@ -21,6 +21,7 @@ constexpr int kMarschnerLobbSamples = 41;  // the classic 41³ grid
 void add_synth(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("synth", "Write a small analytic model (or the Marschner–Lobb test volume)");
   struct Args {
+    WriteModelOptions write;  // --encoding
     std::string kind, out;
     SynthOptions options;
   };
@@ -32,6 +33,7 @@ void add_synth(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember(kinds));
   app->add_option("-o,--out", a->out, "Output .qxm file (marschner-lobb: a .nhdr header, its .raw data beside it)")
       ->required();
+  add_encoding_option(*app, a->write);
   app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere)")->check(number({.lo = 0, .hi = 50e6}));
   app->add_option("--resolution", a->options.resolution,
                   "Grid cells per axis (hyperboloids); samples per axis for marschner-lobb (default 41)")
@@ -54,7 +56,7 @@ void add_synth(CLI::App& root, Commands& commands) {
                           return kOk;
                         }
                         Model m = synth_model(a->kind, a->options);
-                        write_model(m, a->out);
+                        write_model(m, a->out, a->write);
                         report.json["synth"] = {{"kind", a->kind},     {"out", a->out},
                                                 {"slim", m.slims.size()}, {"tet", m.tets.size()},
                                                 {"glyph", m.glyphs.size()}};

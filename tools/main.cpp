@@ -20,6 +20,7 @@ void add_view(CLI::App& root, Commands& commands);
 void add_convert(CLI::App& root, Commands& commands);
 void add_bench(CLI::App& root, Commands& commands);
 void add_mesh(CLI::App& root, Commands& commands);
+void add_tetrahedralize(CLI::App& root, Commands& commands);
 
 namespace {
 // An error message as printed: control bytes (a file's content echoed by a reader that did not
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
   add_convert(app, commands);
   add_bench(app, commands);
   add_mesh(app, commands);
+  add_tetrahedralize(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
 

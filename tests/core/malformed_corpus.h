@@ -327,7 +327,7 @@ inline std::vector<MalformedCase> make_malformed_corpus(const std::filesystem::p
 
   // The valid file as write_model writes it, and its layout.
   const std::filesystem::path valid = dir / "valid_reference.qxm.tmp";
-  write_model(model, valid);
+  write_model(model, valid, {.encoding = ModelEncoding::full});
   const std::string base = read_bytes(valid);
   std::filesystem::remove(valid);
   const std::size_t body = base.find("end_header\n") + 11;
@@ -353,7 +353,7 @@ inline std::vector<MalformedCase> make_malformed_corpus(const std::filesystem::p
   }
   {
     PlyDoc d = doc;
-    d.comments[0] = "quadrix-format 3";
+    d.comments[0] = "quadrix-format " + std::to_string(kQxmFormatVersion + 1);
     add_doc("future_version.qxm", d, le, "unsupported quadrix-format");
     d.comments.erase(d.comments.begin());
     add_doc("plain_ply.qxm", d, le, "not a .qxm file");

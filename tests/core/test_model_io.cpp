@@ -82,7 +82,7 @@ TEST(ModelIo, RoundTripIsBitExactWithOptionalProperties) {
   ScratchDir dir("model-io");
   const Model m = make_sample_model(true);
   ASSERT_TRUE(m.slims[1].clip == std::nullopt && m.slims[0].clip.has_value());  // mixed clip planes
-  write_model(m, dir / "m.qxm");
+  write_model(m, dir / "m.qxm", {.encoding = ModelEncoding::full});
   const Model r = read_model(dir / "m.qxm");
   expect_same_primitives(m, r);
   EXPECT_EQ(without_bbox(r.metadata), m.metadata);
@@ -91,7 +91,7 @@ TEST(ModelIo, RoundTripIsBitExactWithOptionalProperties) {
 TEST(ModelIo, RoundTripIsBitExactWithoutOptionalProperties) {
   ScratchDir dir("model-io");
   const Model m = make_sample_model(false);
-  write_model(m, dir / "m.qxm");
+  write_model(m, dir / "m.qxm", {.encoding = ModelEncoding::full});
   const std::string bytes = test::read_bytes(dir / "m.qxm");
   const std::string header = bytes.substr(0, bytes.find("end_header"));
   EXPECT_EQ(header.find("clip_nx"), std::string::npos);
@@ -107,7 +107,10 @@ TEST(ModelIo, HeaderFollowsTheProfile) {
   m.tets.clear();
   write_model(m, dir / "m.qxm");
   const std::string bytes = test::read_bytes(dir / "m.qxm");
-  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 2\n", 0), 0u);
+  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 3\ncomment quadrix-encoding "
+                        "compact\ncomment quadrix-origin ",
+                        0),
+            0u);
   const ply::File f = ply::File::open(dir / "m.qxm");
   ASSERT_NE(f.header().find("slim"), nullptr);
   EXPECT_EQ(f.header().find("tet"), nullptr);  // empty elements are left out
@@ -441,14 +444,14 @@ TEST(SlimHierarchy, CutByError) {
   EXPECT_EQ(select_slim_cut(m, 0.5), (std::vector<std::int32_t>{0, 1, 2, 3}));  // no hierarchy: all drawn
 }
 
-TEST(ModelIo, HierarchyRoundTripsThroughRevision2) {
+TEST(ModelIo, HierarchyRoundTrips) {
   ScratchDir dir("qxm2");
   Model m = sample_hierarchy();
   m.metadata["producer"] = "test";
-  write_model(m, dir / "h.qxm");
+  write_model(m, dir / "h.qxm", {.encoding = ModelEncoding::full});
   std::ifstream in(dir / "h.qxm", std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(bytes.find("comment quadrix-format 2\n"), std::string::npos);
+  EXPECT_NE(bytes.find("comment quadrix-format 3\ncomment quadrix-encoding double\n"), std::string::npos);
   EXPECT_NE(bytes.find("element slim 4\n"), std::string::npos);
   EXPECT_NE(bytes.find("element slim_node 3\n"), std::string::npos);
   EXPECT_NE(bytes.find("property int parent\nproperty double error\n"), std::string::npos);

@@ -139,6 +139,24 @@ def main():
     put("implicit-list-count.qxm", implicit_qxm(count=1000))
     put("implicit-no-bounds.qxm", implicit_qxm(bounds=(-2, -2, -2, 2, 2), props=b"property double min_x\n"
         b"property double min_y\nproperty double min_z\nproperty double max_x\nproperty double max_y\n"))
+    # The compact encoding (seed written by `quadrix synth hyperboloid1 --resolution 2`): the
+    # origin and encoding lines, and float32 rows.
+    seed = open(os.path.join(HERE, "seed-compact.qxm"), "rb").read()
+    head, body = seed.split(b"end_header\n", 1)
+    origin_at = head.index(b"comment quadrix-origin ")
+    origin_end = head.index(b"\n", origin_at) + 1
+    def with_origin(line):
+        return head[:origin_at] + line + head[origin_end:] + b"end_header\n" + body
+    put("compact-no-origin.qxm", with_origin(b""))
+    put("compact-origin-nan.qxm", with_origin(b"comment quadrix-origin nan 0 0\n"))
+    put("compact-origin-short.qxm", with_origin(b"comment quadrix-origin 1 2\n"))
+    put("compact-origin-word.qxm", with_origin(b"comment quadrix-origin 1 2 three\n"))
+    put("compact-origin-twice.qxm", with_origin(head[origin_at:origin_end] * 2))
+    put("compact-encoding-bad.qxm", seed.replace(b"quadrix-encoding compact", b"quadrix-encoding zipped"))
+    put("compact-revision-2.qxm", seed.replace(b"quadrix-format 3", b"quadrix-format 2"))
+    put("compact-truncated.qxm", seed[:-7])
+    put("compact-nan.qxm", head + b"end_header\n" + struct.pack("<f", float("nan")) + body[4:])
+    put("compact-count-big.qxm", head.replace(b"element tet ", b"element tet 1") + b"end_header\n" + body)
     put("empty.qxm", b"")
     put("text.qxm", b"hello\n")
     # Counts and trailing data.
