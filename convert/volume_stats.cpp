@@ -115,8 +115,14 @@ VolumeStats volume_stats(const Volume& v, const VolumeStatsOptions& o) {
   for (std::size_t j = 1; j + 1 < n; ++j)
     for (std::size_t k = j + 1; k < n; ++k)
       if (const double sc = p.term(0, j) + p.term(j, k) + p.term(k, n); sc > best * (1 + 1e-12)) best = sc, bj = j, bk = k;
-  const double lo3 = inside(s.min + (s.max - s.min) * double(bj) / double(n));
-  const double hi3 = inside(s.min + (s.max - s.min) * double(bk) / double(n));
+  // Each boundary moved to the middle of its run of equal scores (an empty gap), as for two classes.
+  const auto score3 = [&](std::size_t j, std::size_t k) { return p.term(0, j) + p.term(j, k) + p.term(k, n); };
+  const double tol = 1e-12 * std::max(1.0, best);
+  std::size_t ej = bj, ek = bk;
+  while (ej + 1 < bk && score3(ej + 1, bk) >= best - tol) ++ej;
+  while (ek + 1 < n && score3(bj, ek + 1) >= best - tol) ++ek;
+  const double lo3 = inside(s.min + (s.max - s.min) * (0.5 * double(bj + ej)) / double(n));
+  const double hi3 = inside(s.min + (s.max - s.min) * (0.5 * double(bk + ek)) / double(n));
   s.suggestions.push_back({"otsu3-low", lo3, below(lo3)});
   s.suggestions.push_back({"otsu3-high", hi3, below(hi3)});
   return s;

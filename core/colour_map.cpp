@@ -36,12 +36,12 @@ Rgb hsv(double h, double s, double v) {
 
 }  // namespace
 
-ColourBy parse_colour_by(std::string_view text) {
-  if (text == "none") return ColourBy::none;
-  if (text == "error") return ColourBy::error;
-  if (text == "patch") return ColourBy::patch;
-  if (text == "normal") return ColourBy::normal;
-  if (text == "depth") return ColourBy::depth;
+ColourMode parse_colour_mode(std::string_view text) {
+  if (text == "none") return ColourMode::none;
+  if (text == "error") return ColourMode::error;
+  if (text == "patch") return ColourMode::patch;
+  if (text == "normal") return ColourMode::normal;
+  if (text == "depth") return ColourMode::depth;
   throw InvalidInput(fmt::format("colour-by '{}' is not one of none, error, patch, normal, depth", text));
 }
 
@@ -92,9 +92,9 @@ Model colour_by_values(const Model& model, std::span<const std::optional<double>
   return m;
 }
 
-void colour_pixels(Image8& image, ColourBy mode, std::span<const std::uint8_t> coverage, std::span<const float> depth,
+void colour_pixels(Image8& image, ColourMode mode, std::span<const std::uint8_t> coverage, std::span<const float> depth,
                    std::span<const Eigen::Vector3f> normal, const ValueRange& range) {
-  if (mode != ColourBy::normal && mode != ColourBy::depth)
+  if (mode != ColourMode::normal && mode != ColourMode::depth)
     throw InvalidInput("colour_pixels: only normal and depth are per-pixel modes");
   const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
   if (coverage.size() != n || depth.size() != n || normal.size() != n || image.rgba.size() != 4 * n)
@@ -102,7 +102,7 @@ void colour_pixels(Image8& image, ColourBy mode, std::span<const std::uint8_t> c
                                    depth.size(), normal.size(), image.width, image.height));
   for (std::size_t i = 0; i < n; ++i) {
     if (!coverage[i]) continue;
-    const Rgb c = mode == ColourBy::normal ? normal_colour(normal[i]) : scalar_colour(range.normalise(depth[i]));
+    const Rgb c = mode == ColourMode::normal ? normal_colour(normal[i]) : scalar_colour(range.normalise(depth[i]));
     std::copy(c.begin(), c.end(), image.rgba.begin() + 4 * i);
     image.rgba[4 * i + 3] = 255;
   }

@@ -15,10 +15,10 @@ namespace quadrix {
 
 /// What `render --colour-by` colours by. error, patch: per primitive (lit like any colour);
 /// normal, depth: per pixel (unlit, the value itself).
-enum class ColourBy { none, error, patch, normal, depth };
+enum class ColourMode { none, error, patch, normal, depth };
 
 /// "none", "error", "patch", "normal", "depth". \throws InvalidInput naming the text.
-ColourBy parse_colour_by(std::string_view text);
+ColourMode parse_colour_mode(std::string_view text);
 
 /// A closed interval of values mapped onto the scalar map.
 struct ValueRange {
@@ -47,7 +47,7 @@ Model colour_by_values(const Model& model, std::span<const std::optional<double>
 /// Per-pixel colours (normal, depth) of the covered pixels, unlit, into image (others kept).
 /// depth: eye depth per pixel; normal: world unit normal per pixel; range: depth range.
 /// \throws InvalidInput for a mode other than normal or depth, or buffers of the wrong size.
-void colour_pixels(Image8& image, ColourBy mode, std::span<const std::uint8_t> coverage, std::span<const float> depth,
+void colour_pixels(Image8& image, ColourMode mode, std::span<const std::uint8_t> coverage, std::span<const float> depth,
                    std::span<const Eigen::Vector3f> normal, const ValueRange& range);
 
 /// Range of the covered pixels' depths (lo = hi = 0 when none is covered).

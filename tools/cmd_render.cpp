@@ -63,10 +63,10 @@ ValueRange parse_range(const std::string& text) {
 
 // --colour-by error|patch: the model recoloured per primitive (both backends draw its colours).
 // error: the patches' measured_error column (written by fit), or measured against --points.
-Model colour_model(const Model& model, ColourBy mode, const std::optional<PointCloud>& points, const RenderArgs& a,
+Model colour_model(const Model& model, ColourMode mode, const std::optional<PointCloud>& points, const RenderArgs& a,
                    nlohmann::json& j, ValueRange& range) {
-  if (mode == ColourBy::patch) return colour_by_patch(model);
-  if (mode != ColourBy::error) return model;
+  if (mode == ColourMode::patch) return colour_by_patch(model);
+  if (mode != ColourMode::error) return model;
   std::vector<std::optional<double>> values(model.slims.size());
   std::string source;
   if (points) {
@@ -209,8 +209,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     mesh = read_mesh(a.model);
   }
   if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
-  const ColourBy colour_by = parse_colour_by(a.colour_by);
-  if (!a.colour_range.empty() && colour_by != ColourBy::error && colour_by != ColourBy::depth)
+  const ColourMode colour_by = parse_colour_mode(a.colour_by);
+  if (!a.colour_range.empty() && colour_by != ColourMode::error && colour_by != ColourMode::depth)
     throw CLI::ValidationError("--colour-range", "applies to --colour-by error or depth");
   std::optional<PointCloud> points;
   if (!a.points.empty()) points = read_points(a.points);
@@ -270,12 +270,12 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   // the points depth-tested against the surface's depth.
   const auto finish = [&](Image8& colour, std::span<const std::uint8_t> coverage, std::span<const float> depth,
                           std::span<const Eigen::Vector3f> normal) {
-    if (colour_by == ColourBy::normal || colour_by == ColourBy::depth) {
-      if (colour_by == ColourBy::depth)
+    if (colour_by == ColourMode::normal || colour_by == ColourMode::depth) {
+      if (colour_by == ColourMode::depth)
         colour_range = a.colour_range.empty() ? covered_depth_range(coverage, depth) : parse_range(a.colour_range);
       colour_pixels(colour, colour_by, coverage, depth, normal, colour_range);
     }
-    if (colour_by == ColourBy::error || colour_by == ColourBy::depth) {
+    if (colour_by == ColourMode::error || colour_by == ColourMode::depth) {
       draw_colour_bar(colour, colour_range);
       colour_json["range"] = {colour_range.lo, colour_range.hi};
     }
@@ -348,7 +348,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
   Image8 colour = renderer.read_colour();
   std::optional<render::GBuffer> gbuffer;
-  if (transparent || a.background != "255,255,255" || colour_by != ColourBy::none || points)
+  if (transparent || a.background != "255,255,255" || colour_by != ColourMode::none || points)
     gbuffer = renderer.read_gbuffer();
   if (gbuffer)
     for (std::size_t i = 0; i < gbuffer->coverage.size(); ++i)
