@@ -112,6 +112,7 @@ Volume decode(std::string_view data, const std::array<int, 3>& dims, VoxelType t
   v.dims = dims;
   v.spacing = spacing;
   v.source = what;
+  v.voxel_type = voxel_name(type);
   v.values.resize(n);
   const bool swap = big_endian != (std::endian::native == std::endian::big);
   const char* p = data.data();

@@ -45,6 +45,7 @@ struct Volume {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();          ///< world position of sample (0,0,0)
   std::vector<float> values;                                 ///< dims[0]·dims[1]·dims[2], x fastest
   std::string source = "volume";                             ///< names the volume in messages
+  std::string voxel_type = "float";                          ///< sample type in the file (NRRD name)
 
   std::size_t index(int i, int j, int k) const {
     return (static_cast<std::size_t>(k) * dims[1] + j) * dims[0] + i;

@@ -33,6 +33,9 @@ struct SlimPatch {
   Quadric local;                                     ///< g(u), u = (x − centre)/R
   std::optional<ClipPlane> clip;                     ///< sharp features: in local u coordinates
   std::optional<Rgb> colour;
+  /// Measured error (fit/patch_error.h): the largest distance from the data points this patch
+  /// serves (weight > 0 in their probe's blend) to the blended surface, world units, ≥ 0.
+  std::optional<double> measured_error;
   /// The patch's quadric in world coordinates.
   Quadric world() const { return local.from_local(centre, radius); }
 };

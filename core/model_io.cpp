@@ -32,6 +32,7 @@ constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_n
 constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
 constexpr std::array<const char*, 12> kCornerColourNames = {"red0",   "green0", "blue0", "red1",   "green1", "blue1",
                                                             "red2",   "green2", "blue2", "red3",   "green3", "blue3"};
+constexpr const char* kMeasuredErrorName = "measured_error";
 constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
                                                       "x2", "y2", "z2", "x3", "y3", "z3"};
 constexpr std::array<const char*, 6> kBoundsNames = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
@@ -312,7 +313,8 @@ std::vector<std::string> required(const ply::File& f, const ply::Element& e, std
 
 /// Column layout of a `slim` or `slim_node` request: x y z radius k_* [clip] [colour] [parent error].
 struct SlimColumns {
-  bool clip = false, colour = false, hierarchy = false;
+  bool clip = false, colour = false, hierarchy = false, measured_error = false;
+  std::size_t measured_error_col = 0;
   std::size_t parent = 0;  ///< column of `parent` (`error` follows) when hierarchy
 };
 
@@ -327,6 +329,9 @@ SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarc
   c.hierarchy = optional_group(f, e, kHierarchyNames);
   if (c.clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
   if (c.colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
+  c.measured_error = e.find(kMeasuredErrorName) >= 0;
+  c.measured_error_col = props.size();
+  if (c.measured_error) props.emplace_back(kMeasuredErrorName);
   c.parent = props.size();
   if (c.hierarchy) props.insert(props.end(), kHierarchyNames.begin(), kHierarchyNames.end());
   requests.push_back({e.name, std::move(props), {}});
@@ -352,6 +357,12 @@ void read_slim_rows(const Rows& r, const SlimColumns& cols, const Eigen::Vector3
       c += 4;
     }
     if (cols.colour) s.colour = r.colour(i, c);
+    if (cols.measured_error) {
+      // −1: not measured (the patch served no point); else a finite distance ≥ 0.
+      const double e = r.finite(i, cols.measured_error_col);
+      if (e < 0 && e != -1.0) r.fail(i, cols.measured_error_col, fmt::format("measured error {} is negative (−1: none)", e));
+      if (e >= 0) s.measured_error = e;
+    }
     if (cols.hierarchy) {
       const std::size_t self = hierarchy.parent.size();
       const double p = r.finite(i, cols.parent);
@@ -901,6 +912,13 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
   const auto has_colour = [](const SlimPatch& s) { return s.colour.has_value(); };
   const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), has_clip);
   const bool slim_colour = std::any_of(model.slims.begin(), model.slims.end(), has_colour);
+  const auto has_error = [](const SlimPatch& s) { return s.measured_error.has_value(); };
+  const bool slim_error = std::any_of(model.slims.begin(), model.slims.end(), has_error);
+  const bool node_error = std::any_of(hy.others.begin(), hy.others.end(), has_error);
+  for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i)
+    if (const auto& e = slim_ball(model, i).measured_error; e && !(std::isfinite(*e) && *e >= 0))
+      throw InvalidInput(fmt::format("{}: cannot write slim patch {}: measured error {} is not finite and >= 0",
+                                     path.string(), i, *e));
   const bool node_clip = std::any_of(hy.others.begin(), hy.others.end(), has_clip);
   const bool node_colour = std::any_of(hy.others.begin(), hy.others.end(), has_colour);
   const bool tet_colour =
@@ -923,10 +941,11 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
                                      box.max.y(), box.max.z()));
   const bool all = model.empty();  // an empty model still declares the whole profile
-  const auto slim_element = [&](std::string name, std::size_t count, bool clip, bool colour) {
+  const auto slim_element = [&](std::string name, std::size_t count, bool clip, bool colour, bool error) {
     auto props = names({std::span<const char* const>(kSlimNames), kCoefficientNames});
     if (clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
     ply::Element e = element(std::move(name), count, props, colour, real);
+    if (error) e.properties.push_back({kMeasuredErrorName, ply::Type::float64});
     if (hierarchy) {
       e.properties.push_back({"parent", ply::Type::int32});
       e.properties.push_back({"error", real});
@@ -934,9 +953,9 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     return e;
   };
   if (all || hierarchy || !model.slims.empty())
-    h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour));
+    h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour, slim_error));
   if (hierarchy && !hy.others.empty())
-    h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour));
+    h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour, node_error));
   if (all || !model.tets.empty()) {
     h.elements.push_back(element("tet", model.tets.size() - result.dropped_tets,
                                  names({kCornerNames, kCoefficientNames}), tet_colour, real));
@@ -973,6 +992,7 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
       append_reals(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
     }
     if (drawn ? slim_colour : node_colour) append_colour(out, s.colour);
+    if (drawn ? slim_error : node_error) ply::append_le(out, ply::Type::float64, s.measured_error.value_or(-1.0));
     if (hierarchy) {
       ply::append_le(out, ply::Type::int32, hy.parent[i]);
       ply::append_le(out, real, hy.error[i]);

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 
@@ -226,14 +227,24 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
   if (!samples.empty()) {
     // Only patch hits in front of the nearest opaque surface take part (they share one depth test).
     std::erase_if(samples, [&](const SlimSample& s) { return s.hit.t >= best_t; });
-    if (const auto b = blend_slim_samples(samples, options.slim, blended); b && b->t < best_t) {
+    thread_local std::vector<SlimSample> used_here;
+    std::vector<SlimSample>* used = blended ? blended : &used_here;
+    if (const auto b = blend_slim_samples(samples, options.slim, used); b && b->t < best_t) {
       out.t = b->t;
       out.point = b->point;
       out.normal = b->normal;
       out.kind = PrimitiveKind::slim;
       out.index = b->first_index;
-      const auto& colour = m.slims[b->first_index].colour;
-      if (colour) out.colour = *colour;
+      // The colour is blended like the position (Σwᵢcᵢ / Σwᵢ), as the GL accumulation pass does.
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      double w = 0;
+      for (const SlimSample& s : *used) {
+        const Rgb ci = m.slims[s.index].colour.value_or(out.colour);
+        c += s.weight * Eigen::Vector3d(ci[0], ci[1], ci[2]);
+        w += s.weight;
+      }
+      if (w > 0)
+        for (int k = 0; k < 3; ++k) out.colour[k] = static_cast<std::uint8_t>(std::clamp(c[k] / w, 0.0, 255.0) + 0.5);
       return out;
     }
     if (blended) blended->clear();  // the blend lies behind an opaque surface

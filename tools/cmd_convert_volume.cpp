@@ -3,17 +3,35 @@
 // (--tets FILE --values FILE). Registered under the `convert` group by add_convert_volume (called
 // from tools/cmd_convert.cpp).
 #include <cstdio>
+#include <iostream>
+#include <tuple>
 
 #include <fmt/format.h>
 
 #include "convert/tetmesh_io.h"
 #include "convert/volume.h"
+#include "convert/volume_stats.h"
+#include "core/error.h"
 #include "core/log.h"
 #include "core/model_io.h"
 #include "tools/cli.h"
 
 namespace quadrix::cli {
 namespace {
+
+// Without --iso: Otsu's threshold of the values (convert/volume_stats.h), said on stderr and
+// recorded. Returns the iso-value and its source.
+std::pair<double, std::string> suggested_iso(const Volume& values, const CommonOptions& common) {
+  const VolumeStats s = volume_stats(values);
+  if (s.suggestions.empty())
+    throw InvalidInput(fmt::format("{}: constant data ({:g}): no iso-value to suggest", values.source, s.min));
+  const IsoSuggestion& g = s.suggestions.front();
+  if (!common.quiet)
+    std::cerr << fmt::format("quadrix: no --iso given: using {:.6g}, Otsu's threshold ({} of the values {:.6g} – "
+                             "{:.6g}, {:.1f} % below; quadrix info lists more)\n",
+                             g.value, values.source, s.min, s.max, 100.0 * g.below);
+  return {g.value, g.method};
+}
 
 
 // "A,B,C" of three numbers, each finite and within range. \throws CLI::ValidationError.
@@ -55,6 +73,13 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
   const double read_seconds = report.elapsed() - t0;
   VolumeIsoOptions o;
   o.iso = a.iso;
+  std::string iso_source = "--iso";
+  if (!a.has_iso) {
+    Volume list;
+    list.source = a.values;
+    list.values.assign(values.begin(), values.end());
+    std::tie(o.iso, iso_source) = suggested_iso(list, common);
+  }
   o.linear = a.linear;
   if (!a.colour.empty()) o.colour = parse_rgb(a.colour);
   Progress progress("volume", progress_allowed(common));
@@ -65,10 +90,11 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
   const char* midpoints = a.linear ? "none" : "hermite-quadratic-fit";
   auto& meta = conv.model.metadata;
   meta["producer"] = fmt::format("quadrix convert volume --tets {} --values {} --iso {:.17g} -o {}{}", a.tets,
-                                 a.values, a.iso, a.out, a.linear ? " --linear" : "");
+                                 a.values, o.iso, a.out, a.linear ? " --linear" : "");
+  meta["iso_source"] = iso_source;
   meta["source"] = a.tets;
   meta["values"] = a.values;
-  meta["iso"] = fmt::format("{:.17g}", a.iso);
+  meta["iso"] = fmt::format("{:.17g}", o.iso);
   meta["mesh"] = fmt::format("{} vertices, {} tetrahedra", mesh.vertices.size(), mesh.tets.size());
   meta["patches"] = a.linear ? "linear" : "quadratic";
   meta["reconstruction"] = midpoints;
@@ -80,7 +106,8 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
                             {"values_file", a.values},
                             {"out", a.out},
                             {"vertices", mesh.vertices.size()},
-                            {"iso", a.iso},
+                            {"iso", o.iso},
+                            {"iso_source", iso_source},
                             {"value_min", conv.value_min},
                             {"value_max", conv.value_max},
                             {"linear", a.linear},
@@ -108,13 +135,15 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
     std::string volume, out, dims, type, spacing, colour, reconstruction = "catmull-rom", synth, write_volume, tets,
         values;
     double iso = 0;
+    bool has_iso = false;  // --iso given; else Otsu's threshold
     bool big_endian = false, linear = false;
     std::size_t header_bytes = 0;
     int grid = 41;
   };
   auto a = std::make_shared<Args>();
   app->add_option("VOLUME", a->volume, "Input volume: .nhdr/.nrrd, .inr/.inr.gz, or raw with --dims and --type");
-  app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range)")->required()->check(finite());
+  app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range; default: Otsu's threshold of the data, "
+                                  "as quadrix info suggests)")->check(finite());
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
   add_encoding_option(*app, a->write);
   app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest), each in [1, 2^30]");
@@ -134,7 +163,8 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
   app->add_option("--tets", a->tets,
                   "Use a tetrahedral mesh instead of VOLUME: Medit .mesh or TetGen .node/.ele (needs --values)");
   app->add_option("--values", a->values, "Per-vertex values of the --tets mesh: one number per vertex, # comments");
-  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
+  commands.push_back({app, [a, app](const CommonOptions& common, Report& report) {
+                        a->has_iso = app->count("--iso") > 0;
                         if (!a->tets.empty() || !a->values.empty()) return run_tets(*a, common, report);
                         if (a->synth.empty() == a->volume.empty())
                           throw CLI::ValidationError("VOLUME", "give either a VOLUME file, --synth or --tets");
@@ -160,6 +190,8 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                         if (!a->write_volume.empty()) write_nrrd(volume, a->write_volume);
                         VolumeIsoOptions o;
                         o.iso = a->iso;
+                        std::string iso_source = "--iso";
+                        if (!a->has_iso) std::tie(o.iso, iso_source) = suggested_iso(volume, common);
                         o.reconstruction =
                             a->reconstruction == "trilinear" ? Reconstruction::trilinear : Reconstruction::catmull_rom;
                         o.linear = a->linear;
@@ -174,12 +206,13 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                         std::string producer = a->synth.empty()
                                                    ? fmt::format("quadrix convert volume {}", a->volume)
                                                    : fmt::format("quadrix convert volume --synth {} --grid {}", a->synth, a->grid);
-                        producer += fmt::format(" --iso {:.17g} -o {}", a->iso, a->out);
+                        producer += fmt::format(" --iso {:.17g} -o {}", o.iso, a->out);
                         if (a->linear) producer += " --linear";
                         else producer += " --reconstruction " + a->reconstruction;
                         meta["producer"] = producer;
                         meta["source"] = input;
-                        meta["iso"] = fmt::format("{:.17g}", a->iso);
+                        meta["iso"] = fmt::format("{:.17g}", o.iso);
+                        meta["iso_source"] = iso_source;
                         meta["grid"] = fmt::format("{}x{}x{}", volume.dims[0], volume.dims[1], volume.dims[2]);
                         meta["tetrahedra"] = "tessellation";  // cells of the grid: no two overlap
                         meta["spacing"] = fmt::format("{:g},{:g},{:g}", volume.spacing.x(), volume.spacing.y(),
@@ -192,7 +225,8 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                                                   {"volume", input},
                                                   {"out", a->out},
                                                   {"dims", volume.dims},
-                                                  {"iso", a->iso},
+                                                  {"iso", o.iso},
+                                                  {"iso_source", iso_source},
                                                   {"value_min", conv.value_min},
                                                   {"value_max", conv.value_max},
                                                   {"linear", a->linear},

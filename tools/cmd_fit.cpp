@@ -1,4 +1,5 @@
 // quadrix fit POINTS -o model.qxm: SLIM surfaces from point clouds (issue 4, DESIGN §2).
+#include <algorithm>
 #include <iostream>
 #include <optional>
 #include <random>
@@ -9,7 +10,9 @@
 #include "core/log.h"
 #include "core/model_io.h"
 #include "core/points_io.h"
+#include "fit/data_surface.h"
 #include "fit/evaluate.h"
+#include "fit/patch_error.h"
 #include "fit/slim_fit.h"
 #include "tools/cli.h"
 
@@ -121,6 +124,21 @@ void add_fit(CLI::App& root, Commands& commands) {
                           const SlimError e = evaluate_slim(r.model, held);
                           j["holdout"] = {{"points", e.points}, {"misses", e.misses}, {"max_abs", e.max},
                                           {"rms_abs", e.rms}, {"max_rel", e.max / s.diagonal}};
+                        }
+                        {
+                          // Each patch's measured error (the points side, per patch) for render --colour-by error.
+                          const double t0 = report.elapsed();
+                          std::optional<DataSurface> surface;
+                          if (mesh) surface = DataSurface::from_mesh(*mesh);
+                          const PatchErrors pe =
+                              slim_patch_errors(r.model, cloud, {.surface = surface ? &*surface : nullptr});
+                          set_measured_errors(r.model, pe);
+                          j["patch_errors"] = {
+                              {"measured_patches", std::count_if(pe.per_patch.begin(), pe.per_patch.end(),
+                                                                 [](const auto& e) { return e.has_value(); })},
+                              {"max_abs", pe.max},
+                              {"misses", pe.misses},
+                              {"seconds", report.elapsed() - t0}};
                         }
                         write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;

@@ -5,16 +5,25 @@
 
 #include "core/model_io.h"
 #include "tools/cli.h"
+#include "tools/info_volume.h"
 
 namespace quadrix::cli {
 
 void add_info(CLI::App& root, Commands& commands) {
-  auto* app = root.add_subcommand("info", "Validate a .qxm/.slim2t model and print what it holds");
+  auto* app = root.add_subcommand("info", "Validate a .qxm/.slim2t model and print what it holds; for a volume, its values and suggested iso-values");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  app->add_option("MODEL", *file, "Model file (.qxm or .slim2t)")->required();
+  auto raw = std::make_shared<RawVolumeArgs>();
+  app->add_option("MODEL", *file, "Model file (.qxm or .slim2t), or a volume (.nhdr/.nrrd, .inr[.gz], raw with --dims "
+                                  "and --type): range, percentiles, histogram, suggested iso-values")->required();
   app->add_flag("--json", *json, "Print the summary as JSON on stdout");
-  commands.push_back({app, [file, json](const CommonOptions&, Report& report) {
+  app->add_option("--dims", raw->dims, "Raw volume: samples per axis X,Y,Z (x fastest)");
+  app->add_option("--type", raw->type, "Raw volume: uint8|int8|uint16|int16|uint32|int32|float|double");
+  app->add_flag("--big-endian", raw->big_endian, "Raw volume: big-endian samples (default little)");
+  app->add_option("--spacing", raw->spacing, "Raw volume: voxel spacing SX,SY,SZ (default 1,1,1)");
+  app->add_option("--header-bytes", raw->header_bytes, "Raw volume: bytes to skip at the start of the file")->check(non_negative());
+  commands.push_back({app, [file, json, raw](const CommonOptions&, Report& report) {
+                        if (is_volume_file(*file, *raw)) return run_info_volume(*file, *raw, *json, report);
                         const Model m = read_model(*file);  // validates; throws FormatError
                         const Box3 box = bounds(m);
                         nlohmann::json j;

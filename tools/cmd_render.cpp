@@ -6,12 +6,15 @@
 #include <cmath>
 #include <numbers>
 #include <cstdio>
+#include <limits>
+#include <span>
 #include <optional>
 
 #include <fmt/format.h>
 
 #include "convert/molecule.h"
 #include "convert/molecule_glyphs.h"
+#include "core/colour_map.h"
 #include "core/culling.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -20,9 +23,12 @@
 #include "core/log.h"
 #include "core/mesh_io.h"
 #include "core/model_io.h"
+#include "core/overlay.h"
+#include "core/points_io.h"
 #include "core/reference.h"
 #include "core/slim.h"
 #include "core/shade.h"
+#include "fit/patch_error.h"
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
@@ -41,7 +47,50 @@ struct RenderArgs {
   std::string implicit, surface, bounds, amp_test = "auto";
   std::vector<std::string> params;
   double radius = 0, amp_step = 0, amp_tau1 = 0, amp_tau2 = 0, amp_tau3 = 0;
+  // Seeing the error: --colour-by, its range, and a point cloud drawn over the model.
+  std::string colour_by = "none", colour_range, points;
+  double point_size = 1.5;
 };
+
+// "LO,HI" → a range with LO < HI. \throws CLI::ValidationError.
+ValueRange parse_range(const std::string& text) {
+  double lo = 0, hi = 0;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf%c", &lo, &hi, &tail) != 2 || !std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi))
+    throw CLI::ValidationError("--colour-range", fmt::format("expected LO,HI with finite LO < HI, got '{}'", text));
+  return {lo, hi};
+}
+
+// --colour-by error|patch: the model recoloured per primitive (both backends draw its colours).
+// error: the patches' measured_error column (written by fit), or measured against --points.
+Model colour_model(const Model& model, ColourMode mode, const std::optional<PointCloud>& points, const RenderArgs& a,
+                   nlohmann::json& j, ValueRange& range) {
+  if (mode == ColourMode::patch) return colour_by_patch(model);
+  if (mode != ColourMode::error) return model;
+  std::vector<std::optional<double>> values(model.slims.size());
+  std::string source;
+  if (points) {
+    if (model.slims.empty())
+      throw CLI::ValidationError("--colour-by", "error against --points is measured for SLIM patches; the model has none");
+    const PatchErrors pe = slim_patch_errors(model, *points);
+    values = pe.per_patch;
+    source = "points";
+    j["misses"] = pe.misses;
+  } else {
+    for (std::size_t i = 0; i < model.slims.size(); ++i) values[i] = model.slims[i].measured_error;
+    source = "measured_error";
+    if (std::none_of(values.begin(), values.end(), [](const auto& v) { return v.has_value(); }))
+      throw CLI::ValidationError("--colour-by", fmt::format("'{}' has no per-patch measured_error (written by quadrix "
+                                                            "fit); give --points to measure against", a.model));
+  }
+  range = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (const auto& v : values)
+    if (v) range.lo = std::min(range.lo, *v), range.hi = std::max(range.hi, *v);
+  if (!(range.lo <= range.hi)) range = {0, 0};
+  if (!a.colour_range.empty()) range = parse_range(a.colour_range);
+  j["source"] = source;
+  return colour_by_values(model, values, range);
+}
 
 // "xmin,xmax,ymin,ymax,zmin,zmax" → a box. \throws CLI::ValidationError.
 Box3 parse_bounds(const std::string& text) {
@@ -160,6 +209,14 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     mesh = read_mesh(a.model);
   }
   if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
+  const ColourMode colour_by = parse_colour_mode(a.colour_by);
+  if (!a.colour_range.empty() && colour_by != ColourMode::error && colour_by != ColourMode::depth)
+    throw CLI::ValidationError("--colour-range", "applies to --colour-by error or depth");
+  std::optional<PointCloud> points;
+  if (!a.points.empty()) points = read_points(a.points);
+  nlohmann::json colour_json = {{"mode", a.colour_by}};
+  ValueRange colour_range;
+  model = colour_model(model, colour_by, points, a, colour_json, colour_range);
   Box3 box = bounds(model);
   if (mesh)
     for (const auto& v : mesh->vertices) box.extend(v);
@@ -209,6 +266,26 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
        {"framing", {{"up", a.up}, {"view", a.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view)},
                     {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.fill}, {"zoom", a.zoom}}},
        {"background", a.background}};
+  // The overlays every backend draws alike: per-pixel colours (normal, depth), the colour bar,
+  // the points depth-tested against the surface's depth.
+  const auto finish = [&](Image8& colour, std::span<const std::uint8_t> coverage, std::span<const float> depth,
+                          std::span<const Eigen::Vector3f> normal) {
+    if (colour_by == ColourMode::normal || colour_by == ColourMode::depth) {
+      if (colour_by == ColourMode::depth)
+        colour_range = a.colour_range.empty() ? covered_depth_range(coverage, depth) : parse_range(a.colour_range);
+      colour_pixels(colour, colour_by, coverage, depth, normal, colour_range);
+    }
+    if (colour_by == ColourMode::error || colour_by == ColourMode::depth) {
+      draw_colour_bar(colour, colour_range);
+      colour_json["range"] = {colour_range.lo, colour_range.hi};
+    }
+    j["colour_by"] = colour_json;
+    if (points) {
+      const PointSplatStats ps = draw_points(colour, camera, depth, points->points, {.radius_px = a.point_size});
+      j["points"] = {{"file", a.points}, {"count", points->points.size()}, {"drawn", ps.drawn},
+                     {"hidden", ps.hidden}, {"outside", ps.outside}};
+    }
+  };
 
   std::string backend = a.backend;
   if (backend == "auto") backend = "gl";
@@ -235,6 +312,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     Image8 colour = shade_phong(img, camera, {.background = background, .outlines = a.outlines});
     if (transparent)
       for (std::size_t i = 0; i < img.coverage.size(); ++i) colour.rgba[4 * i + 3] = img.coverage[i] ? 255 : 0;
+    finish(colour, img.coverage, img.depth, img.normal);
     write_png(colour, a.out);
     if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
     if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
@@ -274,7 +352,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
   Image8 colour = renderer.read_colour();
   std::optional<render::GBuffer> gbuffer;
-  if (transparent || a.background != "255,255,255") gbuffer = renderer.read_gbuffer();
+  if (transparent || a.background != "255,255,255" || colour_by != ColourMode::none || points)
+    gbuffer = renderer.read_gbuffer();
   if (gbuffer)
     for (std::size_t i = 0; i < gbuffer->coverage.size(); ++i)
       if (!gbuffer->coverage[i]) {
@@ -282,6 +361,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
         p[0] = background[0], p[1] = background[1], p[2] = background[2];
         p[3] = transparent ? 0 : 255;
       }
+  if (gbuffer) finish(colour, gbuffer->coverage, gbuffer->depth, gbuffer->normal);
+  else finish(colour, {}, {}, {});
   write_png(colour, a.out);
   if (!a.depth_out.empty() || !a.normal_out.empty()) {
     const render::GBuffer g = gbuffer ? *gbuffer : renderer.read_gbuffer();
@@ -344,6 +425,19 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--background", a->background, "Background R,G,B, or none (transparent PNG)")->capture_default_str();
   app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}));
+  app->add_option("--colour-by", a->colour_by, "Colour the surface by: none (the model's colours), error (each patch's "
+                                             "measured error, or measured against --points; with a colour bar), patch "
+                                             "(a colour per primitive), normal (world normal as RGB), depth (eye depth; "
+                                             "with a colour bar)")
+      ->check(CLI::IsMember({"none", "error", "patch", "normal", "depth"}))
+      ->capture_default_str();
+  app->add_option("--colour-range", a->colour_range, "LO,HI of the colour bar for error or depth (default: the values' "
+                                                     "min and max)");
+  app->add_option("--points", a->points, "Draw this point cloud (PLY/XYZ) over the model as small splats, depth-tested "
+                                        "(points behind the surface hidden); with --colour-by error, measure against it");
+  app->add_option("--point-size", a->point_size, "Splat radius of --points in pixels")
+      ->check(number({.lo = 0.5, .hi = 64}))
+      ->capture_default_str();
   app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
   app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");

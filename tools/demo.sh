@@ -2,7 +2,8 @@
 # make demo: the pipeline on real and analytic data. Fits the Stanford bunny (SLIM) and renders it
 # with the CPU reference and with the GL three-pass SLIM renderer (OSMesa/EGL); converts a quad
 # mesh, a molecule's skin surface and CT iso-surfaces into tetrahedron-clipped quadrics and
-# ray-casts them with OpenGL (OSMesa/EGL); renders analytic glyph and hyperboloid models.
+# ray-casts them with OpenGL (OSMesa/EGL); renders analytic glyph and hyperboloid models. Shows the
+# fit coloured by its measured error, a mesh export, and a volume whose iso-value info suggested.
 set -euo pipefail
 q=${1:?quadrix binary}; out=${2:-out/demo}
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -45,6 +46,11 @@ if [ -n "$bunny" ] && [ -f "$bunny" ]; then
     --report "$out/bunny_render.json"
   run render --backend gl "$out/bunny.qxm" -o "$out/bunny_envmap.png" --size 640x640 --azimuth 0 --elevation 10 \
     --shading envmap
+  # See the error: each patch coloured by its measured error (stored by fit), with a colour bar.
+  run render --backend gl "$out/bunny.qxm" -o "$out/bunny_error.png" --size 640x640 --azimuth 0 --elevation 10 \
+    --colour-by error --report "$out/bunny_error_render.json"
+  # A mesh for MeshLab, Blender or a printer, within a stated distance of the rendered surface.
+  run mesh "$out/bunny.qxm" -o "$out/bunny_mesh.ply" --report "$out/bunny_mesh.json"
 else
   echo "demo: no bunny found (../shared/datasets or libcgal-demo); skipping the fit"
 fi
@@ -73,6 +79,12 @@ fi
 run convert volume --synth marschner-lobb --grid 41 --iso 0.5 -o "$out/marschner_lobb.qxm" \
   --report "$out/marschner_lobb_convert.json"
 run render "$out/marschner_lobb.qxm" -o "$out/marschner_lobb.png" --size 640x640 --elevation 35 --shading envmap
+# Finding the iso-value: info on a volume suggests Otsu's threshold; convert volume without --iso uses it.
+run synth marschner-lobb -o "$out/marschner_lobb_volume.nhdr"
+run info "$out/marschner_lobb_volume.nhdr"
+run convert volume "$out/marschner_lobb_volume.nhdr" -o "$out/marschner_lobb_otsu.qxm" \
+  --report "$out/marschner_lobb_otsu_convert.json"
+run render "$out/marschner_lobb_otsu.qxm" -o "$out/marschner_lobb_otsu.png" --size 640x640 --elevation 35
 
 run synth glyphs --count 400 -o "$out/glyphs.qxm"
 run synth hyperboloid1 --resolution 12 -o "$out/hyperboloid.qxm"
@@ -81,5 +93,10 @@ run render --backend cpu "$out/glyphs.qxm" -o "$out/glyphs.png" --size 640x480 -
 run render "$out/hyperboloid.qxm" -o "$out/hyperboloid.png" --size 480x480 --no-cull --elevation 25 \
   --report "$out/hyperboloid_render.json"
 run render "$out/hyperboloid.qxm" -o "$out/hyperboloid_npr.png" --size 480x480 --no-cull --elevation 25 --shading npr
+run render "$out/hyperboloid.qxm" -o "$out/hyperboloid_patches.png" --size 480x480 --no-cull --elevation 25 \
+  --colour-by patch
+if [ ! -f "$out/bunny_mesh.ply" ]; then
+  run mesh "$out/hyperboloid.qxm" -o "$out/hyperboloid_mesh.ply" --report "$out/hyperboloid_mesh.json"
+fi
 echo "demo: images in $out/"
-ls -1 "$out"/*.png
+ls -1 "$out"/*.png "$out"/*_mesh.ply
