@@ -26,16 +26,17 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
+#include "tools/view_options.h"
 
 namespace quadrix::cli {
 namespace {
 
 struct RenderArgs {
   std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
-  std::string shading = "phong", mesh, up = "+y", view, background = "255,255,255";
-  double azimuth = 30, elevation = 20, fov = 40, zoom = 1, fill = 0.9;
-  bool no_cull = false;
-  int frames = 1;
+  std::string shading = "phong", mesh, background = "255,255,255";
+  ViewArgs view;  // camera options shared with `view`
+  bool no_cull = false, contact_sheet = false;
+  int frames = 1, supersample = 1, turntable = 0;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
@@ -126,21 +127,62 @@ FloatImage normals_of(const render::GBuffer& g) {
   return f;
 }
 
+// Lower-cased extension of a file name.
+std::string extension_of(const std::string& file) {
+  std::string e = std::filesystem::path(file).extension().string();
+  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+// out.png → out-0001.png: the name of turntable frame i (from 0).
+std::string frame_name(const std::string& out, int i) {
+  const std::filesystem::path p(out);
+  return (p.parent_path() / fmt::format("{}-{:04d}{}", p.stem().string(), i + 1, p.extension().string())).string();
+}
+
+// Writes a colour image in the format its name asks for (checked before rendering).
+void write_image(const Image8& image, const std::string& file) {
+  if (extension_of(file) == ".png") write_png(image, file);
+  else write_jpeg(image, file, {});
+}
+
+// The frames side by side: ceil(√n) columns, the rest of the last row background.
+Image8 contact_sheet(const std::vector<Image8>& frames, const std::uint8_t fill[4]) {
+  const int n = static_cast<int>(frames.size());
+  const int cols = static_cast<int>(std::ceil(std::sqrt(double(n)))), rows = (n + cols - 1) / cols;
+  const int w = frames[0].width, h = frames[0].height;
+  Image8 sheet{w * cols, h * rows, {}};
+  sheet.rgba.resize(std::size_t(sheet.width) * sheet.height * 4);
+  for (std::size_t i = 0; i < sheet.rgba.size(); ++i) sheet.rgba[i] = fill[i % 4];
+  for (int k = 0; k < n; ++k)
+    for (int y = 0; y < h; ++y)
+      std::copy_n(frames[k].pixel(0, y), 4 * w, sheet.pixel((k % cols) * w, (k / cols) * h + y));
+  return sheet;
+}
+
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   if (a.out.empty()) throw CLI::ValidationError("--out", "an output PNG is required");
-  // The format follows the name: PNG images, PFM depth and normals; anything else is refused
-  // rather than written as PNG bytes under another extension.
-  const auto expect_extension = [](const std::string& option, const std::string& file, const char* ext,
-                                   const char* format) {
-    std::string e = std::filesystem::path(file).extension().string();
-    for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (!file.empty() && e != ext)
+  // The format follows the name: PNG or JPEG images, PFM depth and normals; anything else is
+  // refused rather than written as PNG bytes under another extension.
+  const auto expect_extension = [](const std::string& option, const std::string& file,
+                                   std::initializer_list<const char*> exts, const char* format) {
+    const std::string e = extension_of(file);
+    if (!file.empty() && std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; }))
       throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a {} name", file,
-                                                     format, ext));
+                                                     format, *exts.begin()));
   };
-  expect_extension("--out", a.out, ".png", "PNG");
-  expect_extension("--depth-out", a.depth_out, ".pfm", "PFM");
-  expect_extension("--normal-out", a.normal_out, ".pfm", "PFM");
+  expect_extension("--out", a.out, {".png", ".jpg", ".jpeg"}, "PNG or JPEG");
+  expect_extension("--depth-out", a.depth_out, {".pfm"}, "PFM");
+  expect_extension("--normal-out", a.normal_out, {".pfm"}, "PFM");
+  const bool jpeg = extension_of(a.out) != ".png";
+  if (jpeg && a.background == "none")
+    throw CLI::ValidationError("--background", "JPEG has no transparency: give a .png name for --background none");
+  const int turntable = a.turntable;
+  if (a.contact_sheet && turntable < 2) throw CLI::ValidationError("--contact-sheet", "needs --turntable N with N ≥ 2");
+  if (turntable > 0 && (!a.depth_out.empty() || !a.normal_out.empty()))
+    throw CLI::ValidationError("--turntable", "writes colour frames only; render --depth-out/--normal-out as a still");
+  if (a.supersample > 1 && (!a.depth_out.empty() || !a.normal_out.empty()))
+    throw CLI::ValidationError("--supersample", "filters the colour image only; render --depth-out/--normal-out without it");
   const auto [w, h] = parse_size(a.size);
   const auto implicit_surface = implicit_from_options(a);
   if (a.model.empty() && !implicit_surface) throw CLI::ValidationError("MODEL", "give a MODEL, --implicit or --surface");
@@ -163,143 +205,148 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   Box3 box = bounds(model);
   if (mesh)
     for (const auto& v : mesh->vertices) box.extend(v);
-  // The view: about the chosen up axis, distance fitted for a 40° lens on the visible geometry
-  // (a low-resolution CPU pass, or the mesh's vertices), then --fov and --zoom as the lens.
-  double azimuth = a.azimuth, elevation = a.elevation;
-  if (a.view == "front") azimuth = 0, elevation = 0;
-  else if (a.view == "side") azimuth = 90, elevation = 0;
-  else if (a.view == "top") azimuth = 0, elevation = 90;
-  else if (a.view == "iso") azimuth = 45, elevation = 35.264389682754654;
-  constexpr double kFitFov = 40.0;
-  Camera camera = frame_view(box, {.up = parse_axis(a.up), .azimuth_deg = azimuth, .elevation_deg = elevation,
-                                   .fov_y_deg = kFitFov, .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05,
-                                   .width = w, .height = h});
-  if (a.fill > 0) {
-    std::vector<Eigen::Vector3d> visible;
-    if (!model.empty()) {
-      const ReferenceScene scene(model);
-      Camera probe = camera;
-      const double s = 160.0 / std::max(w, h);
-      probe.width = std::max(8, static_cast<int>(std::lround(w * s)));
-      probe.height = std::max(8, static_cast<int>(std::lround(h * s)));
-      ReferenceRenderOptions po;
-      po.trace.cull_backfaces = !a.no_cull;
-      po.trace.slim.offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
-      const ReferenceImage img = render_reference(scene, probe, po);
-      for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x)
-          if (const std::size_t i = std::size_t(y) * img.width + x; img.coverage[i]) {
-            // Pixel corners too, so the bounds are those of the covered pixels, not their centres.
-            for (const double dx : {0.0, 1.0})
-              for (const double dy : {0.0, 1.0})
-                visible.push_back(probe.pixel_ray(x + dx, y + dy).at(img.distance[i]));
-          }
-    }
-    if (mesh) {
-      const std::size_t step = std::max<std::size_t>(1, mesh->vertices.size() / 200000);
-      for (std::size_t v = 0; v < mesh->vertices.size(); v += step) visible.push_back(mesh->vertices[v]);
-    }
-    camera = fit_points(camera, visible, a.fill);
+  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
+  // The view (tools/view_options.h): tight framing on the visible geometry, from a
+  // low-resolution CPU pass and the mesh's vertices.
+  const VisibleFn visible = [&](const Camera& c) {
+    return visible_points(model, mesh ? &*mesh : nullptr, c, {.cull = !a.no_cull, .slim_offset = slim_offset});
+  };
+  const Camera camera = resolve_camera(a.view, box, w, h, a.view.typed("--size"), visible, turntable > 0);
+  std::vector<Camera> cameras{camera};
+  if (turntable > 0) {
+    cameras = turntable_cameras(camera, turntable_axis(a.view, camera), turntable,
+                                wants_fill(a.view) ? a.view.fill : 0.0, visible);
   }
-  camera.fov_y_deg = 2.0 * std::atan(std::tan(a.fov * std::numbers::pi / 360.0) / a.zoom) * 180.0 / std::numbers::pi;
+  if (!a.view.save_camera.empty()) write_camera(cameras.front(), a.view.save_camera);
+  const int width = cameras.front().width, height = cameras.front().height;
+  const int ss = a.supersample;
+  if (std::max(width, height) * ss > 16384)
+    throw CLI::ValidationError("--supersample", fmt::format("{}x{} × {} exceeds 16384 pixels a side", width, height, ss));
   const Rgb background = a.background == "none" ? Rgb{255, 255, 255} : parse_rgb(a.background, "--background");
   const bool transparent = a.background == "none";
   nlohmann::json& j = report.json["render"];
-  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)},
-       {"framing", {{"up", a.up}, {"view", a.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view)},
-                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.fill}, {"zoom", a.zoom}}},
-       {"background", a.background}};
+  const auto [azimuth, elevation] = view_angles(a.view);
+  j = {{"model", a.model}, {"primitives", model.size()}, {"width", width}, {"height", height}, {"camera", camera_json(cameras.front())},
+       {"framing", {{"up", a.view.up}, {"view", a.view.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.view)},
+                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.view.fill}, {"zoom", a.view.zoom},
+                    {"camera_file", a.view.camera_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.camera_file)}}},
+       {"background", a.background}, {"supersample", ss}};
 
   std::string backend = a.backend;
   if (backend == "auto") backend = "gl";
   if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
   j["backend"] = backend;
-  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
   j["slim_offset"] = slim_offset;
-
   if (backend == "cpu") {
     if (mesh) throw InvalidInput("--mesh needs the GL backend");
     if (a.shading != "phong")
       throw CLI::ValidationError("--shading", fmt::format("the CPU reference shades phong only, not {}; use --backend gl", a.shading));
+  }
+  // The pixels of one camera at ss× its size, box-filtered down (backgrounds replaced first).
+  std::vector<Image8> images;
+  std::size_t covered = 0;
+  Progress progress(turntable > 0 ? "turntable" : "render", progress_allowed(common));
+  const auto finish = [&](Image8 colour, const std::vector<std::uint8_t>& coverage) {
+    for (std::size_t i = 0; i < coverage.size(); ++i) {
+      std::uint8_t* p = colour.rgba.data() + 4 * i;
+      if (!coverage[i]) p[0] = background[0], p[1] = background[1], p[2] = background[2];
+      p[3] = !transparent || coverage[i] ? 255 : 0;
+    }
+    if (images.empty()) covered = std::count(coverage.begin(), coverage.end(), 1);
+    images.push_back(ss > 1 ? box_filter(colour, ss) : std::move(colour));
+    progress.update(double(images.size()) / cameras.size());
+  };
+  const auto magnified = [ss](Camera c) {
+    c.width *= ss, c.height *= ss;
+    return c;
+  };
+
+  if (backend == "cpu") {
     const double t0 = report.elapsed();
     const ReferenceScene scene(model);
-    Progress progress("render", progress_allowed(common));
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
     ro.trace.slim.offset = slim_offset;
-    ro.progress = progress.callback();
+    if (cameras.size() == 1) ro.progress = progress.callback();
     const double t1 = report.elapsed();
-    const ReferenceImage img = render_reference(scene, camera, ro);
+    for (const Camera& c : cameras) {
+      const ReferenceImage img = render_reference(scene, magnified(c), ro);
+      finish(shade_phong(img, magnified(c), {.background = background}), img.coverage);
+      if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
+      if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
+    }
     const double t2 = report.elapsed();
-    Image8 colour = shade_phong(img, camera, {.background = background});
-    if (transparent)
-      for (std::size_t i = 0; i < img.coverage.size(); ++i) colour.rgba[4 * i + 3] = img.coverage[i] ? 255 : 0;
-    write_png(colour, a.out);
-    if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
-    if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
-    j["covered_pixels"] = std::count(img.coverage.begin(), img.coverage.end(), 1);
+    j["covered_pixels"] = covered;
     j["bvh_nodes"] = scene.bvh_node_count();
     j["seconds_bvh"] = t1 - t0;
     j["seconds_trace"] = t2 - t1;
-    log::info("cpu: {}x{} in {:.3f} s", w, h, t2 - t1);
-    return kOk;
+    log::info("cpu: {}x{} in {:.3f} s", width, height, t2 - t1);
+  } else {
+    auto context = render::create_context(a.context, {.width = width, .height = height});
+    render::Renderer renderer(*context);
+    render::AmpOptions amp{.step = a.amp_step, .tau1 = a.amp_tau1, .tau2 = a.amp_tau2, .tau3 = a.amp_tau3};
+    const std::string test = a.amp_test != "auto" ? a.amp_test : implicit_surface ? implicit_surface->second : "sign";
+    amp.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
+    renderer.set_model(model, amp);
+    if (!model.implicits.empty()) {
+      j["implicit_test"] = test;
+      j["implicit_compile_ms"] = renderer.implicit_compile_ms();
+    }
+    if (mesh) renderer.set_mesh(*mesh);
+    render::RenderOptions ro;
+    ro.cull = !a.no_cull;
+    ro.slim_offset = static_cast<float>(slim_offset);
+    ro.shading = a.shading == "envmap" ? render::Shading::envmap
+                 : a.shading == "npr"  ? render::Shading::npr
+                                       : render::Shading::phong;
+    // One frame with statistics (counted separately: the counters cost time), then N timed
+    // frames of the first camera.
+    ro.statistics = true;
+    const render::FrameStats stats = renderer.draw(magnified(cameras.front()), ro);
+    ro.statistics = false;
+    std::vector<double> total;
+    for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(magnified(cameras.front()), ro).ms_total);
+    for (std::size_t k = 0; k < cameras.size(); ++k) {
+      if (k > 0) renderer.draw(magnified(cameras[k]), ro);
+      const render::GBuffer g = renderer.read_gbuffer();
+      finish(renderer.read_colour(), g.coverage);
+      if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
+      if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
+    }
+    if (!model.implicits.empty()) j["ms_first_frame"] = stats.ms_total;  // includes the JIT of generated shaders
+    const bool has_fs = stats.fragments != static_cast<std::uint64_t>(-1);
+    j["context"] = context->description();
+    j["frames"] = a.frames;
+    j["culling"] = ro.cull;
+    // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
+    j["backface_culling_exact"] = backface_culling_is_exact(model, cameras.front());
+    j["shading"] = a.shading;
+    j["primitives_drawn"] = stats.primitives - stats.culled;
+    j["primitives_culled"] = stats.culled;
+    j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
+    j["fragments_hit"] = stats.fragments_hit;
+    if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
+    j["ms_frame_median"] = median(total);
+    log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), width, height,
+              median(total), a.frames, stats.primitives - stats.culled, stats.culled);
   }
-
-  auto context = render::create_context(a.context, {.width = w, .height = h});
-  render::Renderer renderer(*context);
-  render::AmpOptions amp{.step = a.amp_step, .tau1 = a.amp_tau1, .tau2 = a.amp_tau2, .tau3 = a.amp_tau3};
-  const std::string test = a.amp_test != "auto" ? a.amp_test : implicit_surface ? implicit_surface->second : "sign";
-  amp.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
-  renderer.set_model(model, amp);
-  if (!model.implicits.empty()) {
-    j["implicit_test"] = test;
-    j["implicit_compile_ms"] = renderer.implicit_compile_ms();
+  std::vector<std::string> written;
+  if (turntable > 0 && !a.contact_sheet) {
+    for (std::size_t k = 0; k < images.size(); ++k) write_image(images[k], written.emplace_back(frame_name(a.out, int(k))));
+  } else if (turntable > 0) {
+    const std::uint8_t fill[4] = {background[0], background[1], background[2], std::uint8_t(transparent ? 0 : 255)};
+    write_image(contact_sheet(images, fill), written.emplace_back(a.out));
+  } else {
+    write_image(images.front(), written.emplace_back(a.out));
   }
-  if (mesh) renderer.set_mesh(*mesh);
-  render::RenderOptions ro;
-  ro.cull = !a.no_cull;
-  ro.slim_offset = static_cast<float>(slim_offset);
-  ro.shading = a.shading == "envmap" ? render::Shading::envmap
-               : a.shading == "npr"  ? render::Shading::npr
-                                     : render::Shading::phong;
-  // One frame with statistics (counted separately: the counters cost time), then N timed frames.
-  ro.statistics = true;
-  const render::FrameStats stats = renderer.draw(camera, ro);
-  ro.statistics = false;
-  std::vector<double> total;
-  for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
-  Image8 colour = renderer.read_colour();
-  std::optional<render::GBuffer> gbuffer;
-  if (transparent || a.background != "255,255,255") gbuffer = renderer.read_gbuffer();
-  if (gbuffer)
-    for (std::size_t i = 0; i < gbuffer->coverage.size(); ++i)
-      if (!gbuffer->coverage[i]) {
-        std::uint8_t* p = colour.rgba.data() + 4 * i;
-        p[0] = background[0], p[1] = background[1], p[2] = background[2];
-        p[3] = transparent ? 0 : 255;
-      }
-  write_png(colour, a.out);
-  if (!a.depth_out.empty() || !a.normal_out.empty()) {
-    const render::GBuffer g = gbuffer ? *gbuffer : renderer.read_gbuffer();
-    if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
-    if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
+  if (turntable > 0) {
+    nlohmann::json cams = nlohmann::json::array();
+    for (const Camera& c : cameras) cams.push_back(camera_json(c));
+    j["turntable"] = {{"frames", turntable}, {"contact_sheet", a.contact_sheet}, {"files", written}, {"cameras", cams}};
   }
-  if (!model.implicits.empty()) j["ms_first_frame"] = stats.ms_total;  // includes the JIT of generated shaders
-  const bool has_fs = stats.fragments != static_cast<std::uint64_t>(-1);
-  j["context"] = context->description();
-  j["frames"] = a.frames;
-  j["culling"] = ro.cull;
-  // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
-  j["backface_culling_exact"] = backface_culling_is_exact(model, camera);
-  j["shading"] = a.shading;
-  j["primitives_drawn"] = stats.primitives - stats.culled;
-  j["primitives_culled"] = stats.culled;
-  j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
-  j["fragments_hit"] = stats.fragments_hit;
-  if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
-  j["ms_frame_median"] = median(total);
-  log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), w, h, median(total),
-            a.frames, stats.primitives - stats.culled, stats.culled);
+  report.summary = fmt::format("wrote {}{} ({}x{}{}, {} primitives, {} backend)", written.front(),
+                               written.size() > 1 ? fmt::format(" … {} ({} frames)", written.back(), written.size()) : "",
+                               width, height, ss > 1 ? fmt::format(", {}× supersampled", ss) : "", model.size(), backend);
   return kOk;
 }
 
@@ -315,26 +362,14 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
-  app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about the up axis, from the front")
-      ->check(number({.lo = -3600.0, .hi = 3600.0}))
+  add_view_options(*app, a->view);
+  app->add_option("--supersample", a->supersample, "Antialiasing: render N×N samples per pixel and box-filter them")
+      ->check(number({.lo = 1, .hi = 16}))
       ->capture_default_str();
-  app->add_option("--elevation", a->elevation, "Camera elevation in degrees above the plane normal to up")
-      ->check(number({.lo = -90.0, .hi = 90.0}))
+  app->add_option("--turntable", a->turntable, "Write N frames turning about the up axis, OUT-0001.png … (0: one still)")
+      ->check(number({.lo = 0, .hi = 3600}))
       ->capture_default_str();
-  app->add_option("--up", a->up, "World up axis: +x -x +y -y +z -z")
-      ->check(CLI::IsMember({"+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"}))
-      ->capture_default_str();
-  app->add_option("--view", a->view, "Named view (overrides --azimuth/--elevation): front, side, top, iso")
-      ->check(CLI::IsMember({"front", "side", "top", "iso"}));
-  app->add_option("--fov", a->fov, "Vertical field of view in degrees: the lens (the distance is fitted for 40, so a "
-                                   "narrower lens zooms in)")
-      ->check(number({.lo = 0.001, .hi = 179.0}))
-      ->capture_default_str();
-  app->add_option("--zoom", a->zoom, "Magnification of the framed view")->check(number({.lo = 0.01, .hi = 1000.0}))->capture_default_str();
-  app->add_option("--fill", a->fill, "Fraction of the smaller image side the visible geometry fills (0: frame the "
-                                     "bounding sphere instead)")
-      ->check(number({.lo = 0.0, .hi = 1.0}))
-      ->capture_default_str();
+  app->add_flag("--contact-sheet", a->contact_sheet, "With --turntable: one image of all frames in a grid instead");
   app->add_option("--background", a->background, "Background R,G,B, or none (transparent PNG)")->capture_default_str();
   app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}));

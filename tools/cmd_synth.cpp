@@ -50,15 +50,16 @@ void add_synth(CLI::App& root, Commands& commands) {
                           const auto [lo, hi] = v.range();
                           report.json["synth"] = {{"kind", a->kind}, {"out", a->out},     {"data", raw.string()},
                                                   {"dims", v.dims},  {"value_min", lo},   {"value_max", hi}};
-                          log::info("wrote {} and {} ({}³ samples over [-1, 1]³)", a->out, raw.string(), n);
+                          report.summary = fmt::format("wrote {} and {} ({}³ samples over [-1, 1]³)", a->out, raw.string(), n);
                           return kOk;
                         }
                         Model m = synth_model(a->kind, a->options);
+                        m.metadata["producer"] = command_line();
                         write_model(m, a->out);
                         report.json["synth"] = {{"kind", a->kind},     {"out", a->out},
                                                 {"slim", m.slims.size()}, {"tet", m.tets.size()},
                                                 {"glyph", m.glyphs.size()}};
-                        log::info("wrote {} ({} primitives)", a->out, m.size());
+                        report.summary = fmt::format("wrote {} ({} primitives)", a->out, m.size());
                         return kOk;
                       }});
 }

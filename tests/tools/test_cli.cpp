@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -530,4 +531,55 @@ TEST(Cli, MalformedCorpusGivesTheManifestsExitCodeAndMessage) {
         << "raw control bytes in: " << results[i].out;
   }
   EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "a failed command left an output behind";
+}
+
+// Every option that takes a value shows its default in --help ("=VALUE" after its type), says in
+// its description how the default is chosen ("default: …"), is REQUIRED, or names an output or an
+// input that is simply absent unless given (the list below).
+TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
+  const std::set<std::string> no_default = {
+      "--out",    "--report", "--mesh",   "--depth-out", "--normal-out", "--camera", "--save-camera", "--screenshot",
+      "--press",  "--holdout-out", "--implicit", "--surface", "--param", "--bounds", "--tets", "--values",
+      "--synth",  "--baseline-mesh", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models"};
+  const std::vector<std::string> commands = {"info",          "render",         "synth",         "fit",
+                                             "view",          "mesh",           "convert quads", "convert skin",
+                                             "convert glyphs", "convert volume", "bench fit",     "bench render"};
+  std::size_t checked = 0;
+  for (const std::string& command : commands) {
+    const CmdResult help = quadrix_run(command + " --help");
+    ASSERT_EQ(help.code, 0) << command;
+    std::vector<std::string> lines;
+    std::istringstream in(help.out);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const std::string& line = lines[i];
+      const auto start = line.find_first_not_of(' ');
+      if (start == std::string::npos || line[start] != '-') continue;
+      const std::string body = line.substr(start);
+      const std::string opts = body.substr(0, body.find("  "));
+      std::istringstream words(opts);
+      std::string name, type;
+      words >> name >> type;
+      if (const auto comma = name.find(','); comma != std::string::npos) name = name.substr(comma + 1);
+      if (type.empty() || !std::isupper(static_cast<unsigned char>(type[0]))) continue;  // a flag
+      if (name == "--help" || name == "--version") continue;
+      std::string description = body.substr(opts.size());
+      for (std::size_t k = i + 1; k < lines.size() && lines[k].find_first_not_of(' ') > 8 &&
+                                  lines[k].find_first_not_of(' ') != std::string::npos && lines[k][lines[k].find_first_not_of(' ')] != '-';
+           ++k)
+        description += " " + lines[k];
+      ++checked;
+      const bool shown = opts.find('=') != std::string::npos || opts.find("REQUIRED") != std::string::npos ||
+                         description.find("default") != std::string::npos || no_default.count(name) > 0;
+      EXPECT_TRUE(shown) << command << " " << name << ": no default shown: " << line;
+      // A default shown must be one the option accepts: not a sentinel outside its range.
+      if (const auto eq = opts.find('='); eq != std::string::npos)
+        for (const NumericOption& o : numeric_options(opts)) {
+          const double v = std::strtod(opts.c_str() + eq + 1, nullptr);
+          EXPECT_TRUE((o.open_lo ? v > o.lo : v >= o.lo) && (o.open_hi ? v < o.hi : v <= o.hi))
+              << command << " " << name << ": the default shown is outside the range: " << line;
+        }
+    }
+  }
+  EXPECT_GE(checked, 60u);
 }
