@@ -30,6 +30,11 @@ struct Progress::Impl {
   std::condition_variable wake;
   bool stop = false;
   double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+  // Seconds of work before the bar appears: 1, or QUADRIX_PROGRESS_DELAY (tests set 0).
+  double delay = [] {
+    const char* v = std::getenv("QUADRIX_PROGRESS_DELAY");
+    return v && *v ? std::strtod(v, nullptr) : 1.0;
+  }();
 };
 
 Progress::Progress(std::string label, bool enabled) : impl_(std::make_unique<Impl>()) {
@@ -41,9 +46,11 @@ Progress::Progress(std::string label, bool enabled, Indeterminate) : Progress(st
   if (!enabled) return;
   impl_->ticker = std::thread([impl = impl_.get()] {
     std::unique_lock lock(impl->mutex);
-    for (int tick = 0; !impl->wake.wait_for(lock, std::chrono::milliseconds(250), [impl] { return impl->stop; }); ++tick) {
+    // Drawn at once, then every 250 ms: short work (under `delay`) stays silent.
+    for (int tick = 0; tick == 0 || !impl->wake.wait_for(lock, std::chrono::milliseconds(250), [impl] { return impl->stop; });
+         ++tick) {
       const double secs = impl->seconds();
-      if (secs < 1.0) continue;  // short work stays silent
+      if (secs < impl->delay) continue;
       constexpr int width = 30;
       std::string bar(width, '.');
       const int at = tick % (2 * width - 2);
@@ -71,7 +78,7 @@ void Progress::update(double fraction) {
   if (!impl_->enabled) return;
   std::lock_guard lock(impl_->mutex);
   const double secs = impl_->seconds();
-  if (secs < 1.0) return;  // short work stays silent
+  if (secs < impl_->delay) return;  // short work stays silent
   const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
   if (percent == impl_->last_percent) return;
   impl_->last_percent = percent;

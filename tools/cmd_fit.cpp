@@ -30,8 +30,8 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("-o,--out", a->out, "Output .qxm")->required();
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
       ->check(number({.lo = 1e-7, .hi = 0.5}));
-  app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error)")
-      ->check(positive());
+  app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error; default: unset)")
+      ->check(positive())->default_str("");
   app->add_option("--normal-weight", a->options.normal_weight, "μ: weight of the normal term")
       ->check(number({.lo = 1e-6, .hi = 10}));
   app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")

@@ -379,16 +379,19 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
   app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
   app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
-      ->check(number({.lo = 0, .hi = 10}));
+      ->check(number({.lo = 0, .hi = 10}))
+      ->default_str("");
   app->add_option("--implicit", a->implicit, "Implicit surface S(x,y,z) = 0 to draw (with MODEL if given), e.g. \"x^4 + y^4 + z^4 - 1\"");
   app->add_option("--surface", a->surface, "Built-in implicit surface of [Singh10]'s gallery; 'list' lists them");
-  app->add_option("--param", a->params, "Parameter of the implicit expression, NAME=VALUE (repeat)");
+  app->add_option("--param", a->params, "Parameter of the implicit expression, NAME=VALUE (repeat)")->default_str("");
   app->add_option("--bounds", a->bounds, "Bounds of the implicit surface: xmin,xmax,ymin,ymax,zmin,zmax (default ±2, or the gallery's)");
-  app->add_option("--radius", a->radius, "Bounds of the implicit surface: the cube ±R")->check(positive());
-  app->add_option("--amp-step", a->amp_step, "AMP base step b in world units (default: bounds diagonal / 400)")->check(positive());
-  app->add_option("--amp-tau1", a->amp_tau1, "AMP proximity threshold τ1 on |S| (default: 0.05 · median |S| over the bounds)")->check(positive());
-  app->add_option("--amp-tau2", a->amp_tau2, "AMP far threshold τ2 on |S| (default 2·τ1)")->check(positive());
-  app->add_option("--amp-tau3", a->amp_tau3, "AMP horizon threshold τ3 on |∇S·D| (default: 0.1 · median |∇S|)")->check(positive());
+  app->add_option("--radius", a->radius, "Bounds of the implicit surface: the cube ±R (default: --bounds)")
+      ->check(positive())
+      ->default_str("");
+  app->add_option("--amp-step", a->amp_step, "AMP base step b in world units (default: bounds diagonal / 400)")->check(positive())->default_str("");
+  app->add_option("--amp-tau1", a->amp_tau1, "AMP proximity threshold τ1 on |S| (default: 0.05 · median |S| over the bounds)")->check(positive())->default_str("");
+  app->add_option("--amp-tau2", a->amp_tau2, "AMP far threshold τ2 on |S| (default 2·τ1)")->check(positive())->default_str("");
+  app->add_option("--amp-tau3", a->amp_tau3, "AMP horizon threshold τ3 on |∇S·D| (default: 0.1 · median |∇S|)")->check(positive())->default_str("");
   app->add_option("--amp-test", a->amp_test, "AMP root test: auto (the gallery's choice, else sign), sign or taylor")
       ->check(CLI::IsMember({"auto", "sign", "taylor"}));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) {

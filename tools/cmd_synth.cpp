@@ -32,9 +32,11 @@ void add_synth(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember(kinds));
   app->add_option("-o,--out", a->out, "Output .qxm file (marschner-lobb: a .nhdr header, its .raw data beside it)")
       ->required();
-  app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere)")->check(number({.lo = 0, .hi = 50e6}));
+  app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere; default: per kind)")
+      ->check(number({.lo = 0, .hi = 50e6}))
+      ->default_str("");
   app->add_option("--resolution", a->options.resolution,
-                  "Grid cells per axis (hyperboloids); samples per axis for marschner-lobb (default 41)")
+                  "Grid cells per axis (hyperboloids)->default_str(""); samples per axis for marschner-lobb (default 41)")
       ->check(number({.lo = 0, .hi = 512}));
   app->add_option("--seed", a->options.seed, "Random seed (glyphs)")->check(non_negative());
   commands.push_back({app, [a](const CommonOptions&, Report& report) {

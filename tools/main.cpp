@@ -81,8 +81,13 @@ int main(int argc, char** argv) {
     const int rc = app.exit(e);
     if (rc == 0) return kOk;
     // --report may have been read before the error: the usage error goes into it too.
+    // The options' values are stored only after every option validated: read --report's raw text.
     for (auto& c : commands)
-      if (c.app->parsed()) report.json["command"] = c.app->get_name();
+      if (c.app->parsed()) {
+        report.json["command"] = c.app->get_name();
+        if (const CLI::Option* o = c.app->get_option_no_throw("--report"); o && !o->results().empty())
+          common.report = o->results().front();
+      }
     error = e.what();
     return write_report(kUsage);
   }

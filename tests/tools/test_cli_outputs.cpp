@@ -134,33 +134,46 @@ TEST_F(CliOutputs, JpegByExtensionOtherNamesRefused) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "t.bmp"));
 }
 
-// Runs the command under a pseudo-terminal (python3's pty), so stderr is a terminal.
-CmdResult under_pty(const std::string& args) {
+// Runs the command under a pseudo-terminal (python3's pty), so stderr is a terminal; env: variables.
+CmdResult under_pty(const std::string& args, const std::string& env = "") {
   const std::string cmd = "python3 -c \"import pty, sys; sys.exit(pty.spawn(sys.argv[1:]) >> 8)\" sh -c " +
-                          q(std::string(QUADRIX_BINARY) + " " + args);
+                          q(env + " " + std::string(QUADRIX_BINARY) + " " + args);
   return test_support::run_command(cmd, "");
 }
 
 TEST_F(CliOutputs, ProgressBarOnATerminalOnlyForLongWork) {
   if (std::system("python3 -c 'import pty' > /dev/null 2>&1") != 0) GTEST_SKIP() << "python3 with pty is not available";
   const auto model = dir_ / "h.qxm";
-  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 24 -o " + q(model)).code, 0);
-  // A CPU render of a few seconds: the bar, then the summary on a clean line.
-  const std::string slow = "render --backend cpu --no-cull --size 1400x1400 " + q(model) + " -o " + q(dir_ / "a.png");
-  CmdResult r = under_pty(slow);
+  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 12 -o " + q(model)).code, 0);
+  // QUADRIX_PROGRESS_DELAY=0 makes any work "long": the bar, then the summary on a clean line.
+  const std::string now = "QUADRIX_PROGRESS_DELAY=0";
+  const std::string render = "render --backend cpu --no-cull --size 200x200 " + q(model) + " -o " + q(dir_ / "a.png");
+  CmdResult r = under_pty(render, now);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("render ["), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("%"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("100%"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\r\033[K"), std::string::npos) << "bar not cleared: " << r.out;
   EXPECT_NE(r.out.find("quadrix render: wrote"), std::string::npos) << r.out;
+  // Turntables count frames; fits (no fractions) show a moving marker.
+  r = under_pty("render --backend cpu --size 40x40 --turntable 4 " + q(model) + " -o " + q(dir_ / "t.png"), now);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("turntable ["), std::string::npos) << r.out;
+  std::string xyz;
+  for (int i = 0; i < 800; ++i) {
+    const double t = std::acos(1 - 2 * (i + 0.5) / 800), p = i * 2.399963229728653;
+    xyz += fmt::format("{} {} {}\n", std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), 0.5 * std::cos(t));
+  }
+  r = under_pty("fit " + q(write("p.xyz", xyz)) + " -o " + q(dir_ / "f.qxm") + " --allow-exceed", now);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("fit ["), std::string::npos) << r.out;
   // --quiet on a terminal, or a pipe: no bar.
-  r = under_pty(slow + " --quiet");
+  r = under_pty(render + " --quiet", now);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(r.out.find("["), std::string::npos) << r.out;
-  r = quadrix_run(slow);
+  r = test_support::run_command(now + " " + std::string(QUADRIX_BINARY), render);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(r.out.find("render ["), std::string::npos) << r.out;
-  // Short work on a terminal: no bar either.
+  // Short work on a terminal with the default delay (1 s): no bar.
   r = under_pty("render --backend cpu --size 16x16 " + q(model) + " -o " + q(dir_ / "b.png"));
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(r.out.find("render ["), std::string::npos) << r.out;
