@@ -69,7 +69,7 @@ TEST(Cli, SynthInfoRenderRoundTrip) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["counts"]["tet"].get<std::size_t>(), read_model(model).tets.size());
   EXPECT_GT(j["counts"]["tet"].get<int>(), 0);
-  EXPECT_EQ(j["metadata"]["producer"], "quadrix synth hyperboloid1");
+  EXPECT_EQ(j["metadata"]["producer"], "quadrix synth hyperboloid1 --resolution 6 -o " + model.string());  // as typed
 
   const auto png = dir / "h.png", depth = dir / "d.pfm", report = dir / "r.json";
   r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --size 64x48 --no-cull --depth-out " +
@@ -141,13 +141,13 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(quadrix_run("render --help").code, 0);
 }
 
-// The output format follows the name (PNG images, PFM depth and normals) and every backend honours
-// --shading or refuses: nothing written under a wrong extension, no silent Phong.
+// The output format follows the name (PNG or JPEG images, PFM depth and normals) and every backend
+// honours --shading or refuses: nothing written under a wrong extension, no silent Phong.
 TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
   ScratchDir dir("cli-honest");
   const auto model = dir / "s.qxm";
   ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
-  for (const std::string out : {"a.jpg", "a.PPM", "a"}) {
+  for (const std::string out : {"a.bmp", "a.PPM", "a"}) {
     const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / out) + " --size 32x32");
     EXPECT_EQ(r.code, 2) << out << ": " << r.out;
     EXPECT_NE(r.out.find("PNG"), std::string::npos) << r.out;
