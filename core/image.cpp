@@ -272,4 +272,27 @@ FloatImage read_pfm(const std::filesystem::path& path) {
   return image;
 }
 
+Image8 box_filter(const Image8& image, int factor) {
+  if (factor < 1 || image.width % factor || image.height % factor)
+    throw InvalidInput(fmt::format("box filter: {}x{} is not a multiple of {}", image.width, image.height, factor));
+  if (factor == 1) return image;
+  Image8 out{image.width / factor, image.height / factor, {}};
+  out.rgba.resize(std::size_t(out.width) * out.height * 4);
+  const unsigned n = unsigned(factor * factor);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      unsigned sum[3] = {0, 0, 0}, alpha = 0;
+      for (int dy = 0; dy < factor; ++dy)
+        for (int dx = 0; dx < factor; ++dx) {
+          const std::uint8_t* p = image.pixel(x * factor + dx, y * factor + dy);
+          for (int k = 0; k < 3; ++k) sum[k] += unsigned(p[k]) * p[3];
+          alpha += p[3];
+        }
+      std::uint8_t* q = out.pixel(x, y);
+      for (int k = 0; k < 3; ++k) q[k] = alpha ? std::uint8_t((sum[k] + alpha / 2) / alpha) : 0;
+      q[3] = std::uint8_t((alpha + n / 2) / n);
+    }
+  return out;
+}
+
 }  // namespace quadrix

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
+#include <condition_variable>
 #include <mutex>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -23,6 +25,16 @@ struct Progress::Impl {
   std::mutex mutex;
   int last_percent = -1;
   bool drawn = false;
+  // Indeterminate work: a ticker thread until `stop`.
+  std::thread ticker;
+  std::condition_variable wake;
+  bool stop = false;
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+  // Seconds of work before the bar appears: 1, or QUADRIX_PROGRESS_DELAY (tests set 0).
+  double delay = [] {
+    const char* v = std::getenv("QUADRIX_PROGRESS_DELAY");
+    return v && *v ? std::strtod(v, nullptr) : 1.0;
+  }();
 };
 
 Progress::Progress(std::string label, bool enabled) : impl_(std::make_unique<Impl>()) {
@@ -30,15 +42,43 @@ Progress::Progress(std::string label, bool enabled) : impl_(std::make_unique<Imp
   impl_->enabled = enabled;
 }
 
+Progress::Progress(std::string label, bool enabled, Indeterminate) : Progress(std::move(label), enabled) {
+  if (!enabled) return;
+  impl_->ticker = std::thread([impl = impl_.get()] {
+    std::unique_lock lock(impl->mutex);
+    // Drawn at once, then every 250 ms: short work (under `delay`) stays silent.
+    for (int tick = 0; tick == 0 || !impl->wake.wait_for(lock, std::chrono::milliseconds(250), [impl] { return impl->stop; });
+         ++tick) {
+      const double secs = impl->seconds();
+      if (secs < impl->delay) continue;
+      constexpr int width = 30;
+      std::string bar(width, '.');
+      const int at = tick % (2 * width - 2);
+      bar[at < width ? at : 2 * width - 2 - at] = '#';
+      std::fprintf(stderr, "\r%s [%s] %.1fs", impl->label.c_str(), bar.c_str(), secs);
+      std::fflush(stderr);
+      impl->drawn = true;
+    }
+  });
+}
+
 Progress::~Progress() {
+  if (impl_->ticker.joinable()) {
+    {
+      std::lock_guard lock(impl_->mutex);
+      impl_->stop = true;
+    }
+    impl_->wake.notify_all();
+    impl_->ticker.join();
+  }
   if (impl_->drawn) std::fprintf(stderr, "\r\033[K");
 }
 
 void Progress::update(double fraction) {
   if (!impl_->enabled) return;
   std::lock_guard lock(impl_->mutex);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - impl_->start).count();
-  if (secs < 1.0) return;  // short work stays silent
+  const double secs = impl_->seconds();
+  if (secs < impl_->delay) return;  // short work stays silent
   const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
   if (percent == impl_->last_percent) return;
   impl_->last_percent = percent;
@@ -109,6 +149,33 @@ Rgb parse_rgb(const std::string& text, const std::string& option) {
       b < 0 || b > 255)
     throw CLI::ValidationError(option, fmt::format("expected R,G,B with components 0..255, got '{}'", text));
   return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
+}
+
+namespace {
+std::string& typed_command_line() {
+  static std::string line = "quadrix";
+  return line;
+}
+}  // namespace
+
+const std::string& command_line() { return typed_command_line(); }
+
+void set_command_line(int argc, const char* const* argv) {
+  std::string line = "quadrix";
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const bool plain = !arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                             "0123456789-_.,/:=+@%^") == std::string_view::npos;
+    line += ' ';
+    if (plain) {
+      line += arg;
+    } else {
+      line += '\'';
+      for (const char c : arg) line += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      line += '\'';
+    }
+  }
+  typed_command_line() = line;
 }
 
 bool progress_allowed(const CommonOptions& o) { return !o.quiet && ::isatty(STDERR_FILENO); }

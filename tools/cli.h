@@ -44,6 +44,9 @@ struct Report {
   /// Seconds since the command started.
   double elapsed() const;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  /// One line main prints on stderr after a success unless --quiet: what was written, counts
+  /// (main appends the time).
+  std::string summary;
 };
 
 /// A text progress bar on stderr, shown only when stderr is a terminal, not --quiet, and the work
@@ -51,6 +54,10 @@ struct Report {
 class Progress {
 public:
   Progress(std::string label, bool enabled);
+  /// Work that reports no fractions (a fit, a skin): a background thread shows the label, a
+  /// moving marker and the elapsed time until destruction.
+  struct Indeterminate {};
+  Progress(std::string label, bool enabled, Indeterminate);
   ~Progress();
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
@@ -107,6 +114,11 @@ std::pair<int, int> parse_size(const std::string& text);
 /// Parses "R,G,B" with components 0..255 (option names the option in the message).
 /// \throws CLI::ValidationError.
 Rgb parse_rgb(const std::string& text, const std::string& option = "--colour");
+
+/// The command line as typed ("quadrix fit 'my scan.ply' -o m.qxm"; arguments with spaces or
+/// shell characters single-quoted), for the `producer` metadata of written models. Set by main.
+const std::string& command_line();
+void set_command_line(int argc, const char* const* argv);
 
 /// True when progress output is allowed (stderr is a terminal and not quiet).
 bool progress_allowed(const CommonOptions& options);

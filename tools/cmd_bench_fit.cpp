@@ -375,8 +375,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
             "{:<10} {:<10} {:>8} {:>9} {:>10.3g} {:>10.3g} {:>8.2f} {:>6} {:>10.3g} {:>10.3g} {:>9.2e} {:>9.2e}\n",
             r.model, r.method, r.max_error > 0 ? fmt::format("{:g}", r.max_error) : "-", r.size, r.max_rel, r.rms_rel,
             r.seconds, r.beyond, r.surface_max_rel, r.surface_p999_rel, r.surface_share_beyond_2e, r.hole_share);
-      std::cout << fmt::format("wrote {}/bench_fit.{{csv,json,png}}\n", out_dir.string());
     }
+    report.summary = fmt::format("wrote {}/bench_fit.{{csv,json,png}} ({} rows)", out_dir.string(), rows.size());
     return kOk;
   }});
 }

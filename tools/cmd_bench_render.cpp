@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "convert/quads.h"
@@ -171,7 +173,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
   app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(number({.lo = 1, .hi = 1000}));
   app->add_option("--azimuth", a->azimuth, "Camera azimuth (degrees)")->check(finite());
   app->add_option("--elevation", a->elevation, "Camera elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const auto [w, h] = parse_size(a->size);
                         const std::string ext = std::filesystem::path(a->input).extension().string();
                         const bool is_mesh = ext != ".qxm" && ext != ".slim2t";
@@ -189,6 +191,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                                      .height = h});
                         auto context = render::create_context(a->context, {.width = w, .height = h});
                         std::vector<Row> rows;
+                        std::optional<Progress> progress(std::in_place, "bench render", progress_allowed(common),
+                                                         Progress::Indeterminate{});
                         {
                           render::Renderer r(*context);
                           r.set_model(model);
@@ -226,6 +230,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                  false, a->frames));
                           for (std::size_t f = 0; f < mesh->face_count(); ++f) triangles += mesh->face(f).size() - 2;
                         }
+                        progress.reset();
                         nlohmann::json j = {{"input", a->input}, {"width", w}, {"height", h},
                                             {"frames", a->frames}, {"context", context->description()},
                                             {"primitives", model.size()}, {"baseline_triangles", triangles},
@@ -291,6 +296,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         write_file_atomically(std::filesystem::path(a->out) / "bench_render.csv",
                                               [&](std::ostream& o) { o << csv; });
                         report.json["bench_render"] = j;
+                        report.summary = fmt::format("wrote {}/bench_render.{{json,csv}} ({} configurations)", a->out, rows.size());
                         return kOk;
                       }});
 }

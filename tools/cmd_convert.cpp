@@ -45,12 +45,8 @@ void add_convert(CLI::App& root, Commands& commands) {
                         QuadConversion conv = convert_quads(mesh, a->options);
                         const double seconds = report.elapsed() - start;
                         const auto& c = conv.counts;
-                        std::string producer = fmt::format("quadrix convert quads {} -o {} --planar-threshold {:g}",
-                                                           a->mesh, a->out, a->options.planar_threshold);
-                        if (!a->colour.empty()) producer += " --colour " + a->colour;
-                        if (a->options.skip_degenerate) producer += " --skip-degenerate";
                         auto& meta = conv.model.metadata;
-                        meta["producer"] = producer;
+                        meta["producer"] = command_line();
                         meta["source"] = a->mesh;
                         meta["faces"] = fmt::format("{}", mesh.face_count());
                         meta["quads_quadric"] = fmt::format("{}", c.quadric_quads);
@@ -77,8 +73,8 @@ void add_convert(CLI::App& root, Commands& commands) {
                                                   {"degenerate_skipped", c.degenerate_skipped},
                                                   {"max_relative_deviation", conv.max_relative_deviation},
                                                   {"convert_seconds", seconds}};
-                        log::info("wrote {}: {} tet patches from {} faces ({} quadric, {} flat, {} split quads, "
-                                  "{} triangles) in {:.3f} s",
+                        report.summary = fmt::format("wrote {}: {} tet patches from {} faces ({} quadric, {} flat, {} split quads, "
+                                  "{} triangles) ({:.3f} s converting)",
                                   a->out, conv.model.tets.size(), mesh.face_count(), c.quadric_quads, c.flat_quads,
                                   c.split_quads, c.triangles, seconds);
                         return kOk;

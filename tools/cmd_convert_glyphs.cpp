@@ -39,13 +39,12 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                         const double t0 = report.elapsed();
                         if (!a->ellipsoids.empty()) {
                           Model m = read_ellipsoids_csv(a->ellipsoids);
-                          m.metadata["producer"] =
-                              fmt::format("quadrix convert glyphs --ellipsoids {} -o {}", a->ellipsoids, a->out);
+                          m.metadata["producer"] = command_line();
                           m.metadata["source"] = a->ellipsoids;
                           write_model(m, a->out, a->write);
                           report.json["convert"] = {{"kind", "ellipsoids"}, {"input", a->ellipsoids}, {"out", a->out},
                                                     {"glyphs", m.glyphs.size()}};
-                          log::info("wrote {}: {} ellipsoids", a->out, m.glyphs.size());
+                          report.summary = fmt::format("wrote {}: {} ellipsoids", a->out, m.glyphs.size());
                           return kOk;
                         }
                         if (a->input.empty()) throw InvalidInput("convert glyphs: give a MOLECULE file or --ellipsoids FILE.csv");
@@ -54,9 +53,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                         MoleculeGlyphs g = molecule_glyphs(
                             mol, {.style = parse_molecule_style(a->style), .colour_by = parse_colour_by(a->colour_by)});
                         auto& meta = g.model.metadata;
-                        meta["producer"] = fmt::format("quadrix convert glyphs {} -o {} --style {} --colour-by {}{}",
-                                                       a->input, a->out, a->style, a->colour_by,
-                                                       a->no_water ? " --no-water" : "");
+                        meta["producer"] = command_line();
                         meta["source"] = a->input;
                         write_model(g.model, a->out, a->write);
                         report.json["convert"] = {{"kind", "glyphs"},
@@ -72,7 +69,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                                                   {"glyphs", g.model.glyphs.size()},
                                                   {"read_seconds", read_seconds},
                                                   {"convert_seconds", report.elapsed() - t0}};
-                        log::info("wrote {}: {} glyphs from {} atoms and {} bonds ({} from the file)", a->out,
+                        report.summary = fmt::format("wrote {}: {} glyphs from {} atoms and {} bonds ({} from the file)", a->out,
                                   g.model.glyphs.size(), mol.atoms.size(), g.bonds, g.file_bonds);
                         return kOk;
                       }});

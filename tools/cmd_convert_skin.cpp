@@ -1,6 +1,8 @@
 // quadrix convert skin INPUT -o FILE: skin surfaces of ball sets (PDB, .cin, .xyzr) as
 // tetrahedron-clipped quadrics ([Stoll06] §5.1.2). Registered under the `convert` group by
 // add_convert_skin (called from tools/cmd_convert.cpp).
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "convert/balls.h"
@@ -38,7 +40,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                   "triangulation, each cell split directly; default), cgal (CGAL Skin_surface_3's triangulated "
                   "mixed complex as is) or tetgen (CGAL's cells re-tetrahedralised by TetGen)")
       ->check(CLI::IsMember({"regular", "tetgen", "cgal"}));
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const double t0 = report.elapsed();
                         const auto balls = read_balls(
                             a->input, {.radii = parse_radius_table(a->radii), .radius_scale = a->radius_scale, .water = !a->no_water});
@@ -50,13 +52,12 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                                                                    : SkinTetrahedra::regular;
                         o.source = a->input;
                         const double t1 = report.elapsed();
+                        std::optional<Progress> progress(std::in_place, "skin", progress_allowed(common), Progress::Indeterminate{});
                         SkinConversion conv = convert_skin(balls, o);
+                        progress.reset();
                         const double seconds = report.elapsed() - t1;
                         auto& meta = conv.model.metadata;
-                        meta["producer"] = fmt::format("quadrix convert skin {} -o {} --shrink {:g} --radii {} "
-                                                       "--radius-scale {:g} --tetrahedra {}{}",
-                                                       a->input, a->out, a->shrink, a->radii, a->radius_scale,
-                                                       a->tetrahedra, a->no_water ? " --no-water" : "");
+                        meta["producer"] = command_line();
                         meta["source"] = a->input;
                         meta[kClosedKey] = "1";  // a skin bounds the union of its balls: cull exactly
                         meta["balls"] = fmt::format("{}", balls.size());
@@ -91,7 +92,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
                                                   {"cgal_seconds", conv.cgal_seconds},
                                                   {"tetgen_seconds", conv.tetgen_seconds},
                                                   {"convert_seconds", seconds}};
-                        log::info("wrote {}: {} tet patches from {} balls ({} of {} mixed cells crossed) in {:.3f} s",
+                        report.summary = fmt::format("wrote {}: {} tet patches from {} balls ({} of {} mixed cells crossed) ({:.3f} s converting)",
                                   a->out, conv.model.tets.size(), balls.size(), conv.mixed_cells_crossed,
                                   conv.mixed_cells, seconds);
                         return kOk;

@@ -89,8 +89,7 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
   const double seconds = report.elapsed() - t1;
   const char* midpoints = a.linear ? "none" : "hermite-quadratic-fit";
   auto& meta = conv.model.metadata;
-  meta["producer"] = fmt::format("quadrix convert volume --tets {} --values {} --iso {:.17g} -o {}{}", a.tets,
-                                 a.values, o.iso, a.out, a.linear ? " --linear" : "");
+  meta["producer"] = command_line();
   meta["iso_source"] = iso_source;
   meta["source"] = a.tets;
   meta["values"] = a.values;
@@ -119,7 +118,7 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
                             {"tets", conv.model.tets.size()},
                             {"read_seconds", read_seconds},
                             {"convert_seconds", seconds}};
-  log::info("wrote {}: {} tet patches from a mesh of {} vertices and {} tetrahedra in {:.3f} s", a.out,
+  report.summary = fmt::format("wrote {}: {} tet patches from a mesh of {} vertices and {} tetrahedra ({:.3f} s converting)", a.out,
             conv.model.tets.size(), mesh.vertices.size(), mesh.tets.size(), seconds);
   return kOk;
 }
@@ -203,13 +202,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                         const double seconds = report.elapsed() - t1;
                         const std::string input = a->synth.empty() ? a->volume : fmt::format("{} {}^3", a->synth, a->grid);
                         auto& meta = conv.model.metadata;
-                        std::string producer = a->synth.empty()
-                                                   ? fmt::format("quadrix convert volume {}", a->volume)
-                                                   : fmt::format("quadrix convert volume --synth {} --grid {}", a->synth, a->grid);
-                        producer += fmt::format(" --iso {:.17g} -o {}", o.iso, a->out);
-                        if (a->linear) producer += " --linear";
-                        else producer += " --reconstruction " + a->reconstruction;
-                        meta["producer"] = producer;
+                        meta["producer"] = command_line();
                         meta["source"] = input;
                         meta["iso"] = fmt::format("{:.17g}", o.iso);
                         meta["iso_source"] = iso_source;
@@ -237,7 +230,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                                                   {"tets", conv.model.tets.size()},
                                                   {"read_seconds", read_seconds},
                                                   {"convert_seconds", seconds}};
-                        log::info("wrote {}: {} tet patches from a {}x{}x{} volume ({} of {} cells near V) in {:.3f} s",
+                        report.summary = fmt::format("wrote {}: {} tet patches from a {}x{}x{} volume ({} of {} cells near V) ({:.3f} s converting)",
                                   a->out, conv.model.tets.size(), volume.dims[0], volume.dims[1], volume.dims[2],
                                   conv.cells_visited, conv.cells, seconds);
                         return kOk;

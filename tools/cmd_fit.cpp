@@ -35,8 +35,8 @@ void add_fit(CLI::App& root, Commands& commands) {
   add_encoding_option(*app, a->write);
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
       ->check(number({.lo = 1e-7, .hi = 0.5}));
-  app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error)")
-      ->check(positive());
+  app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error; default: unset)")
+      ->check(positive())->default_str("");
   app->add_option("--normal-weight", a->options.normal_weight, "μ: weight of the normal term")
       ->check(number({.lo = 1e-6, .hi = 10}));
   app->add_option("--holdout", a->holdout, "Fraction of points held out of the fit and measured after it")
@@ -55,7 +55,7 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("--sharp-angle", a->options.sharp_angle_deg,
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
       ->check(number({.lo = 1, .hi = 179}));
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         // A mesh's faces give the normals and the surface the fit is bounded against.
                         std::optional<PolygonMesh> mesh;
                         PointCloud cloud;
@@ -83,13 +83,12 @@ void add_fit(CLI::App& root, Commands& commands) {
                         o.max_error_is_absolute = a->max_error_abs > 0;
                         SlimFitResult r;
                         try {
+                          const Progress progress("fit", progress_allowed(common), Progress::Indeterminate{});
                           r = mesh ? fit_slim(cloud, *mesh, o) : fit_slim(cloud, o);
                         } catch (const InvalidInput& e) {  // unusable data: say which file held it
                           throw InvalidInput(fmt::format("{}: {}", a->points, e.what()));
                         }
-                        r.model.metadata["producer"] =
-                            fmt::format("quadrix fit {}{}", a->points,
-                                        o.sharp ? fmt::format(" --sharp --sharp-angle {:g}", o.sharp_angle_deg) : "");
+                        r.model.metadata["producer"] = command_line();
                         const auto& s = r.stats;
                         nlohmann::json j = {{"points", s.points},
                                             {"patches", s.patches},
@@ -142,9 +141,10 @@ void add_fit(CLI::App& root, Commands& commands) {
                         }
                         write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;
-                        log::info("{} patches for {} points in {:.2f} s; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
-                                  "(E = {:.3g})", s.patches, s.points, s.time_total, s.max_blend, s.surface_max,
-                                  s.surface_p999, s.max_error_abs);
+                        report.summary = fmt::format(
+                            "wrote {}: {} patches for {} points; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
+                            "(E = {:.3g})", a->out, s.patches, s.points, s.max_blend, s.surface_max, s.surface_p999,
+                            s.max_error_abs);
                         if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;
                         const auto what = fmt::format(
                             "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "

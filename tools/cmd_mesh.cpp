@@ -51,13 +51,11 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"open_edges", r.open_edges},
                          {"refinements", r.refinements},
                          {"within_bound", r.within}};
-  if (!common.quiet)
-    std::cout << fmt::format("{}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
-                             "surface->mesh {:.3g}), {}, {:.2f} s\n",
+  report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
+                             "surface->mesh {:.3g}), {}",
                              a.out, r.mesh.face_count(), r.mesh.vertices.size(), r.mesh.colours.empty() ? "" : " with colours",
                              r.max_error(), r.bound, r.mesh_to_surface.max, r.surface_to_mesh.max,
-                             r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges),
-                             report.elapsed());
+                             r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges));
   if (r.within) return kOk;
   const std::string what = fmt::format(
       "{}: the mesh is outside the bound {:.3g} after {} refinements (max error {:.3g}, {} samples whose normal met no "
@@ -83,14 +81,14 @@ void add_mesh(CLI::App& root, Commands& commands) {
                                                "bounding-box diagonal")
       ->check(number({.lo = 1e-7, .hi = 0.5}))
       ->capture_default_str();
-  app->add_option("--max-error-abs", a->max_error_abs, "The bound in world units (overrides --max-error)")
-      ->check(positive());
+  app->add_option("--max-error-abs", a->max_error_abs, "The bound in world units (overrides --max-error; default: unset)")
+      ->check(positive())->default_str("");
   app->add_option("--max-refinements", a->options.max_refinements, "Resolution doublings tried to reach the bound")
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_option("--slim-offset", a->options.slim_offset,
                   "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
-      ->check(number({.lo = 0.0, .hi = 10.0}));
+      ->check(number({.lo = 0.0, .hi = 10.0}))->default_str("");
   app->add_flag("--allow-exceed", a->allow_exceed,
                 "Exit 0 even when the mesh stays outside its bound (otherwise exit 7, the mesh still written)");
   commands.push_back({app, [a](const CommonOptions& c, Report& r) { return run_mesh(*a, c, r); }});

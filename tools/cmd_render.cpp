@@ -7,8 +7,8 @@
 #include <numbers>
 #include <cstdio>
 #include <limits>
-#include <span>
 #include <optional>
+#include <span>
 
 #include <fmt/format.h>
 
@@ -32,16 +32,17 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
+#include "tools/view_options.h"
 
 namespace quadrix::cli {
 namespace {
 
 struct RenderArgs {
   std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
-  std::string shading = "phong", mesh, up = "+y", view, background = "255,255,255";
-  double azimuth = 30, elevation = 20, fov = 40, zoom = 1, fill = 0.9;
-  bool no_cull = false, shadows = false, outlines = false;
-  int frames = 1, shadow_map = 2048;
+  std::string shading = "phong", mesh, background = "255,255,255";
+  ViewArgs view;  // camera options shared with `view`
+  bool no_cull = false, contact_sheet = false, shadows = false, outlines = false;
+  int frames = 1, supersample = 1, turntable = 0, shadow_map = 2048;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
@@ -175,21 +176,62 @@ FloatImage normals_of(const render::GBuffer& g) {
   return f;
 }
 
+// Lower-cased extension of a file name.
+std::string extension_of(const std::string& file) {
+  std::string e = std::filesystem::path(file).extension().string();
+  for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+// out.png → out-0001.png: the name of turntable frame i (from 0).
+std::string frame_name(const std::string& out, int i) {
+  const std::filesystem::path p(out);
+  return (p.parent_path() / fmt::format("{}-{:04d}{}", p.stem().string(), i + 1, p.extension().string())).string();
+}
+
+// Writes a colour image in the format its name asks for (checked before rendering).
+void write_image(const Image8& image, const std::string& file) {
+  if (extension_of(file) == ".png") write_png(image, file);
+  else write_jpeg(image, file, {});
+}
+
+// The frames side by side: ceil(√n) columns, the rest of the last row background.
+Image8 contact_sheet(const std::vector<Image8>& frames, const std::uint8_t fill[4]) {
+  const int n = static_cast<int>(frames.size());
+  const int cols = static_cast<int>(std::ceil(std::sqrt(double(n)))), rows = (n + cols - 1) / cols;
+  const int w = frames[0].width, h = frames[0].height;
+  Image8 sheet{w * cols, h * rows, {}};
+  sheet.rgba.resize(std::size_t(sheet.width) * sheet.height * 4);
+  for (std::size_t i = 0; i < sheet.rgba.size(); ++i) sheet.rgba[i] = fill[i % 4];
+  for (int k = 0; k < n; ++k)
+    for (int y = 0; y < h; ++y)
+      std::copy_n(frames[k].pixel(0, y), 4 * w, sheet.pixel((k % cols) * w, (k / cols) * h + y));
+  return sheet;
+}
+
 int run_render(const RenderArgs& a, const CommonOptions& common, Report& report) {
   if (a.out.empty()) throw CLI::ValidationError("--out", "an output PNG is required");
-  // The format follows the name: PNG images, PFM depth and normals; anything else is refused
-  // rather than written as PNG bytes under another extension.
-  const auto expect_extension = [](const std::string& option, const std::string& file, const char* ext,
-                                   const char* format) {
-    std::string e = std::filesystem::path(file).extension().string();
-    for (auto& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (!file.empty() && e != ext)
+  // The format follows the name: PNG or JPEG images, PFM depth and normals; anything else is
+  // refused rather than written as PNG bytes under another extension.
+  const auto expect_extension = [](const std::string& option, const std::string& file,
+                                   std::initializer_list<const char*> exts, const char* format) {
+    const std::string e = extension_of(file);
+    if (!file.empty() && std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; }))
       throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a {} name", file,
-                                                     format, ext));
+                                                     format, *exts.begin()));
   };
-  expect_extension("--out", a.out, ".png", "PNG");
-  expect_extension("--depth-out", a.depth_out, ".pfm", "PFM");
-  expect_extension("--normal-out", a.normal_out, ".pfm", "PFM");
+  expect_extension("--out", a.out, {".png", ".jpg", ".jpeg"}, "PNG or JPEG");
+  expect_extension("--depth-out", a.depth_out, {".pfm"}, "PFM");
+  expect_extension("--normal-out", a.normal_out, {".pfm"}, "PFM");
+  const bool jpeg = extension_of(a.out) != ".png";
+  if (jpeg && a.background == "none")
+    throw CLI::ValidationError("--background", "JPEG has no transparency: give a .png name for --background none");
+  const int turntable = a.turntable;
+  if (a.contact_sheet && turntable < 2) throw CLI::ValidationError("--contact-sheet", "needs --turntable N with N ≥ 2");
+  if (turntable > 0 && (!a.depth_out.empty() || !a.normal_out.empty()))
+    throw CLI::ValidationError("--turntable", "writes colour frames only; render --depth-out/--normal-out as a still");
+  if (a.supersample > 1 && (!a.depth_out.empty() || !a.normal_out.empty()))
+    throw CLI::ValidationError("--supersample", "filters the colour image only; render --depth-out/--normal-out without it");
   const auto [w, h] = parse_size(a.size);
   const auto implicit_surface = implicit_from_options(a);
   if (a.model.empty() && !implicit_surface) throw CLI::ValidationError("MODEL", "give a MODEL, --implicit or --surface");
@@ -220,56 +262,56 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   Box3 box = bounds(model);
   if (mesh)
     for (const auto& v : mesh->vertices) box.extend(v);
-  // The view: about the chosen up axis, distance fitted for a 40° lens on the visible geometry
-  // (a low-resolution CPU pass, or the mesh's vertices), then --fov and --zoom as the lens.
-  double azimuth = a.azimuth, elevation = a.elevation;
-  if (a.view == "front") azimuth = 0, elevation = 0;
-  else if (a.view == "side") azimuth = 90, elevation = 0;
-  else if (a.view == "top") azimuth = 0, elevation = 90;
-  else if (a.view == "iso") azimuth = 45, elevation = 35.264389682754654;
-  constexpr double kFitFov = 40.0;
-  Camera camera = frame_view(box, {.up = parse_axis(a.up), .azimuth_deg = azimuth, .elevation_deg = elevation,
-                                   .fov_y_deg = kFitFov, .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05,
-                                   .width = w, .height = h});
-  if (a.fill > 0) {
-    std::vector<Eigen::Vector3d> visible;
-    if (!model.empty()) {
-      const ReferenceScene scene(model);
-      Camera probe = camera;
-      const double s = 160.0 / std::max(w, h);
-      probe.width = std::max(8, static_cast<int>(std::lround(w * s)));
-      probe.height = std::max(8, static_cast<int>(std::lround(h * s)));
-      ReferenceRenderOptions po;
-      po.trace.cull_backfaces = !a.no_cull;
-      po.trace.slim.offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
-      const ReferenceImage img = render_reference(scene, probe, po);
-      for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x)
-          if (const std::size_t i = std::size_t(y) * img.width + x; img.coverage[i]) {
-            // Pixel corners too, so the bounds are those of the covered pixels, not their centres.
-            for (const double dx : {0.0, 1.0})
-              for (const double dy : {0.0, 1.0})
-                visible.push_back(probe.pixel_ray(x + dx, y + dy).at(img.distance[i]));
-          }
-    }
-    if (mesh) {
-      const std::size_t step = std::max<std::size_t>(1, mesh->vertices.size() / 200000);
-      for (std::size_t v = 0; v < mesh->vertices.size(); v += step) visible.push_back(mesh->vertices[v]);
-    }
-    camera = fit_points(camera, visible, a.fill);
+  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
+  // The view (tools/view_options.h): tight framing on the visible geometry, from a
+  // low-resolution CPU pass and the mesh's vertices.
+  const VisibleFn visible = [&](const Camera& c) {
+    return visible_points(model, mesh ? &*mesh : nullptr, c, {.cull = !a.no_cull, .slim_offset = slim_offset});
+  };
+  const Camera camera = resolve_camera(a.view, box, w, h, a.view.typed("--size"), visible, turntable > 0);
+  std::vector<Camera> cameras{camera};
+  if (turntable > 0) {
+    cameras = turntable_cameras(camera, turntable_axis(a.view, camera), turntable,
+                                wants_fill(a.view) ? a.view.fill : 0.0, visible);
   }
-  camera.fov_y_deg = 2.0 * std::atan(std::tan(a.fov * std::numbers::pi / 360.0) / a.zoom) * 180.0 / std::numbers::pi;
+  if (!a.view.save_camera.empty()) write_camera(cameras.front(), a.view.save_camera);
+  const int width = cameras.front().width, height = cameras.front().height;
+  const int ss = a.supersample;
+  if (std::max(width, height) * ss > 16384)
+    throw CLI::ValidationError("--supersample", fmt::format("{}x{} × {} exceeds 16384 pixels a side", width, height, ss));
   const Rgb background = a.background == "none" ? Rgb{255, 255, 255} : parse_rgb(a.background, "--background");
   const bool transparent = a.background == "none";
   nlohmann::json& j = report.json["render"];
-  j = {{"model", a.model}, {"primitives", model.size()}, {"width", w}, {"height", h}, {"camera", camera_json(camera)},
-       {"framing", {{"up", a.up}, {"view", a.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view)},
-                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.fill}, {"zoom", a.zoom}}},
-       {"background", a.background}};
-  // The overlays every backend draws alike: per-pixel colours (normal, depth), the colour bar,
-  // the points depth-tested against the surface's depth.
-  const auto finish = [&](Image8& colour, std::span<const std::uint8_t> coverage, std::span<const float> depth,
-                          std::span<const Eigen::Vector3f> normal) {
+  const auto [azimuth, elevation] = view_angles(a.view);
+  j = {{"model", a.model}, {"primitives", model.size()}, {"width", width}, {"height", height}, {"camera", camera_json(cameras.front())},
+       {"framing", {{"up", a.view.up}, {"view", a.view.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.view)},
+                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.view.fill}, {"zoom", a.view.zoom},
+                    {"camera_file", a.view.camera_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.camera_file)}}},
+       {"background", a.background}, {"supersample", ss}};
+
+  std::string backend = a.backend;
+  if (backend == "auto") backend = "gl";
+  if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
+  j["backend"] = backend;
+  j["slim_offset"] = slim_offset;
+  if (backend == "cpu") {
+    if (mesh) throw InvalidInput("--mesh needs the GL backend");
+    if (a.shading != "phong")
+      throw CLI::ValidationError("--shading", fmt::format("the CPU reference shades phong only, not {}; use --backend gl", a.shading));
+  }
+  // The pixels of one camera at ss× its size, box-filtered down (backgrounds replaced first).
+  std::vector<Image8> images;
+  std::size_t covered = 0;
+  Progress progress(turntable > 0 ? "turntable" : "render", progress_allowed(common));
+  // The overlays every backend draws alike after the background: per-pixel colours (normal,
+  // depth), the colour bar, the points depth-tested against the surface's depth.
+  const auto finish = [&](Image8 colour, const Camera& c, const std::vector<std::uint8_t>& coverage,
+                          std::span<const float> depth, std::span<const Eigen::Vector3f> normal) {
+    for (std::size_t i = 0; i < coverage.size(); ++i) {
+      std::uint8_t* p = colour.rgba.data() + 4 * i;
+      if (!coverage[i]) p[0] = background[0], p[1] = background[1], p[2] = background[2];
+      p[3] = !transparent || coverage[i] ? 255 : 0;
+    }
     if (colour_by == ColourMode::normal || colour_by == ColourMode::depth) {
       if (colour_by == ColourMode::depth)
         colour_range = a.colour_range.empty() ? covered_depth_range(coverage, depth) : parse_range(a.colour_range);
@@ -281,112 +323,112 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     }
     j["colour_by"] = colour_json;
     if (points) {
-      const PointSplatStats ps = draw_points(colour, camera, depth, points->points, {.radius_px = a.point_size});
+      const PointSplatStats ps = draw_points(colour, c, depth, points->points, {.radius_px = a.point_size * ss});
       j["points"] = {{"file", a.points}, {"count", points->points.size()}, {"drawn", ps.drawn},
                      {"hidden", ps.hidden}, {"outside", ps.outside}};
     }
+    if (images.empty()) covered = std::count(coverage.begin(), coverage.end(), 1);
+    images.push_back(ss > 1 ? box_filter(colour, ss) : std::move(colour));
+    progress.update(double(images.size()) / cameras.size());
+  };
+  const auto magnified = [ss](Camera c) {
+    c.width *= ss, c.height *= ss;
+    return c;
   };
 
-  std::string backend = a.backend;
-  if (backend == "auto") backend = "gl";
-  if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
-  j["backend"] = backend;
-  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
-  j["slim_offset"] = slim_offset;
-
   if (backend == "cpu") {
-    if (mesh) throw InvalidInput("--mesh needs the GL backend");
-    if (a.shading != "phong")
-      throw CLI::ValidationError("--shading", fmt::format("the CPU reference shades phong only, not {}; use --backend gl", a.shading));
     const double t0 = report.elapsed();
     const ReferenceScene scene(model);
-    Progress progress("render", progress_allowed(common));
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
     ro.trace.slim.offset = slim_offset;
     ro.shadows = a.shadows;
-    ro.progress = progress.callback();
+    if (cameras.size() == 1) ro.progress = progress.callback();
     const double t1 = report.elapsed();
-    const ReferenceImage img = render_reference(scene, camera, ro);
+    for (const Camera& c : cameras) {
+      const ReferenceImage img = render_reference(scene, magnified(c), ro);
+      finish(shade_phong(img, magnified(c), {.background = background, .outlines = a.outlines}), magnified(c),
+             img.coverage, img.depth, img.normal);
+      if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
+      if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
+    }
     const double t2 = report.elapsed();
-    Image8 colour = shade_phong(img, camera, {.background = background, .outlines = a.outlines});
-    if (transparent)
-      for (std::size_t i = 0; i < img.coverage.size(); ++i) colour.rgba[4 * i + 3] = img.coverage[i] ? 255 : 0;
-    finish(colour, img.coverage, img.depth, img.normal);
-    write_png(colour, a.out);
-    if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
-    if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
-    j["covered_pixels"] = std::count(img.coverage.begin(), img.coverage.end(), 1);
+    j["covered_pixels"] = covered;
     j["bvh_nodes"] = scene.bvh_node_count();
     j["seconds_bvh"] = t1 - t0;
     j["seconds_trace"] = t2 - t1;
-    log::info("cpu: {}x{} in {:.3f} s", w, h, t2 - t1);
-    return kOk;
+    log::info("cpu: {}x{} in {:.3f} s", width, height, t2 - t1);
+  } else {
+    auto context = render::create_context(a.context, {.width = width, .height = height});
+    render::Renderer renderer(*context);
+    render::AmpOptions amp{.step = a.amp_step, .tau1 = a.amp_tau1, .tau2 = a.amp_tau2, .tau3 = a.amp_tau3};
+    const std::string test = a.amp_test != "auto" ? a.amp_test : implicit_surface ? implicit_surface->second : "sign";
+    amp.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
+    renderer.set_model(model, amp);
+    if (!model.implicits.empty()) {
+      j["implicit_test"] = test;
+      j["implicit_compile_ms"] = renderer.implicit_compile_ms();
+    }
+    if (mesh) renderer.set_mesh(*mesh);
+    render::RenderOptions ro;
+    ro.cull = !a.no_cull;
+    ro.slim_offset = static_cast<float>(slim_offset);
+    ro.shading = a.shading == "envmap" ? render::Shading::envmap
+                 : a.shading == "npr"  ? render::Shading::npr
+                                       : render::Shading::phong;
+    ro.shadows = a.shadows;
+    ro.shadow_map_size = a.shadow_map;
+    ro.outlines = a.outlines;
+    // One frame with statistics (counted separately: the counters cost time), then N timed
+    // frames of the first camera.
+    ro.statistics = true;
+    const render::FrameStats stats = renderer.draw(magnified(cameras.front()), ro);
+    ro.statistics = false;
+    std::vector<double> total;
+    for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(magnified(cameras.front()), ro).ms_total);
+    for (std::size_t k = 0; k < cameras.size(); ++k) {
+      if (k > 0) renderer.draw(magnified(cameras[k]), ro);
+      const render::GBuffer g = renderer.read_gbuffer();
+      finish(renderer.read_colour(), magnified(cameras[k]), g.coverage, g.depth, g.normal);
+      if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
+      if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
+    }
+    if (!model.implicits.empty()) j["ms_first_frame"] = stats.ms_total;  // includes the JIT of generated shaders
+    const bool has_fs = stats.fragments != static_cast<std::uint64_t>(-1);
+    j["context"] = context->description();
+    j["frames"] = a.frames;
+    j["culling"] = ro.cull;
+    // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
+    j["backface_culling_exact"] = backface_culling_is_exact(model, cameras.front());
+    j["shading"] = a.shading;
+    j["primitives_drawn"] = stats.primitives - stats.culled;
+    j["primitives_culled"] = stats.culled;
+    j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
+    j["fragments_hit"] = stats.fragments_hit;
+    if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
+    j["ms_frame_median"] = median(total);
+    log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), width, height,
+              median(total), a.frames, stats.primitives - stats.culled, stats.culled);
   }
-
-  auto context = render::create_context(a.context, {.width = w, .height = h});
-  render::Renderer renderer(*context);
-  render::AmpOptions amp{.step = a.amp_step, .tau1 = a.amp_tau1, .tau2 = a.amp_tau2, .tau3 = a.amp_tau3};
-  const std::string test = a.amp_test != "auto" ? a.amp_test : implicit_surface ? implicit_surface->second : "sign";
-  amp.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
-  renderer.set_model(model, amp);
-  if (!model.implicits.empty()) {
-    j["implicit_test"] = test;
-    j["implicit_compile_ms"] = renderer.implicit_compile_ms();
-  }
-  if (mesh) renderer.set_mesh(*mesh);
-  render::RenderOptions ro;
-  ro.cull = !a.no_cull;
-  ro.slim_offset = static_cast<float>(slim_offset);
-  ro.shading = a.shading == "envmap" ? render::Shading::envmap
-               : a.shading == "npr"  ? render::Shading::npr
-                                     : render::Shading::phong;
-  ro.shadows = a.shadows;
-  ro.shadow_map_size = a.shadow_map;
-  ro.outlines = a.outlines;
-  // One frame with statistics (counted separately: the counters cost time), then N timed frames.
-  ro.statistics = true;
-  const render::FrameStats stats = renderer.draw(camera, ro);
-  ro.statistics = false;
-  std::vector<double> total;
-  for (int f = 0; f < a.frames; ++f) total.push_back(renderer.draw(camera, ro).ms_total);
-  Image8 colour = renderer.read_colour();
-  std::optional<render::GBuffer> gbuffer;
-  if (transparent || a.background != "255,255,255" || colour_by != ColourMode::none || points)
-    gbuffer = renderer.read_gbuffer();
-  if (gbuffer)
-    for (std::size_t i = 0; i < gbuffer->coverage.size(); ++i)
-      if (!gbuffer->coverage[i]) {
-        std::uint8_t* p = colour.rgba.data() + 4 * i;
-        p[0] = background[0], p[1] = background[1], p[2] = background[2];
-        p[3] = transparent ? 0 : 255;
-      }
-  if (gbuffer) finish(colour, gbuffer->coverage, gbuffer->depth, gbuffer->normal);
-  else finish(colour, {}, {}, {});
-  write_png(colour, a.out);
-  if (!a.depth_out.empty() || !a.normal_out.empty()) {
-    const render::GBuffer g = gbuffer ? *gbuffer : renderer.read_gbuffer();
-    if (!a.depth_out.empty()) write_pfm(depth_of(g), a.depth_out);
-    if (!a.normal_out.empty()) write_pfm(normals_of(g), a.normal_out);
-  }
-  if (!model.implicits.empty()) j["ms_first_frame"] = stats.ms_total;  // includes the JIT of generated shaders
-  const bool has_fs = stats.fragments != static_cast<std::uint64_t>(-1);
-  j["context"] = context->description();
-  j["frames"] = a.frames;
-  j["culling"] = ro.cull;
-  // Back sides of tetrahedron patches and glyphs are culled only where exact (core/culling.h).
-  j["backface_culling_exact"] = backface_culling_is_exact(model, camera);
-  j["shading"] = a.shading;
   j["shadows"] = a.shadows;
   j["outlines"] = a.outlines;
-  j["primitives_drawn"] = stats.primitives - stats.culled;
-  j["primitives_culled"] = stats.culled;
-  j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
-  j["fragments_hit"] = stats.fragments_hit;
-  if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
-  j["ms_frame_median"] = median(total);
-  log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), w, h, median(total),
-            a.frames, stats.primitives - stats.culled, stats.culled);
+  std::vector<std::string> written;
+  if (turntable > 0 && !a.contact_sheet) {
+    for (std::size_t k = 0; k < images.size(); ++k) write_image(images[k], written.emplace_back(frame_name(a.out, int(k))));
+  } else if (turntable > 0) {
+    const std::uint8_t fill[4] = {background[0], background[1], background[2], std::uint8_t(transparent ? 0 : 255)};
+    write_image(contact_sheet(images, fill), written.emplace_back(a.out));
+  } else {
+    write_image(images.front(), written.emplace_back(a.out));
+  }
+  if (turntable > 0) {
+    nlohmann::json cams = nlohmann::json::array();
+    for (const Camera& c : cameras) cams.push_back(camera_json(c));
+    j["turntable"] = {{"frames", turntable}, {"contact_sheet", a.contact_sheet}, {"files", written}, {"cameras", cams}};
+  }
+  report.summary = fmt::format("wrote {}{} ({}x{}{}, {} primitives, {} backend)", written.front(),
+                               written.size() > 1 ? fmt::format(" … {} ({} frames)", written.back(), written.size()) : "",
+                               width, height, ss > 1 ? fmt::format(", {}× supersampled", ss) : "", model.size(), backend);
   return kOk;
 }
 
@@ -402,26 +444,14 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
-  app->add_option("--azimuth", a->azimuth, "Camera azimuth in degrees about the up axis, from the front")
-      ->check(number({.lo = -3600.0, .hi = 3600.0}))
+  add_view_options(*app, a->view);
+  app->add_option("--supersample", a->supersample, "Antialiasing: render N×N samples per pixel and box-filter them")
+      ->check(number({.lo = 1, .hi = 16}))
       ->capture_default_str();
-  app->add_option("--elevation", a->elevation, "Camera elevation in degrees above the plane normal to up")
-      ->check(number({.lo = -90.0, .hi = 90.0}))
+  app->add_option("--turntable", a->turntable, "Write N frames turning about the up axis, OUT-0001.png … (0: one still)")
+      ->check(number({.lo = 0, .hi = 3600}))
       ->capture_default_str();
-  app->add_option("--up", a->up, "World up axis: +x -x +y -y +z -z")
-      ->check(CLI::IsMember({"+x", "-x", "+y", "-y", "+z", "-z", "x", "y", "z"}))
-      ->capture_default_str();
-  app->add_option("--view", a->view, "Named view (overrides --azimuth/--elevation): front, side, top, iso")
-      ->check(CLI::IsMember({"front", "side", "top", "iso"}));
-  app->add_option("--fov", a->fov, "Vertical field of view in degrees: the lens (the distance is fitted for 40, so a "
-                                   "narrower lens zooms in)")
-      ->check(number({.lo = 0.001, .hi = 179.0}))
-      ->capture_default_str();
-  app->add_option("--zoom", a->zoom, "Magnification of the framed view")->check(number({.lo = 0.01, .hi = 1000.0}))->capture_default_str();
-  app->add_option("--fill", a->fill, "Fraction of the smaller image side the visible geometry fills (0: frame the "
-                                     "bounding sphere instead)")
-      ->check(number({.lo = 0.0, .hi = 1.0}))
-      ->capture_default_str();
+  app->add_flag("--contact-sheet", a->contact_sheet, "With --turntable: one image of all frames in a grid instead");
   app->add_option("--background", a->background, "Background R,G,B, or none (transparent PNG)")->capture_default_str();
   app->add_option("--shading", a->shading, "phong, envmap (line map) or npr (cel + outlines)")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}));
@@ -438,27 +468,30 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--point-size", a->point_size, "Splat radius of --points in pixels")
       ->check(number({.lo = 0.5, .hi = 64}))
       ->capture_default_str();
-  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
-  app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
-  app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
-  app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
-  app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
   app->add_flag("--shadows", a->shadows, "Shadows of the key light (GL: shadow map with soft edges; cpu: shadow rays)");
   app->add_option("--shadow-map", a->shadow_map, "Shadow map size in pixels per side (GL)")
       ->check(number({.lo = 16, .hi = 16384}))
       ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
+  app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
+  app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
+  app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");
+  app->add_flag("--no-cull", a->no_cull, "No backface culling (two-sided surfaces)");
   app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
-      ->check(number({.lo = 0, .hi = 10}));
+      ->check(number({.lo = 0, .hi = 10}))
+      ->default_str("");
   app->add_option("--implicit", a->implicit, "Implicit surface S(x,y,z) = 0 to draw (with MODEL if given), e.g. \"x^4 + y^4 + z^4 - 1\"");
   app->add_option("--surface", a->surface, "Built-in implicit surface of [Singh10]'s gallery; 'list' lists them");
-  app->add_option("--param", a->params, "Parameter of the implicit expression, NAME=VALUE (repeat)");
+  app->add_option("--param", a->params, "Parameter of the implicit expression, NAME=VALUE (repeat)")->default_str("");
   app->add_option("--bounds", a->bounds, "Bounds of the implicit surface: xmin,xmax,ymin,ymax,zmin,zmax (default ±2, or the gallery's)");
-  app->add_option("--radius", a->radius, "Bounds of the implicit surface: the cube ±R")->check(positive());
-  app->add_option("--amp-step", a->amp_step, "AMP base step b in world units (default: bounds diagonal / 400)")->check(positive());
-  app->add_option("--amp-tau1", a->amp_tau1, "AMP proximity threshold τ1 on |S| (default: 0.05 · median |S| over the bounds)")->check(positive());
-  app->add_option("--amp-tau2", a->amp_tau2, "AMP far threshold τ2 on |S| (default 2·τ1)")->check(positive());
-  app->add_option("--amp-tau3", a->amp_tau3, "AMP horizon threshold τ3 on |∇S·D| (default: 0.1 · median |∇S|)")->check(positive());
+  app->add_option("--radius", a->radius, "Bounds of the implicit surface: the cube ±R (default: --bounds)")
+      ->check(positive())
+      ->default_str("");
+  app->add_option("--amp-step", a->amp_step, "AMP base step b in world units (default: bounds diagonal / 400)")->check(positive())->default_str("");
+  app->add_option("--amp-tau1", a->amp_tau1, "AMP proximity threshold τ1 on |S| (default: 0.05 · median |S| over the bounds)")->check(positive())->default_str("");
+  app->add_option("--amp-tau2", a->amp_tau2, "AMP far threshold τ2 on |S| (default 2·τ1)")->check(positive())->default_str("");
+  app->add_option("--amp-tau3", a->amp_tau3, "AMP horizon threshold τ3 on |∇S·D| (default: 0.1 · median |∇S|)")->check(positive())->default_str("");
   app->add_option("--amp-test", a->amp_test, "AMP root test: auto (the gallery's choice, else sign), sign or taylor")
       ->check(CLI::IsMember({"auto", "sign", "taylor"}));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) {

@@ -34,9 +34,11 @@ void add_synth(CLI::App& root, Commands& commands) {
   app->add_option("-o,--out", a->out, "Output .qxm file (marschner-lobb: a .nhdr header, its .raw data beside it)")
       ->required();
   add_encoding_option(*app, a->write);
-  app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere)")->check(number({.lo = 0, .hi = 50e6}));
+  app->add_option("--count", a->options.count, "Primitives (glyphs, slim-sphere; default: per kind)")
+      ->check(number({.lo = 0, .hi = 50e6}))
+      ->default_str("");
   app->add_option("--resolution", a->options.resolution,
-                  "Grid cells per axis (hyperboloids); samples per axis for marschner-lobb (default 41)")
+                  "Grid cells per axis (hyperboloids)->default_str(""); samples per axis for marschner-lobb (default 41)")
       ->check(number({.lo = 0, .hi = 512}));
   app->add_option("--seed", a->options.seed, "Random seed (glyphs)")->check(non_negative());
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
@@ -52,15 +54,16 @@ void add_synth(CLI::App& root, Commands& commands) {
                           const auto [lo, hi] = v.range();
                           report.json["synth"] = {{"kind", a->kind}, {"out", a->out},     {"data", raw.string()},
                                                   {"dims", v.dims},  {"value_min", lo},   {"value_max", hi}};
-                          log::info("wrote {} and {} ({}³ samples over [-1, 1]³)", a->out, raw.string(), n);
+                          report.summary = fmt::format("wrote {} and {} ({}³ samples over [-1, 1]³)", a->out, raw.string(), n);
                           return kOk;
                         }
                         Model m = synth_model(a->kind, a->options);
+                        m.metadata["producer"] = command_line();
                         write_model(m, a->out, a->write);
                         report.json["synth"] = {{"kind", a->kind},     {"out", a->out},
                                                 {"slim", m.slims.size()}, {"tet", m.tets.size()},
                                                 {"glyph", m.glyphs.size()}};
-                        log::info("wrote {} ({} primitives)", a->out, m.size());
+                        report.summary = fmt::format("wrote {} ({} primitives)", a->out, m.size());
                         return kOk;
                       }});
 }

@@ -1,12 +1,18 @@
-// quadrix view MODEL: an interactive GLFW window. Left drag orbits, right drag pans, the wheel
-// zooms; C toggles culling, S cycles the shading, B the SLIM ball outlines (red: culled), R
-// resets the view, Esc quits. The title shows
-// the frame time. --frames N renders N frames and exits (scripts and tests), --screenshot saves
-// the last frame. --animate NAME=FROM:TO:SECONDS sweeps a parameter of the implicit surfaces
-// from FROM to TO and back every 2·SECONDS ([Singh10] dynamic surfaces: a uniform per frame,
-// nothing recompiled); with --frames the clock runs at 30 frames per second of animation.
+// quadrix view MODEL: an interactive GLFW window. Left drag orbits about the up axis, right drag
+// pans, the wheel zooms; C toggles culling, S cycles the shading, B the SLIM ball outlines (red:
+// culled), K saves the camera as JSON, P a screenshot, R resets the view, Esc quits. The title
+// shows the frame time. The first view is the one `render` gives for the same options (tight
+// framing, --up, --view, --camera, …). --frames N renders N frames and exits (scripts and tests),
+// --press KEYS presses keys after the first frame. --animate NAME=FROM:TO:SECONDS sweeps a
+// parameter of the implicit surfaces from FROM to TO and back every 2·SECONDS ([Singh10] dynamic
+// surfaces: a uniform per frame, nothing recompiled); with --frames the clock runs at 30 frames
+// per second of animation.
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <map>
+#include <numbers>
+#include <optional>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -25,30 +31,66 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
+#include "tools/view_options.h"
 
 namespace quadrix::cli {
 namespace {
 
+// The window's camera: the resolved start view, then orbit (about the up axis through the
+// target), pan and zoom (the distance) applied to it.
 struct ViewState {
-  FramingOptions framing;
-  Box3 box;
-  Eigen::Vector3d pan = Eigen::Vector3d::Zero();
-  double zoom = 1.0;
+  Camera start;
+  Camera camera;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitY();  // the orbit axis
   render::RenderOptions options;
   double last_x = 0, last_y = 0;
   bool rotating = false, panning = false;
+  std::string camera_file = "quadrix-camera.json", screenshot_file = "quadrix-screenshot.png";
+  bool save_camera = false, save_screenshot = false;  // requested by K / P, done after the frame
+  int saved_cameras = 0, saved_screenshots = 0;
 
-  Camera camera(int w, int h) const {
-    FramingOptions f = framing;
-    f.width = std::max(w, 1);
-    f.height = std::max(h, 1);
-    Camera c = frame_box(box, f);
-    const Eigen::Vector3d dir = c.eye - c.target;
-    c.target += pan;
-    c.eye = c.target + zoom * dir;
-    c.near_plane = std::max(c.near_plane * zoom, 1e-6 * dir.norm());
-    c.far_plane *= std::max(1.0, zoom);
+  // The camera at the window's size (the lens and the view kept).
+  Camera at_size(int w, int h) const {
+    Camera c = camera;
+    c.width = std::max(w, 1);
+    c.height = std::max(h, 1);
     return c;
+  }
+  void orbit(double dx, double dy) {
+    const Eigen::Vector3d offset = camera.eye - camera.target;
+    const Eigen::Vector3d f = -offset.normalized();
+    Eigen::Vector3d right = f.cross(camera.up);
+    if (right.squaredNorm() < 1e-24) return;
+    right.normalize();
+    // Azimuth about the up axis; elevation about the right axis, kept off the poles.
+    const Eigen::Matrix3d turn = Eigen::AngleAxisd(-dx * std::numbers::pi / 450.0, up).toRotationMatrix();
+    Eigen::Vector3d o = turn * offset, u = turn * camera.up;
+    const Eigen::Vector3d r = turn * right;
+    const Eigen::Matrix3d tilt = Eigen::AngleAxisd(-dy * std::numbers::pi / 450.0, r).toRotationMatrix();
+    const Eigen::Vector3d o2 = tilt * o;
+    if (std::abs(o2.normalized().dot(up)) < 0.999) o = o2, u = tilt * u;
+    camera.eye = camera.target + o;
+    camera.up = std::abs(u.dot(up)) > 1e-6 ? up : u;  // keep the world up once off a top view
+  }
+  void pan(double dx, double dy, int height) {
+    const Eigen::Vector3d f = camera.forward(), r = f.cross(camera.up).normalized(), u = r.cross(f);
+    const double k = 2.0 * (camera.eye - camera.target).norm() * std::tan(camera.fov_y_deg * std::numbers::pi / 360.0) /
+                     std::max(height, 1);
+    const Eigen::Vector3d d = k * (-dx * r + dy * u);
+    camera.eye += d, camera.target += d;
+  }
+  void zoom(double factor) {
+    const Eigen::Vector3d offset = camera.eye - camera.target;
+    camera.eye = camera.target + factor * offset;
+    camera.near_plane *= factor, camera.far_plane *= factor;
+  }
+  void key(int key) {
+    if (key == GLFW_KEY_C) options.cull = !options.cull;
+    if (key == GLFW_KEY_B) options.slim_outlines = !options.slim_outlines;
+    if (key == GLFW_KEY_S) options.shading = static_cast<render::Shading>((static_cast<int>(options.shading) + 1) % 3);
+    if (key == GLFW_KEY_R) camera = start;
+    if (key == GLFW_KEY_K) save_camera = true;
+    if (key == GLFW_KEY_P) save_screenshot = true;
   }
 };
 
@@ -92,8 +134,8 @@ Animation parse_animation(const std::string& text) {
 void add_view(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("view", "Open an interactive window (GLFW) on a model");
   struct Args {
-    std::string model, mesh, size = "960x720", screenshot, shading = "phong";
-    double azimuth = 30, elevation = 20, fov = 40;
+    std::string model, mesh, size = "960x720", screenshot, shading = "phong", press;
+    ViewArgs view;  // camera options shared with `render`
     int frames = 0;
     std::string surface;
     std::vector<std::string> animate;
@@ -101,20 +143,25 @@ void add_view(CLI::App& root, Commands& commands) {
     bool outlines = false;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("MODEL", a->model, "Model file (.qxm); optional with --surface");
+  app->add_option("MODEL", a->model, "Model file (.qxm), or a molecule (.pdb, .cif); optional with --surface");
   app->add_option("--surface", a->surface, "Also draw this built-in implicit surface (render --surface list)");
   app->add_option("--animate", a->animate,
-                  "Sweep a parameter of the implicit surfaces, NAME=FROM:TO:SECONDS, there and back (repeat)");
+                  "Sweep a parameter of the implicit surfaces, NAME=FROM:TO:SECONDS, there and back (repeat)")
+      ->default_str("");
   app->add_option("--mesh", a->mesh, "Also draw this mesh");
-  app->add_option("--size", a->size, "Window size WxH");
-  app->add_option("--azimuth", a->azimuth, "Initial azimuth (degrees)")->check(finite());
-  app->add_option("--elevation", a->elevation, "Initial elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
-  app->add_option("--fov", a->fov, "Vertical field of view (degrees)")->check(number({.lo = 0.001, .hi = 179}));
-  app->add_option("--shading", a->shading, "phong, envmap or npr")->check(CLI::IsMember({"phong", "envmap", "npr"}));
+  app->add_option("--size", a->size, "Window size WxH")->capture_default_str();
+  add_view_options(*app, a->view);
+  app->add_option("--shading", a->shading, "phong, envmap or npr")
+      ->check(CLI::IsMember({"phong", "envmap", "npr"}))
+      ->capture_default_str();
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
   app->add_flag("--outlines", a->outlines, "Start with the SLIM ball outlines shown (key B)");
-  app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")->check(non_negative());
-  app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG");
+  app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")
+      ->check(non_negative())
+      ->capture_default_str();
+  app->add_option("--screenshot", a->screenshot, "Save the last frame as PNG; key P saves the current one here "
+                                                 "(default for P: quadrix-screenshot.png)");
+  app->add_option("--press", a->press, "Keys pressed after the first frame, e.g. 'kp' (scripts and tests)");
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const auto [w, h] = parse_size(a->size);
                         if (a->model.empty() && a->surface.empty())
@@ -146,23 +193,33 @@ void add_view(CLI::App& root, Commands& commands) {
                           for (std::size_t i : animated.back())
                             model.implicits[i].parameters[animations.back().name] = animations.back().from;
                         }
+                        const std::string title = a->model.empty() ? a->surface : a->model;
                         std::optional<PolygonMesh> mesh;
                         if (!a->mesh.empty()) mesh = read_mesh(a->mesh);
-                        ViewState st;
-                        st.box = bounds(model);
+                        Box3 box = bounds(model);
                         if (mesh)
-                          for (const auto& v : mesh->vertices) st.box.extend(v);
-                        st.framing = {.azimuth_deg = a->azimuth, .elevation_deg = a->elevation, .fov_y_deg = a->fov};
+                          for (const auto& v : mesh->vertices) box.extend(v);
+                        ViewState st;
                         st.options.cull = !a->no_cull;
                         st.options.slim_outlines = a->outlines;
                         st.options.shading = a->shading == "envmap" ? render::Shading::envmap
                                              : a->shading == "npr"  ? render::Shading::npr
                                                                     : render::Shading::phong;
+                        st.options.slim_offset = static_cast<float>(slim_offset_of(model));
+                        // The start view as `render` resolves it (tools/view_options.h).
+                        const VisibleFn visible = [&](const Camera& c) {
+                          return visible_points(model, mesh ? &*mesh : nullptr, c,
+                                                {.cull = st.options.cull, .slim_offset = st.options.slim_offset});
+                        };
+                        st.start = st.camera = resolve_camera(a->view, box, w, h, a->view.typed("--size"), visible);
+                        st.up = turntable_axis(a->view, st.start);
+                        if (!a->view.save_camera.empty()) st.camera_file = a->view.save_camera;
+                        if (!a->screenshot.empty()) st.screenshot_file = a->screenshot;
                         auto context = render::create_context(
-                            "glfw", {.width = w, .height = h, .visible = true, .title = "quadrix " + (a->model.empty() ? a->surface : a->model)});
+                            "glfw", {.width = st.start.width, .height = st.start.height, .visible = true,
+                                     .title = "quadrix " + title});
                         render::Renderer renderer(*context);
                         renderer.set_model(model);
-                        st.options.slim_offset = static_cast<float>(slim_offset_of(model));
                         if (mesh) renderer.set_mesh(*mesh);
                         auto* win = static_cast<GLFWwindow*>(context->native_window());
                         glfwSetWindowUserPointer(win, &st);
@@ -176,32 +233,18 @@ void add_view(CLI::App& root, Commands& commands) {
                           auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
                           const double dx = x - s.last_x, dy = y - s.last_y;
                           s.last_x = x, s.last_y = y;
-                          if (s.rotating) {
-                            s.framing.azimuth_deg -= 0.4 * dx;
-                            s.framing.elevation_deg = std::clamp(s.framing.elevation_deg + 0.4 * dy, -89.0, 89.0);
-                          } else if (s.panning) {
-                            int ww, wh;
-                            glfwGetFramebufferSize(wnd, &ww, &wh);
-                            const Camera c = s.camera(ww, wh);
-                            const Eigen::Vector3d f = c.forward(), r = f.cross(c.up).normalized(), u = r.cross(f);
-                            const double k = 2.0 * (c.eye - c.target).norm() *
-                                             std::tan(c.fov_y_deg * 3.14159265358979 / 360.0) / std::max(wh, 1);
-                            s.pan += k * (-dx * r + dy * u);
-                          }
+                          int ww, wh;
+                          glfwGetFramebufferSize(wnd, &ww, &wh);
+                          if (s.rotating) s.orbit(dx, dy);
+                          else if (s.panning) s.pan(dx, dy, wh);
                         });
                         glfwSetScrollCallback(win, [](GLFWwindow* wnd, double, double dy) {
-                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
-                          s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 1e-4, 1e4);
+                          static_cast<ViewState*>(glfwGetWindowUserPointer(wnd))->zoom(std::pow(0.9, dy));
                         });
                         glfwSetKeyCallback(win, [](GLFWwindow* wnd, int key, int, int action, int) {
                           if (action != GLFW_PRESS) return;
-                          auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(wnd));
                           if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(wnd, GLFW_TRUE);
-                          if (key == GLFW_KEY_C) s.options.cull = !s.options.cull;
-                          if (key == GLFW_KEY_B) s.options.slim_outlines = !s.options.slim_outlines;
-                          if (key == GLFW_KEY_S)
-                            s.options.shading = static_cast<render::Shading>((static_cast<int>(s.options.shading) + 1) % 3);
-                          if (key == GLFW_KEY_R) s.pan.setZero(), s.zoom = 1.0;
+                          static_cast<ViewState*>(glfwGetWindowUserPointer(wnd))->key(key);
                         });
                         int frame = 0;
                         double ms = 0;
@@ -216,22 +259,37 @@ void add_view(CLI::App& root, Commands& commands) {
                             for (std::size_t i : animated[k])
                               renderer.set_implicit_parameters(i, {{animations[k].name, values[animations[k].name]}});
                           }
-                          const auto stats = renderer.draw(st.camera(fw, fh), st.options);
+                          const Camera camera = st.at_size(fw, fh);
+                          const auto stats = renderer.draw(camera, st.options);
                           ms = stats.ms_total;
+                          // Saved files land when the window closes, with the command's other outputs.
+                          if (st.save_screenshot) write_png(renderer.read_colour(), st.screenshot_file), ++st.saved_screenshots;
+                          if (st.save_camera) write_camera(camera, st.camera_file), ++st.saved_cameras;
+                          st.save_camera = st.save_screenshot = false;
                           renderer.present(fw, fh);
                           context->swap_buffers();
                           std::string shown;
                           for (const auto& [k, v] : values) shown += fmt::format(", {} = {:.4g}", k, v);
-                          glfwSetWindowTitle(win, fmt::format("quadrix {} — {:.1f} ms/frame, culling {}{}",
-                                                              a->model.empty() ? a->surface : a->model, ms,
+                          glfwSetWindowTitle(win, fmt::format("quadrix {} — {:.1f} ms/frame, culling {}{}", title, ms,
                                                               st.options.cull ? "on" : "off", shown)
                                                       .c_str());
                           glfwPollEvents();
+                          if (frame == 0)
+                            for (const char c : a->press)
+                              if (std::isalpha(static_cast<unsigned char>(c)))
+                                st.key(GLFW_KEY_A + (std::toupper(static_cast<unsigned char>(c)) - 'A'));
                           ++frame;
                         }
+                        int fw, fh;
+                        glfwGetFramebufferSize(win, &fw, &fh);
                         if (!a->screenshot.empty()) write_png(renderer.read_colour(), a->screenshot);
-                        report.json["view"] = {{"frames", frame}, {"ms_last_frame", ms}, {"context", context->description()}};
+                        if (!a->view.save_camera.empty()) write_camera(st.at_size(fw, fh), a->view.save_camera);
+                        report.json["view"] = {{"frames", frame}, {"ms_last_frame", ms}, {"context", context->description()},
+                                               {"camera", camera_json(st.at_size(fw, fh))}};
                         if (!values.empty()) report.json["view"]["parameters_last_frame"] = values;
+                        report.summary = fmt::format("{} frames, {} screenshots, {} cameras saved", frame,
+                                                     st.saved_screenshots + !a->screenshot.empty(),
+                                                     st.saved_cameras + !a->view.save_camera.empty());
                         return kOk;
                       }});
 }

@@ -44,6 +44,9 @@ int main(int argc, char** argv) {
   CLI::App app{"quadrix — fit, convert and ray-cast quadric surface models"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "quadrix 0.1.0");
+  // Every option's default in --help ("=VALUE"); options whose default is decided at run time say
+  // so in their description instead.
+  app.option_defaults()->always_capture_default();
   Commands commands;
   add_info(app, commands);
   add_render(app, commands);
@@ -56,19 +59,46 @@ int main(int argc, char** argv) {
   add_tetrahedralize(app, commands);
   CommonOptions common;
   for (auto& c : commands) add_common_options(*c.app, common);
+  set_command_line(argc, argv);
+  // The report, written on success and on failure alike, with the error and the exit code.
+  Report report;
+  std::string error;
+  const auto write_report = [&](int rc) {
+    if (common.report.empty()) return rc;
+    report.json["exit_code"] = rc;
+    report.json["seconds"] = report.elapsed();
+    report.json["error"] = error.empty() ? nlohmann::json(nullptr) : nlohmann::json(error);
+    try {
+      write_file_atomically(common.report, [&](std::ostream& out) { out << report.json.dump(2) << "\n"; });
+    } catch (const std::exception& e) {
+      std::cerr << "quadrix: i/o error: cannot write report: " << printable(e.what()) << "\n";
+      if (rc == kOk) rc = kIo;
+    }
+    return rc;
+  };
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);
-    return rc == 0 ? kOk : kUsage;
+    if (rc == 0) return kOk;
+    // --report may have been read before the error: the usage error goes into it too.
+    // The options' values are stored only after every option validated: read --report's raw text.
+    for (auto& c : commands)
+      if (c.app->parsed()) {
+        report.json["command"] = c.app->get_name();
+        if (const CLI::Option* o = c.app->get_option_no_throw("--report"); o && !o->results().empty())
+          common.report = o->results().front();
+      }
+    error = e.what();
+    return write_report(kUsage);
   }
   log::set_level(common.quiet ? log::Level::error
                  : common.verbose >= 2 ? log::Level::debug
                  : common.verbose == 1 ? log::Level::info
                                        : log::Level::warn);
-  Report report;
   int rc = kInternal;
+  std::string command_name;
   const char* kind = "internal error";
   try {
     // Every output of the command lands together at the end, or none does.
@@ -76,6 +106,8 @@ int main(int argc, char** argv) {
     for (auto& c : commands) {
       if (!c.app->parsed()) continue;
       report.json["command"] = c.app->get_name();
+      for (const CLI::App* a = c.app; a && a != &app; a = a->get_parent())
+        command_name = a->get_name() + (command_name.empty() ? "" : " " + command_name);
       rc = c.run(common, report);
       kind = nullptr;
       break;
@@ -84,39 +116,35 @@ int main(int argc, char** argv) {
     if (rc == kOk || rc == kExceeded) outputs.commit();
     kind = nullptr;
   } catch (const FormatError& e) {
-    std::cerr << "quadrix: bad input: " << printable(e.what()) << "\n";
+    error = "bad input: " + printable(e.what());
     rc = kBadInput;
   } catch (const InvalidInput& e) {
-    std::cerr << "quadrix: invalid input: " << printable(e.what()) << "\n";
+    error = "invalid input: " + printable(e.what());
     rc = kBadInput;
   } catch (const IoError& e) {
-    std::cerr << "quadrix: i/o error: " << printable(e.what()) << "\n";
+    error = "i/o error: " + printable(e.what());
     rc = kIo;
   } catch (const SolverError& e) {
-    std::cerr << "quadrix: computation failed: " << printable(e.what()) << "\n";
+    error = "computation failed: " + printable(e.what());
     rc = kComputation;
   } catch (const GlError& e) {
-    std::cerr << "quadrix: OpenGL: " << printable(e.what()) << "\n";
+    error = "OpenGL: " + printable(e.what());
     rc = kGl;
   } catch (const CLI::ValidationError& e) {
-    std::cerr << "quadrix: usage: " << printable(e.what()) << "\n";
+    error = "usage: " + printable(e.what());
     rc = kUsage;
   } catch (const std::bad_alloc&) {
-    std::cerr << "quadrix: out of memory\n";
+    error = "out of memory";
     rc = kComputation;
   } catch (const std::exception& e) {
-    std::cerr << "quadrix: " << kind << ": " << printable(e.what()) << "\n";
+    error = std::string(kind ? kind : "internal error") + ": " + printable(e.what());
     rc = kInternal;
   }
-  if (!common.report.empty()) {
-    report.json["exit_code"] = rc;
-    report.json["seconds"] = report.elapsed();
-    try {
-      write_file_atomically(common.report, [&](std::ostream& out) { out << report.json.dump(2) << "\n"; });
-    } catch (const std::exception& e) {
-      std::cerr << "quadrix: i/o error: cannot write report: " << printable(e.what()) << "\n";
-      if (rc == kOk) rc = kIo;
-    }
-  }
+  if (!error.empty()) std::cerr << "quadrix: " << error << "\n";
+  rc = write_report(rc);
+  // One line on success: what was written, counts, time.
+  if ((rc == kOk || rc == kExceeded) && !common.quiet && !report.summary.empty())
+    std::cerr << fmt::format("quadrix {}: {} in {:.2f} s\n", command_name, report.summary,
+                             report.elapsed());
   return rc;
 }

@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config ccache
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev libtet1.5-dev libopenmesh-dev
-  libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev
+  libtbb-dev libcli11-dev nlohmann-json3-dev libfmt-dev libpng-dev libjpeg62-turbo-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libnanoflann-dev zlib1g-dev gemmi-dev tao-pegtl-dev clang libclang-rt-14-dev libosmesa6-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
   povray  # bench-only peer: `quadrix bench implicit` renders the same surfaces with POV-Ray

@@ -1,1 +1,2 @@
 find_package(PNG REQUIRED)
+find_package(JPEG REQUIRED)

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -68,7 +69,7 @@ TEST(Cli, SynthInfoRenderRoundTrip) {
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["counts"]["tet"].get<std::size_t>(), read_model(model).tets.size());
   EXPECT_GT(j["counts"]["tet"].get<int>(), 0);
-  EXPECT_EQ(j["metadata"]["producer"], "quadrix synth hyperboloid1");
+  EXPECT_EQ(j["metadata"]["producer"], "quadrix synth hyperboloid1 --resolution 6 -o " + model.string());  // as typed
 
   const auto png = dir / "h.png", depth = dir / "d.pfm", report = dir / "r.json";
   r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --size 64x48 --no-cull --depth-out " +
@@ -140,13 +141,13 @@ TEST(Cli, UsageErrorsExitTwo) {
   EXPECT_EQ(quadrix_run("render --help").code, 0);
 }
 
-// The output format follows the name (PNG images, PFM depth and normals) and every backend honours
-// --shading or refuses: nothing written under a wrong extension, no silent Phong.
+// The output format follows the name (PNG or JPEG images, PFM depth and normals) and every backend
+// honours --shading or refuses: nothing written under a wrong extension, no silent Phong.
 TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
   ScratchDir dir("cli-honest");
   const auto model = dir / "s.qxm";
   ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
-  for (const std::string out : {"a.jpg", "a.PPM", "a"}) {
+  for (const std::string out : {"a.bmp", "a.PPM", "a"}) {
     const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / out) + " --size 32x32");
     EXPECT_EQ(r.code, 2) << out << ": " << r.out;
     EXPECT_NE(r.out.find("PNG"), std::string::npos) << r.out;
@@ -531,4 +532,55 @@ TEST(Cli, MalformedCorpusGivesTheManifestsExitCodeAndMessage) {
         << "raw control bytes in: " << results[i].out;
   }
   EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "a failed command left an output behind";
+}
+
+// Every option that takes a value shows its default in --help ("=VALUE" after its type), says in
+// its description how the default is chosen ("default: …"), is REQUIRED, or names an output or an
+// input that is simply absent unless given (the list below).
+TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
+  const std::set<std::string> no_default = {
+      "--out",    "--report", "--mesh",   "--depth-out", "--normal-out", "--camera", "--save-camera", "--screenshot",
+      "--press",  "--holdout-out", "--implicit", "--surface", "--param", "--bounds", "--tets", "--values",
+      "--synth",  "--baseline-mesh", "--write-volume", "--animate", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models"};
+  const std::vector<std::string> commands = {"info",          "render",         "synth",         "fit",
+                                             "view",          "mesh",           "convert quads", "convert skin",
+                                             "convert glyphs", "convert volume", "bench fit",     "bench render"};
+  std::size_t checked = 0;
+  for (const std::string& command : commands) {
+    const CmdResult help = quadrix_run(command + " --help");
+    ASSERT_EQ(help.code, 0) << command;
+    std::vector<std::string> lines;
+    std::istringstream in(help.out);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const std::string& line = lines[i];
+      const auto start = line.find_first_not_of(' ');
+      if (start == std::string::npos || line[start] != '-') continue;
+      const std::string body = line.substr(start);
+      const std::string opts = body.substr(0, body.find("  "));
+      std::istringstream words(opts);
+      std::string name, type;
+      words >> name >> type;
+      if (const auto comma = name.find(','); comma != std::string::npos) name = name.substr(comma + 1);
+      if (type.empty() || !std::isupper(static_cast<unsigned char>(type[0]))) continue;  // a flag
+      if (name == "--help" || name == "--version") continue;
+      std::string description = body.substr(opts.size());
+      for (std::size_t k = i + 1; k < lines.size() && lines[k].find_first_not_of(' ') > 8 &&
+                                  lines[k].find_first_not_of(' ') != std::string::npos && lines[k][lines[k].find_first_not_of(' ')] != '-';
+           ++k)
+        description += " " + lines[k];
+      ++checked;
+      const bool shown = opts.find('=') != std::string::npos || opts.find("REQUIRED") != std::string::npos ||
+                         description.find("default") != std::string::npos || no_default.count(name) > 0;
+      EXPECT_TRUE(shown) << command << " " << name << ": no default shown: " << line;
+      // A default shown must be one the option accepts: not a sentinel outside its range.
+      if (const auto eq = opts.find('='); eq != std::string::npos && opts[eq + 1] != '[')
+        for (const NumericOption& o : numeric_options(opts)) {
+          const double v = std::strtod(opts.c_str() + eq + 1, nullptr);
+          EXPECT_TRUE((o.open_lo ? v > o.lo : v >= o.lo) && (o.open_hi ? v < o.hi : v <= o.hi))
+              << command << " " << name << ": the default shown is outside the range: " << line;
+        }
+    }
+  }
+  EXPECT_GE(checked, 60u);
 }

@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <regex>
+
+#include <fmt/format.h>
 
 #include <Eigen/Geometry>
 
@@ -49,7 +52,8 @@ protected:
   std::pair<Mask, nlohmann::json> render(const std::filesystem::path& model, const std::string& options,
                                          const std::string& name) {
     const auto png = dir_ / (name + ".png"), report = dir_ / (name + ".json");
-    const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --size 160x120 " +
+    const std::string size = options.find("--size") == std::string::npos ? " --size 160x120 " : " ";
+    const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + size +
                                     "--background none --quiet --report " + q(report) + " " + options);
     EXPECT_EQ(r.code, 0) << options << ": " << r.out;
     if (r.code != 0) return {};
@@ -123,4 +127,208 @@ TEST_F(CliCamera, BackgroundColourOrTransparent) {
   EXPECT_EQ(corner[2], 30);
   EXPECT_EQ(corner[3], 255);
   EXPECT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --background 1,2").code, 2);
+}
+
+namespace {
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+}  // namespace
+
+TEST_F(CliCamera, SavedCameraReproducesTheImage) {
+  const auto model = dir_ / "h.qxm", cam = dir_ / "cam.json";
+  ASSERT_EQ(quadrix_run("synth hyperboloid1 --resolution 6 -o " + q(model)).code, 0);
+  // An unusual view: up +z, a narrow lens, zoom, a non-square image.
+  const std::string view = "--up +z --azimuth 70 --elevation 35 --fov 25 --zoom 1.3 --size 96x64";
+  for (const char* backend : {"cpu", "gl"}) {
+    const auto a = dir_ / (std::string(backend) + "-a.png"), b = dir_ / (std::string(backend) + "-b.png");
+    CmdResult r = quadrix_run(std::string("render --backend ") + backend + " " + q(model) + " -o " + q(a) + " " + view +
+                              " --no-cull --save-camera " + q(cam) + " --quiet");
+    if (std::string(backend) == "gl" && r.code == 6) GTEST_SKIP() << "no OpenGL 4.5 context: " << r.out;
+    ASSERT_EQ(r.code, 0) << r.out;
+    const nlohmann::json saved = read_json(cam);
+    EXPECT_EQ(saved["width"].get<int>(), 96);
+    EXPECT_EQ(saved["height"].get<int>(), 64);
+    // No view option beside --camera: the same camera, the same pixels, byte for byte.
+    r = quadrix_run(std::string("render --backend ") + backend + " " + q(model) + " -o " + q(b) + " --no-cull --camera " +
+                    q(cam) + " --quiet");
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_EQ(slurp(a), slurp(b)) << backend;
+    // A report's render.camera is a camera file too.
+    const auto report = dir_ / "report.json", c = dir_ / "c.png";
+    ASSERT_EQ(quadrix_run(std::string("render --backend ") + backend + " " + q(model) + " -o " + q(c) + " --no-cull --camera " +
+                          q(cam) + " --quiet --report " + q(report)).code, 0);
+    ASSERT_EQ(quadrix_run(std::string("render --backend ") + backend + " " + q(model) + " -o " + q(c) + " --no-cull --camera " +
+                          q(report) + " --quiet").code, 0);
+    EXPECT_EQ(slurp(a), slurp(c)) << backend;
+  }
+}
+
+TEST_F(CliCamera, OptionsTypedBesideACameraFileOverrideIt) {
+  const auto model = dir_ / "c.qxm", cam = dir_ / "cam.json";
+  ASSERT_EQ(quadrix_run("synth cylinder -o " + q(model)).code, 0);
+  const auto [a, ja] = render(model, "--view front --save-camera " + q(cam), "a");
+  // --size: the image changes, the vertical lens and the eye stay.
+  const auto [b, jb] = render(model, "--camera " + q(cam) + " --size 80x60", "b");
+  EXPECT_EQ(jb["camera"]["width"].get<int>(), 80);
+  EXPECT_TRUE(vec(ja["camera"]["eye"]).isApprox(vec(jb["camera"]["eye"])));
+  EXPECT_EQ(ja["camera"]["fov_y_deg"].get<double>(), jb["camera"]["fov_y_deg"].get<double>());
+  // --fov: the lens; --zoom narrows the file's lens.
+  const auto [c, jc] = render(model, "--camera " + q(cam) + " --fov 20", "c");
+  EXPECT_EQ(jc["camera"]["fov_y_deg"].get<double>(), 20.0);
+  EXPECT_GT(c.covered, 1.3 * a.covered);  // magnified (and clipped by the frame)
+  const auto [d, jd] = render(model, "--camera " + q(cam) + " --zoom 2", "d");
+  EXPECT_NEAR(std::tan(jd["camera"]["fov_y_deg"].get<double>() * M_PI / 360),
+              std::tan(ja["camera"]["fov_y_deg"].get<double>() * M_PI / 360) / 2, 1e-12);
+  // --view: the eye turns about the file's target at the same distance.
+  const auto [e, je] = render(model, "--camera " + q(cam) + " --view side", "e");
+  const Eigen::Vector3d ta = vec(ja["camera"]["target"]), te = vec(je["camera"]["target"]);
+  EXPECT_TRUE(ta.isApprox(te));
+  EXPECT_NEAR((vec(je["camera"]["eye"]) - te).norm(), (vec(ja["camera"]["eye"]) - ta).norm(), 1e-9);
+  EXPECT_TRUE((vec(je["camera"]["eye"]) - te).normalized().isApprox(Eigen::Vector3d::UnitX(), 1e-9));
+}
+
+TEST_F(CliCamera, BadCameraFilesNameTheFileAndTheKey) {
+  const auto model = dir_ / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  const std::string good = R"("eye": [0, 0, 5], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 40, "width": 32, "height": 32, "near": 0.1, "far": 10)";
+  const auto run = [&](const std::string& name, const std::string& text) {
+    const auto f = write_text(name, text);
+    return quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir_ / "x.png") + " --camera " + q(f));
+  };
+  EXPECT_EQ(run("ok.json", "{" + good + "}").code, 0);
+  std::filesystem::remove(dir_ / "x.png");
+  struct Case {
+    std::string name, text, fragment;
+  };
+  const std::vector<Case> cases = {
+      {"syntax.json", "{\"eye\": [0, 0,", "byte"},
+      {"no-eye.json", R"({"target": [0, 0, 0]})", "'eye'"},
+      {"eye2.json", "{" + std::string(R"("eye": [0, 0], )") + good.substr(good.find("\"target\"")) + "}", "'eye'"},
+      {"fov.json", "{" + std::regex_replace(good, std::regex("\"fov_y_deg\": 40"), "\"fov_y_deg\": 180") + "}", "'fov_y_deg'"},
+      {"width.json", "{" + std::regex_replace(good, std::regex("\"width\": 32"), "\"width\": 2.5") + "}", "'width'"},
+      {"far.json", "{" + std::regex_replace(good, std::regex("\"far\": 10"), "\"far\": 0.01") + "}", "'far'"},
+      {"up.json", "{" + std::regex_replace(good, std::regex("\"up\": \\[0, 1, 0\\]"), "\"up\": [0, 0, 1]") + "}", "'up'"},
+      {"array.json", "[1, 2, 3]", "object"},
+  };
+  for (const Case& c : cases) {
+    const CmdResult r = run(c.name, c.text);
+    EXPECT_EQ(r.code, 3) << c.name << ": " << r.out;
+    EXPECT_NE(r.out.find(c.name), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(c.fragment), std::string::npos) << c.name << ": " << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "x.png")) << c.name;
+  }
+  const CmdResult missing = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir_ / "y.png") + " --camera " +
+                                        q(dir_ / "none.json"));
+  EXPECT_EQ(missing.code, 5) << missing.out;
+  EXPECT_NE(missing.out.find("none.json"), std::string::npos) << missing.out;
+}
+
+TEST_F(CliCamera, SupersamplingIsTheBoxFilteredLargerImage) {
+  const auto model = dir_ / "s.qxm", cam = dir_ / "cam.json";
+  ASSERT_EQ(quadrix_run("synth ellipsoid -o " + q(model)).code, 0);
+  const auto [a, ja] = render(model, "--size 40x30 --save-camera " + q(cam), "plain");
+  const auto ss = dir_ / "ss.png", big = dir_ / "big.png";
+  ASSERT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(ss) + " --camera " + q(cam) +
+                        " --supersample 3 --background none --quiet").code, 0);
+  // The same camera at 3× the size, filtered here: the image --supersample 3 must give.
+  ASSERT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(big) + " --camera " + q(cam) +
+                        " --size 120x90 --background none --quiet").code, 0);
+  const Image8 s = read_png(ss), b = read_png(big);
+  ASSERT_EQ(s.width, 40);
+  ASSERT_EQ(s.height, 30);
+  int partial = 0, max_diff = 0;
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) {
+      int sum[4] = {0, 0, 0, 0};
+      for (int dy = 0; dy < 3; ++dy)
+        for (int dx = 0; dx < 3; ++dx) {
+          const std::uint8_t* p = b.pixel(3 * x + dx, 3 * y + dy);
+          for (int k = 0; k < 3; ++k) sum[k] += p[k] * p[3];
+          sum[3] += p[3];
+        }
+      const std::uint8_t* p = s.pixel(x, y);
+      max_diff = std::max(max_diff, std::abs(p[3] - (sum[3] + 4) / 9));
+      if (sum[3] > 0)
+        for (int k = 0; k < 3; ++k) max_diff = std::max(max_diff, std::abs(p[k] - (sum[k] + sum[3] / 2) / sum[3]));
+      partial += p[3] > 0 && p[3] < 255;
+    }
+  EXPECT_EQ(max_diff, 0);
+  // Antialiased: the silhouette has partly covered pixels; without supersampling it has none.
+  EXPECT_GT(partial, 20);
+  const Image8 plain = read_png(dir_ / "plain.png");
+  for (std::size_t i = 3; i < plain.rgba.size(); i += 4) ASSERT_TRUE(plain.rgba[i] == 0 || plain.rgba[i] == 255);
+  EXPECT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(ss) + " --supersample 2 --depth-out " +
+                        q(dir_ / "d.pfm")).code, 2);
+}
+
+TEST_F(CliCamera, GlSupersamplingMatchesTheReference) {
+  const auto model = dir_ / "h.qxm";
+  ASSERT_EQ(quadrix_run("synth hyperboloid2 --resolution 6 -o " + q(model)).code, 0);
+  const auto gl = dir_ / "gl.png", cpu = dir_ / "cpu.png";
+  const std::string args = q(model) + " --size 64x48 --supersample 4 --no-cull --quiet -o ";
+  const CmdResult r = quadrix_run("render --backend gl " + args + q(gl));
+  if (r.code == 6) GTEST_SKIP() << "no OpenGL 4.5 context: " << r.out;
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(quadrix_run("render --backend cpu " + args + q(cpu)).code, 0);
+  const Image8 g = read_png(gl), c = read_png(cpu);
+  ASSERT_EQ(g.rgba.size(), c.rgba.size());
+  double total = 0;
+  for (std::size_t i = 0; i < g.rgba.size(); ++i) total += std::abs(int(g.rgba[i]) - int(c.rgba[i]));
+  EXPECT_LT(total / g.rgba.size(), 1.5);  // mean absolute difference per channel, 0..255
+}
+
+TEST_F(CliCamera, TurntableFramesTurnAboutTheUpAxis) {
+  const auto model = dir_ / "c.qxm", out = dir_ / "t.png", report = dir_ / "t.json";
+  ASSERT_EQ(quadrix_run("synth cylinder -o " + q(model)).code, 0);
+  const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(out) +
+                                  " --size 64x48 --up +z --turntable 8 --background none --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("8 frames"), std::string::npos) << r.out;  // the summary line
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const nlohmann::json j = read_json(report)["render"]["turntable"];
+  ASSERT_EQ(j["cameras"].size(), 8u);
+  const Eigen::Vector3d target = vec(j["cameras"][0]["target"]);
+  const Eigen::Vector3d e0 = vec(j["cameras"][0]["eye"]) - target;
+  for (int i = 0; i < 8; ++i) {
+    const auto frame = dir_ / fmt::format("t-{:04d}.png", i + 1);
+    ASSERT_TRUE(std::filesystem::exists(frame)) << frame;
+    const Mask m = alpha_mask(read_png(frame));
+    EXPECT_GT(m.covered, 0);
+    // Every frame inside the image, the widest one filling about 0.9.
+    EXPECT_GT(m.x0, 0);
+    EXPECT_GT(m.y0, 0);
+    EXPECT_LT(m.x1, m.w - 1);
+    EXPECT_LT(m.y1, m.h - 1);
+    const nlohmann::json& c = j["cameras"][i];
+    EXPECT_TRUE(vec(c["target"]).isApprox(target));
+    const Eigen::Vector3d e = vec(c["eye"]) - target;
+    // Same height along +z and distance; turned by 45° i about +z.
+    EXPECT_NEAR(e.z(), e0.z(), 1e-9);
+    EXPECT_NEAR(e.norm(), e0.norm(), 1e-9);
+    const double turn = std::atan2(e0.x() * e.y() - e0.y() * e.x(), e0.x() * e.x() + e0.y() * e.y());
+    EXPECT_NEAR(std::remainder(turn - 2 * M_PI * i / 8, 2 * M_PI), 0, 1e-9) << i;
+  }
+  // A contact sheet: the same frames in a 3×3 grid, the ninth cell background.
+  const auto sheet = dir_ / "sheet.png";
+  ASSERT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(sheet) +
+                        " --size 64x48 --up +z --turntable 8 --contact-sheet --background none --quiet").code, 0);
+  const Image8 s = read_png(sheet);
+  ASSERT_EQ(s.width, 3 * 64);
+  ASSERT_EQ(s.height, 3 * 48);
+  for (int i = 0; i < 9; ++i) {
+    const int cx = (i % 3) * 64, cy = (i / 3) * 48;
+    bool same = true;
+    if (i < 8) {
+      const Image8 f = read_png(dir_ / fmt::format("t-{:04d}.png", i + 1));
+      for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) same &= std::equal(f.pixel(x, y), f.pixel(x, y) + 4, s.pixel(cx + x, cy + y));
+    } else {
+      for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) same &= s.pixel(cx + x, cy + y)[3] == 0;
+    }
+    EXPECT_TRUE(same) << "cell " << i;
+  }
+  EXPECT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(sheet) + " --contact-sheet").code, 2);
 }

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <filesystem>
 
 #include "core/image.h"
 #include "tests/core/malformed_corpus.h"
@@ -31,8 +32,8 @@ TEST(View, WindowFramesMatchHeadlessRender) {
                     " --frames 4 --screenshot " + window + " --quiet");
   if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
   ASSERT_EQ(rc, 0);
-  // The viewer frames the bounding sphere; render frames tightly unless --fill 0.
-  ASSERT_EQ(sh(q + " render " + model + " -o " + headless + view_args + " --fill 0 --quiet"), 0);
+  // The viewer frames like render: tightly, by default.
+  ASSERT_EQ(sh(q + " render " + model + " -o " + headless + view_args + " --quiet"), 0);
   const auto a = quadrix::read_png(window), b = quadrix::read_png(headless);
   ASSERT_EQ(a.width, b.width);
   ASSERT_EQ(a.height, b.height);
@@ -88,4 +89,42 @@ TEST(View, AnimateRefusesUnknownParametersAndBadSyntax) {
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate k=0:1:1 --frames 1 --quiet 2> /dev/null"), 2);
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1:0 --frames 1 --quiet 2> /dev/null"), 2);
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1 --frames 1 --quiet 2> /dev/null"), 2);
+namespace {
+// Share of pixels whose colours differ by at most 2 per channel.
+double same_share(const quadrix::Image8& a, const quadrix::Image8& b) {
+  if (a.width != b.width || a.height != b.height) return 0;
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < a.rgba.size(); i += 4) {
+    bool eq = true;
+    for (int c = 0; c < 3; ++c) eq &= std::abs(int(a.rgba[i + c]) - int(b.rgba[i + c])) <= 2;
+    same += eq;
+  }
+  return double(same) / (a.rgba.size() / 4);
+}
+}  // namespace
+
+TEST(View, CameraOptionsAndKeysSaveACameraThatRenderReproduces) {
+  if (sh("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  ScratchDir dir("view-keys");
+  const std::string q = QUADRIX_BINARY, d = dir.path().string();
+  const std::string model = d + "/c.qxm";
+  ASSERT_EQ(sh(q + " synth cylinder -o " + model), 0);
+  // --up, --view and --zoom as render takes them; K and P (pressed by --press) write the camera
+  // and the screenshot under their default names in the working folder.
+  const std::string view_args = " --size 160x120 --up +z --view iso --zoom 0.8";
+  const int rc = sh("cd " + d + " && xvfb-run -a -s '-screen 0 640x480x24' " + q + " view " + model + view_args +
+                    " --frames 3 --press kp --quiet");
+  if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
+  ASSERT_EQ(rc, 0);
+  ASSERT_TRUE(std::filesystem::exists(dir / "quadrix-camera.json"));
+  ASSERT_TRUE(std::filesystem::exists(dir / "quadrix-screenshot.png"));
+  const auto shot = quadrix::read_png(dir / "quadrix-screenshot.png");
+  // render with the same options, and render from the saved camera: the same picture.
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/same.png" + view_args + " --quiet"), 0);
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/saved.png --camera " + d + "/quadrix-camera.json --quiet"), 0);
+  EXPECT_GE(same_share(shot, quadrix::read_png(dir / "same.png")), 0.999);
+  EXPECT_GE(same_share(shot, quadrix::read_png(dir / "saved.png")), 0.999);
+  // A different view gives a different picture (the comparison can fail).
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/other.png --size 160x120 --view front --quiet"), 0);
+  EXPECT_LT(same_share(shot, quadrix::read_png(dir / "other.png")), 0.95);
 }
