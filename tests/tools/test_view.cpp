@@ -57,7 +57,8 @@ TEST(View, AnimatedParameterReachesItsEndValue) {
   ScratchDir dir("view");
   const std::string q = QUADRIX_BINARY;
   const auto window = (dir / "window.png").string(), report = (dir / "report.json").string();
-  const std::string view_args = " --size 160x120 --azimuth 20 --elevation 50";
+  // The bounding sphere framed (--fill 0): the same camera for every value of s.
+  const std::string view_args = " --size 160x120 --azimuth 20 --elevation 50 --fill 0";
   const int rc = sh("xvfb-run -a -s '-screen 0 640x480x24' " + q + " view --surface blobs-merging" + view_args +
                     " --animate s=0.3:1.2:1 --frames 31 --screenshot " + window + " --report " + report + " --quiet");
   if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
@@ -67,8 +68,7 @@ TEST(View, AnimatedParameterReachesItsEndValue) {
   EXPECT_NE(text.find("\"parameters_last_frame\""), std::string::npos) << text;
   const auto agreement = [&](const std::string& s) {
     const auto headless = (dir / ("headless-" + s + ".png")).string();
-    EXPECT_EQ(sh(q + " render --surface blobs-merging --param s=" + s + " -o " + headless + view_args +
-                 " --fill 0 --quiet"),
+    EXPECT_EQ(sh(q + " render --surface blobs-merging --param s=" + s + " -o " + headless + view_args + " --quiet"),
               0);
     const auto a = quadrix::read_png(window), b = quadrix::read_png(headless);
     EXPECT_EQ(a.rgba.size(), b.rgba.size());
@@ -89,6 +89,8 @@ TEST(View, AnimateRefusesUnknownParametersAndBadSyntax) {
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate k=0:1:1 --frames 1 --quiet 2> /dev/null"), 2);
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1:0 --frames 1 --quiet 2> /dev/null"), 2);
   EXPECT_EQ(sh(q + " view --surface blobs-merging --animate s=0:1 --frames 1 --quiet 2> /dev/null"), 2);
+}
+
 namespace {
 // Share of pixels whose colours differ by at most 2 per channel.
 double same_share(const quadrix::Image8& a, const quadrix::Image8& b) {
