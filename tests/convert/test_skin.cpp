@@ -293,10 +293,12 @@ std::size_t render_difference(const Model& ma, const Model& mb, const std::vecto
 
 void expect_round_trip(const Model& m) {
   const fs::path tmp = fs::temp_directory_path() / ("quadrix_skin_" + std::to_string(::getpid()) + ".qxm");
-  write_model(m, tmp);
+  // Compact (the default) may leave out slivers float32 flattens: it counts them, at most 1 in 1,000.
+  const WriteModelResult written = write_model(m, tmp);
   const Model back = read_model(tmp);
   fs::remove(tmp);
-  ASSERT_EQ(back.tets.size(), m.tets.size());
+  EXPECT_LE(written.dropped_tets * 1000, m.tets.size());
+  ASSERT_EQ(back.tets.size() + written.dropped_tets, m.tets.size());
   for (const auto& t : m.tets) ASSERT_TRUE(t.colour.has_value());
 }
 
