@@ -541,10 +541,12 @@ TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
   const std::set<std::string> no_default = {
       "--out",    "--report", "--mesh",   "--depth-out", "--normal-out", "--camera", "--save-camera", "--screenshot",
       "--press",  "--holdout-out", "--implicit", "--surface", "--param", "--bounds", "--tets", "--values",
-      "--synth",  "--baseline-mesh", "--write-volume", "--animate", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models"};
+      "--synth",  "--baseline-mesh", "--write-volume", "--animate", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models",
+      "--points"};
   const std::vector<std::string> commands = {"info",          "render",         "synth",         "fit",
                                              "view",          "mesh",           "convert quads", "convert skin",
-                                             "convert glyphs", "convert volume", "bench fit",     "bench render"};
+                                             "convert glyphs", "convert volume", "bench fit",     "bench render",
+                                             "tetrahedralize", "convert curvature-glyphs", "bench implicit"};
   std::size_t checked = 0;
   for (const std::string& command : commands) {
     const CmdResult help = quadrix_run(command + " --help");
