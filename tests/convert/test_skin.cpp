@@ -81,9 +81,9 @@ TEST_F(BallIo, MalformedRecordsAreFormatErrorsWithLineNumbers) {
   expect_format("b.pdb", ok + "ATOM      2  CA  GLY D   1      42.704 -10.253\n", "b.pdb:2: ATOM   record has");
   expect_format("c.pdb", ok + ok, "atoms with serial numbers 1 and 1: duplicate ball");
   expect_format("d.pdb", "HEADER nothing\n", "no atoms");
-  expect_format("e.cin", "0 0 0 1\n1 0 0 0\n", "e.cin:2: weight (squared radius) 0 must be > 0");
-  expect_format("f.xyzr", "0 0 0 1\n# c\n1 0 0 -2\n", "f.xyzr:3: radius -2 must be > 0");
-  expect_format("g.cin", "0 0 0\n", "g.cin:1: expected 4 numbers");
+  expect_format("e.cin", "0 0 0 1\n1 0 0 0\n", "e.cin:2:8: weight (squared radius) 0 must be > 0");
+  expect_format("f.xyzr", "0 0 0 1\n# c\n1 0 0 -2\n", "f.xyzr:3:9: radius -2 must be > 0");
+  expect_format("g.cin", "0 0 0\n", "g.cin:1:6: expected 4 numbers");
   expect_format("h.cin", "0 0 0 nan\n", "not a finite number");
   EXPECT_THROW(read_balls(write("x.txt", "0 0 0 1\n")), InvalidInput);
   EXPECT_THROW(read_balls(dir_ / "missing.pdb"), IoError);
