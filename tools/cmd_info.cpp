@@ -24,7 +24,16 @@ void add_info(CLI::App& root, Commands& commands) {
   app->add_option("--header-bytes", raw->header_bytes, "Raw volume: bytes to skip at the start of the file")->check(non_negative());
   commands.push_back({app, [file, json, raw](const CommonOptions&, Report& report) {
                         if (is_volume_file(*file, *raw)) return run_info_volume(*file, *raw, *json, report);
-                        const Model m = read_model(*file);  // validates; throws FormatError
+                        Model m;
+                        try {
+                          m = read_model(*file);  // validates; throws FormatError
+                        } catch (const std::exception& e) {
+                          // --json: a script reading stdout learns why too (the exit code is main's).
+                          if (*json)
+                            std::cout << nlohmann::json{{"file", *file}, {"valid", false}, {"error", e.what()}}.dump(2)
+                                      << "\n";
+                          throw;
+                        }
                         const Box3 box = bounds(m);
                         nlohmann::json j;
                         j["file"] = *file;

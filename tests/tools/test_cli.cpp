@@ -170,6 +170,18 @@ TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
   EXPECT_TRUE(std::filesystem::exists(dir / "d.pfm"));
 }
 
+TEST(Cli, InfoJsonSaysWhyAFileIsInvalid) {
+  ScratchDir dir("cli-info-json");
+  const auto bad = dir / "bad.qxm";
+  { std::ofstream(bad) << "ply\nformat ascii 1.0\ncomment quadrix-format 2\nelement slim 1\nend_header\n"; }
+  const CmdResult r = quadrix_run("info " + q(bad) + " --json");
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("\"valid\": false"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"error\": "), std::string::npos) << r.out;
+  // Without --json no JSON.
+  EXPECT_EQ(quadrix_run("info " + q(bad)).out.find("\"valid\""), std::string::npos);
+}
+
 TEST(Cli, MissingFilesAndUnwritableOutputsFailCleanly) {
   ScratchDir dir("cli-io");
   CmdResult r = quadrix_run("info " + q(dir / "nope.qxm"));
