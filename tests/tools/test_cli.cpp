@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support.h"
+#include "tests/tools/cli_support.h"
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -31,9 +32,10 @@ using quadrix::test::ScratchDir;
 
 namespace {
 using test_support::CmdResult;
-CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
+using test_support::q;
+using test_support::quadrix_run;
+using test_support::read_json;
 
-std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
 // A camera from the fields a report records, and nothing else.
 Camera camera_from(const nlohmann::json& j) {
@@ -53,10 +55,6 @@ Camera camera_from(const nlohmann::json& j) {
   return c;
 }
 
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
 }  // namespace
 
 TEST(Cli, SynthInfoRenderRoundTrip) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support.h"
+#include "tests/tools/cli_support.h"
 
 #include <cstdlib>
 #include <fstream>
@@ -17,14 +18,11 @@
 
 using namespace quadrix;
 using test_support::CmdResult;
+using test_support::q;
+using test_support::quadrix_run;
+using test_support::read_json;
 
 namespace {
-CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
-std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
 int count_lines(const std::string& text, const std::string& prefix) {
   int n = 0;
   for (std::size_t at = 0; (at = text.find(prefix, at)) != std::string::npos; at += prefix.size())

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/support.h"
+#include "tests/tools/cli_support.h"
 
 #include <cmath>
 #include <fstream>
@@ -20,14 +21,11 @@
 
 using namespace quadrix;
 using test_support::CmdResult;
+using test_support::q;
+using test_support::quadrix_run;
+using test_support::read_json;
 
 namespace {
-CmdResult quadrix_run(const std::string& args) { return test_support::run_command(QUADRIX_BINARY, args); }
-std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
 Eigen::Vector3d vec(const nlohmann::json& v) { return {v.at(0).get<double>(), v.at(1).get<double>(), v.at(2).get<double>()}; }
 
 Camera camera_of(const nlohmann::json& c) {
