@@ -1,6 +1,7 @@
 #include "fit/data_surface.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -211,6 +212,25 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     // triangle so far (or than the cap).
     const double cap2 = cap * cap * (1.0 + 1e-12), good2 = good * good;
     double best = cap2;
+    // Queries come in runs along one patch: the triangles nearest the last few queries of this
+    // thread (same surface) give a first upper bound, often good enough to stop at once. The
+    // walk below stays exact: it only prunes boxes farther than a distance already reached.
+    thread_local const Impl* hint_owner = nullptr;
+    thread_local std::array<std::uint32_t, 4> hint{};
+    thread_local unsigned hint_next = 0;
+    if (hint_owner != &m) hint_owner = &m, hint.fill(0), hint_next = 0;
+    std::uint32_t best_id = hint[0];
+    for (const std::uint32_t id : hint) {
+      const auto& t = m.triangles[id];
+      if (const double d2 = point_triangle_distance2(x, t[0], t[1], t[2]); d2 < best) best = d2, best_id = id;
+    }
+    const auto remember = [&](std::uint32_t id) {
+      if (std::find(hint.begin(), hint.end(), id) == hint.end()) hint[hint_next++ % hint.size()] = id;
+    };
+    if (best <= good2) {
+      remember(best_id);
+      return std::sqrt(best);
+    }
     const auto& nodes = m.bvh.nodes();
     const auto& items = m.bvh.items();
     const auto box_distance = [&](const Bvh::Node& n) {
@@ -225,7 +245,7 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
       if (n.count > 0) {
         for (std::uint32_t k = 0; k < n.count; ++k) {
           const auto& t = m.triangles[items[n.first + k]];
-          best = std::min(best, point_triangle_distance2(x, t[0], t[1], t[2]));
+          if (const double d2 = point_triangle_distance2(x, t[0], t[1], t[2]); d2 < best) best = d2, best_id = items[n.first + k];
         }
         if (best <= good2) break;
         continue;
@@ -240,7 +260,9 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
         if (dr < best) stack[sp++] = right;
       }
     }
-    return best < cap2 ? std::sqrt(best) : kInf;
+    if (!(best < cap2)) return kInf;
+    remember(best_id);
+    return std::sqrt(best);
   }
   m.index->nearest(x, m.options.candidates, nb);
   double best = kInf;
@@ -300,6 +322,36 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     for (int i = 0; i < grid; ++i)
       for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0, 0});
   const double min_reach = bound / 16.0;
+  // A clipped patch reaches farthest along its clip plane: the curve where its zero set meets the
+  // plane is sampled at a spacing of bound/2 (a tilted cut past an open boundary leaves a wedge
+  // thinner than the lattice spacing; bunny-size balls are hundreds of E across).
+  if (patch.clip) {
+    const double nn = patch.clip->n.norm();
+    const Eigen::Vector3d n = patch.clip->n / nn;
+    const double off = patch.clip->d / nn;  // plane: n·u + off = 0
+    if (std::abs(off) < 1.0) {
+      const double r = std::sqrt(1.0 - off * off);
+      const Eigen::Vector3d p0 = -off * n;
+      const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+      const double step = std::max(0.5 * bound / patch.radius, 2.0 * r / 4096.0);
+      const int lines = static_cast<int>(std::ceil(2.0 * r / step));
+      for (int axis = 0; axis < 2; ++axis) {
+        const Eigen::Vector3d& along = axis == 0 ? e1 : e2;
+        const Eigen::Vector3d& across = axis == 0 ? e2 : e1;
+        for (int i = 0; i < lines; ++i) {
+          const Ray line{p0 + (-r + (i + 0.5) * step) * across, along};
+          const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
+          for (int k = 0; k < roots.count; ++k) {
+            const Eigen::Vector3d u = line.at(roots.t[k]);
+            if (!(u.squaredNorm() < 1.0)) continue;
+            const Eigen::Vector3d x = patch.centre + patch.radius * u;
+            const double d = data.distance(x, bound, bound);
+            if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
+          }
+        }
+      }
+    }
+  }
   while (!stack.empty()) {
     const Cell c = stack.back();
     stack.pop_back();

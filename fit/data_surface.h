@@ -79,7 +79,9 @@ private:
 /// to the data is 1-Lipschitz, a sample at distance d vouches for its lattice cell when
 /// d + (the cell's reach on the sheet) ≤ bound, and cells it cannot vouch for are split in four,
 /// down to a reach of bound/16 or max_depth splits, whichever comes first (the cost of a full
-/// guarantee grows with (R/bound)²; the blended verification samples the rest).
+/// guarantee grows with (R/bound)²; the blended verification samples the rest). A clipped patch
+/// is also sampled every bound/2 along the curve where its zero set meets the clip plane, where
+/// it reaches farthest past an open boundary.
 /// Returns 0 when within, else the distance of the first sample found beyond bound.
 double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth);
 

@@ -10,6 +10,7 @@
 #include <queue>
 #include <random>
 #include <memory>
+#include <thread>
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -50,6 +51,7 @@ struct Ball {
   std::size_t count = 0;     // points in the ball
   std::optional<ClipPlane> clip;  // sharp features: the patch keeps the sheet of its centre
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
+  bool settled = false;      // the surface side (BallFitter::settle) was checked
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return !clip || (clip->keeps(u) && n.dot(sheet) >= n.dot(other));
@@ -201,17 +203,18 @@ struct BallFitter {
     return c;
   }
 
-  // grow, then shrink (×shrink_step) until the zero set passes surface_ok too; when nothing
-  // does, the smallest ball within E on the points side (verification reports the rest).
-  Ball grow_checked(std::uint32_t ci, Scratch& s, double limit, double guess) const {
-    Ball b = grow(ci, s, limit, guess);
+  // A ball from grow, shrunk (×shrink_step) until its zero set passes surface_ok too; when
+  // nothing does, the smallest ball within E on the points side (verification reports the rest).
+  Ball settle(Ball b, Scratch& s) const {
+    b.settled = true;
     if (!b.is_bounded || surface_ok(b)) return b;
-    if (auto c = try_both_sides(ci, b.R, s)) return *c;
+    const std::uint32_t ci = b.centre;
+    if (auto c = try_both_sides(ci, b.R, s)) return c->settled = true, *c;
     double R = b.R;
     for (int k = 0; k < opt.shrink_steps; ++k) {
       R *= opt.shrink_step;
-      if (auto c = try_both_sides(ci, R, s)) return *c;
-      if (auto c = try_ball(ci, R, s)) b = *c;
+      if (auto c = try_both_sides(ci, R, s)) return c->settled = true, *c;
+      if (auto c = try_ball(ci, R, s)) b = *c, b.settled = true;
     }
     return b;
   }
@@ -559,14 +562,35 @@ private:
           pilot_index_->nearest(P_[centres[k]], 1, pn);
           guess = pilot_R_[pn[0].first];
         }
-        Ball b = fitter_->grow_checked(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity(), guess);
-        // A ball that never reached E covers within ½R only.
-        index_->radius(P_[centres[k]], (b.is_bounded ? opt_.cover_fraction : 0.5) * b.R, s.nb);
-        auto& cov = covers_[first + k];
-        cov.clear();
-        for (const auto& [p, d2] : s.nb)
-          if (b.owns((P_[p] - P_[centres[k]]) / b.R, N_[p])) cov.push_back(p);
+        Ball b = fitter_->grow(centres[k], s, caps ? (*caps)[k] : std::numeric_limits<double>::infinity(), guess);
+        if (!opt_.lazy_surface_check) b = fitter_->settle(std::move(b), s);
         balls_[first + k] = std::move(b);
+        cover_of(first + k, s.nb);
+      }
+    });
+  }
+
+  // The points candidate b covers: those within cover_fraction·R of its centre (½R for a ball
+  // that never reached E) on its sheet.
+  void cover_of(std::size_t b, std::vector<Neighbour>& nb) {
+    const Ball& ball = balls_[b];
+    const Eigen::Vector3d& c = P_[ball.centre];
+    index_->radius(c, (ball.is_bounded ? opt_.cover_fraction : 0.5) * ball.R, nb);
+    auto& cov = covers_[b];
+    cov.clear();
+    for (const auto& [p, d2] : nb)
+      if (ball.owns((P_[p] - c) / ball.R, N_[p])) cov.push_back(p);
+  }
+
+  // The surface side of candidates (BallFitter::settle), in parallel; their covers follow.
+  void settle(const std::vector<std::uint32_t>& ids) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      BallFitter::Scratch s;
+      for (std::size_t k = r.begin(); k != r.end(); ++k) {
+        const std::uint32_t b = ids[k];
+        if (balls_[b].settled) continue;
+        balls_[b] = fitter_->settle(std::move(balls_[b]), s);
+        cover_of(b, s.nb);
       }
     });
   }
@@ -613,9 +637,15 @@ private:
   }
 
   // Greedy covering over candidates [from, end) (lazy: a candidate's gain only decreases).
+  // A candidate's surface side is checked when it reaches the top of the heap (lazy_surface_check),
+  // together with the next unchecked ones in gain order so the checks run in parallel; settling
+  // may shrink it, and it goes back into the heap with its new gain.
   void run_greedy(std::size_t from) {
     chosen_flag_.resize(balls_.size(), 0);
     for (std::size_t b = from; b < balls_.size(); ++b) heap_.push({gain(std::uint32_t(b)), std::uint32_t(b)});
+    const std::size_t batch_size = std::max<std::size_t>(4, 4 * std::thread::hardware_concurrency());
+    std::vector<std::uint32_t> batch;
+    std::vector<std::pair<std::size_t, std::uint32_t>> aside;
     while (uncovered_ > 0 && !heap_.empty()) {
       auto [g, b] = heap_.top();
       heap_.pop();
@@ -625,7 +655,28 @@ private:
         if (now > 0) heap_.push({now, b});
         continue;
       }
-      take(b);
+      if (balls_[b].settled) {
+        take(b);
+        continue;
+      }
+      batch.assign(1, b);
+      aside.clear();
+      for (std::size_t looked = 0; batch.size() < batch_size && looked < 4 * batch_size && !heap_.empty(); ++looked) {
+        const auto next = heap_.top();
+        heap_.pop();
+        // Only candidates whose gain is current join the batch (a stale one would rank lower).
+        if (const std::size_t gn = gain(next.second); gn < next.first) {
+          if (gn > 0) aside.push_back({gn, next.second});
+        } else if (balls_[next.second].settled) {
+          aside.push_back(next);
+        } else {
+          batch.push_back(next.second);
+        }
+      }
+      settle(batch);
+      for (const auto& a : aside) heap_.push(a);
+      for (const auto c : batch)
+        if (const std::size_t gc = gain(c); gc > 0) heap_.push({gc, c});
     }
   }
 
@@ -929,6 +980,9 @@ private:
     if (stubborn.empty() || stubborn.size() > P_.size() / 100) return;
     const std::size_t first = balls_.size();
     evaluate(stubborn, &stubborn_caps);
+    std::vector<std::uint32_t> fresh(balls_.size() - first);
+    std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
+    settle(fresh);
     chosen_flag_.resize(balls_.size(), 0);
     pinned_.resize(balls_.size(), 0);
     for (std::size_t b = first; b < balls_.size(); ++b) {
@@ -967,6 +1021,10 @@ private:
     }
     st_.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
     st_.candidates = balls_.size();
+    result_.surface_error_per_patch.assign(chosen_.size(), 0.0);
+    for (std::size_t k = 0; k < chosen_.size() && chosen_[k] < patch_errors_.size(); ++k)
+      for (const double e : patch_errors_[chosen_[k]]) result_.surface_error_per_patch[k] = std::max(result_.surface_error_per_patch[k], e);
+    st_.settled_candidates = std::size_t(std::count_if(balls_.begin(), balls_.end(), [](const Ball& b) { return b.settled; }));
     st_.patches = chosen_.size();
 
     auto& md = result_.model.metadata;
@@ -997,9 +1055,9 @@ private:
     md["time_cover_s"] = num(st_.time_cover);
     md["time_verify_s"] = num(st_.time_verify);
     md["time_total_s"] = num(st_.time_total);
-    log::info("fit_slim: {} points, {} patches ({} candidates), E = {:.3g}: points max {:.3g} ({} beyond E), "
+    log::info("fit_slim: {} points, {} patches ({} candidates, {} checked on the surface side), E = {:.3g}: points max {:.3g} ({} beyond E), "
               "surface max {:.3g} p99.9 {:.3g} ({} samples beyond {}E), {:.2f} s",
-              st_.points, st_.patches, st_.candidates, E_, st_.max_blend, st_.blend_failures, st_.surface_max,
+              st_.points, st_.patches, st_.candidates, st_.settled_candidates, E_, st_.max_blend, st_.blend_failures, st_.surface_max,
               st_.surface_p999, st_.surface_failures, opt_.surface_factor, st_.time_total);
   }
 

@@ -14,6 +14,7 @@
 #include "fit/evaluate.h"
 #include "fit/patch_error.h"
 #include "fit/slim_fit.h"
+#include "fit/slim_hierarchy.h"
 #include "tools/cli.h"
 
 namespace quadrix::cli {
@@ -27,6 +28,7 @@ void add_fit(CLI::App& root, Commands& commands) {
     double max_error_abs = 0;
     double holdout = 0;
     bool allow_exceed = false;
+    int lod_levels = 0;
     SlimFitOptions options;
   };
   auto a = std::make_shared<Args>();
@@ -55,6 +57,11 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("--sharp-angle", a->options.sharp_angle_deg,
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
       ->check(number({.lo = 1, .hi = 179}));
+  app->add_option("--lod-levels", a->lod_levels,
+                  "Coarser levels of detail above the fit, each merging the balls of the one below into larger ones "
+                  "with their measured error (render --pixel-error draws a cut); 0: none")
+      ->check(number({.lo = 0, .hi = 16}))
+      ->capture_default_str();
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         // A mesh's faces give the normals and the surface the fit is bounded against.
                         std::optional<PolygonMesh> mesh;
@@ -138,6 +145,14 @@ void add_fit(CLI::App& root, Commands& commands) {
                               {"max_abs", pe.max},
                               {"misses", pe.misses},
                               {"seconds", report.elapsed() - t0}};
+                        }
+                        if (a->lod_levels > 0) {
+                          const SlimLevelsStats hs = add_slim_hierarchy(
+                              r, cloud, mesh ? &*mesh : nullptr, o, {.levels = a->lod_levels});
+                          j["hierarchy"] = {{"levels", hs.patches.size()},
+                                            {"patches", hs.patches},
+                                            {"max_error_abs", hs.max_error},
+                                            {"seconds", hs.seconds}};
                         }
                         write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;

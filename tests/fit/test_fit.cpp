@@ -15,6 +15,7 @@
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/slim_fit.h"
+#include "fit/slim_hierarchy.h"
 
 namespace quadrix {
 namespace {
@@ -259,10 +260,87 @@ TEST(FitSlim, SharpCreasesOfFandisk) {
   // about the same (−1 %; +5 % with ½R).
   EXPECT_LT(double(sharp.stats.patches), 0.8 * double(smooth.stats.patches));
   EXPECT_LE(cmax, sharp.stats.max_error_abs * (1 + 1e-9));
-  // The clipped sheets trade crease RMS for patches (measured: 0.79e-3 against 0.43e-3, E 1.45e-3).
-  EXPECT_LE(crms, 2.0 * srms);
+  // The clipped sheets trade crease RMS for patches (measured: 0.79e-3 against 0.43e-3, E 1.45e-3;
+  // with 4 candidates per patch 0.81e-3 against 0.38e-3: the smooth fit got more, smaller patches).
+  EXPECT_LE(crms, 2.5 * srms);
+  EXPECT_LE(crms, 0.6 * sharp.stats.max_error_abs);
   EXPECT_EQ(ec.misses, 0u);
   EXPECT_LE(ec.max, sharp.stats.max_error_abs * (1 + 1e-9));
+}
+
+// Levels of detail (fit/slim_hierarchy.h): merged balls linked above the fit, the fit's patches
+// the leaves, errors (distances) growing towards the roots, and a cut by error drawing fewer
+// balls within about that error.
+TEST(FitSlimHierarchy, CoarserLevelsLinkedAboveTheFit) {
+  const PointCloud c = torus(8000, 1.0, 0.35, 21);
+  const SlimFitOptions o{.max_error = 1e-3};
+  SlimFitResult r = fit_slim(c, o);
+  const std::size_t leaves = r.model.slims.size();
+  const SlimLevelsStats st = add_slim_hierarchy(r, c, nullptr, o, {.levels = 2});
+  EXPECT_EQ(validate_slim_hierarchy(r.model), "");
+  ASSERT_EQ(st.patches.size(), 3u);
+  EXPECT_EQ(r.model.slims.size(), leaves);
+  EXPECT_LT(st.patches[1], st.patches[0]);
+  EXPECT_LT(st.patches[2], st.patches[1]);
+  const SlimHierarchyStats hs = slim_hierarchy_stats(r.model);
+  EXPECT_EQ(hs.levels, 3u);
+  EXPECT_EQ(hs.leaves, leaves);
+  EXPECT_EQ(hs.roots, st.patches[2]);
+  const auto& h = r.model.slim_hierarchy;
+  for (std::size_t id = 0; id < h.size(); ++id)
+    if (h.parent[id] >= 0) {
+      const std::size_t p = std::size_t(h.parent[id]);
+      EXPECT_GE(h.error[p], h.error[id]) << "ball " << id;
+      // A parent holds its children's balls: drawing it instead of them leaves no hole.
+      const SlimPatch &child = slim_ball(r.model, id), &parent = slim_ball(r.model, p);
+      EXPECT_LE((child.centre - parent.centre).norm() + child.radius, parent.radius * (1 + 1e-9)) << "ball " << id;
+    }
+  // Leaves' errors: within the fit's two-sided bound (points E, surface 2E).
+  const double E = r.stats.max_error_abs;
+  for (std::size_t k = 0; k < leaves; ++k) EXPECT_LE(h.error[k], 2 * E * (1 + 1e-9));
+  // A cut at the middle level's error draws fewer balls, and the blended surface of that cut
+  // keeps the points within about that error (probed from 4× that error, as the fitter probes at 4E).
+  const std::vector<std::int32_t> cut = select_slim_cut(r.model, st.max_error[1]);
+  EXPECT_LT(cut.size(), leaves);
+  Model m;
+  for (const auto id : cut) m.slims.push_back(slim_ball(r.model, std::size_t(id)));
+  m.metadata = r.model.metadata;
+  const SlimError e = evaluate_slim(m, c, {.probe_height = 4 * st.max_error[1]});
+  std::cout << "torus 1e-3 levels " << st.patches[0] << "/" << st.patches[1] << "/" << st.patches[2]
+            << ", cut at " << st.max_error[1] / E << "E: " << cut.size() << " balls, points max " << e.max / E
+            << "E, misses " << e.misses << "\n";
+  EXPECT_EQ(e.misses, 0u);
+  EXPECT_LE(e.max, 1.5 * st.max_error[1]);
+  // A mixed cut (some regions coarse, some fine): the median level-1 error as the threshold.
+  std::vector<double> level1(h.error.begin() + std::ptrdiff_t(leaves), h.error.begin() + std::ptrdiff_t(leaves + st.patches[1]));
+  std::nth_element(level1.begin(), level1.begin() + std::ptrdiff_t(level1.size() / 2), level1.end());
+  const double mid = level1[level1.size() / 2];
+  const auto mixed = select_slim_cut(r.model, mid);
+  std::size_t fine = 0;
+  Model mm;
+  for (const auto id : mixed) fine += std::size_t(id) < leaves, mm.slims.push_back(slim_ball(r.model, std::size_t(id)));
+  mm.metadata = r.model.metadata;
+  const SlimError em = evaluate_slim(mm, c, {.probe_height = 4 * mid});
+  std::cout << "mixed cut at " << mid / E << "E: " << mixed.size() << " balls (" << fine << " leaves), points max "
+            << em.max / E << "E, misses " << em.misses << "\n";
+  {
+    const SlimError ek = evaluate_slim(mm, c, {.probe_height = 4 * mid, .keep_per_point = true});
+    int shown = 0;
+    for (std::size_t i = 0; i < c.points.size() && shown < 6; ++i)
+      if (!std::isfinite(ek.per_point[i])) {
+        ++shown;
+        std::cout << "miss " << c.points[i].transpose() << ":";
+        for (std::size_t k = 0; k < mm.slims.size(); ++k) {
+          const double r = (c.points[i] - mm.slims[k].centre).norm() / mm.slims[k].radius;
+          if (r < 1) std::cout << " [" << k << (std::size_t(mixed[k]) < leaves ? " leaf" : " coarse") << " r " << r << "]";
+        }
+        std::cout << "\n";
+      }
+  }
+  EXPECT_GT(fine, 0u);
+  EXPECT_LT(fine, mixed.size());
+  EXPECT_EQ(em.misses, 0u);
+  EXPECT_LE(em.max, 1.5 * mid);
 }
 
 // The closed-form point–triangle distance against the minimum over a fine barycentric lattice
