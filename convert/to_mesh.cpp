@@ -340,22 +340,21 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
       }
     });
   }
-  const auto is_inside = [&](std::uint64_t k) { return std::popcount(static_cast<unsigned>(state[k] & 7u)) >= 2; };
-  // Cells with corners on both sides, and their corners.
+  const auto corner_of = [&](std::uint64_t k0, int c) {
+    return k0 + (c & 1) + ((c >> 1) & 1) * grid.n.x() + ((c >> 2) & 1) * static_cast<std::uint64_t>(grid.n.x()) * grid.n.y();
+  };
+  // Cells whose corners are not all unanimous alike (all three lines inside, or all outside):
+  // the surface may cross them. Their corners get the blended distance.
   std::vector<std::uint64_t> cells;
   for (int z = 0; z + 1 < grid.n.z(); ++z)
     for (int y = 0; y + 1 < grid.n.y(); ++y)
       for (int x = 0; x + 1 < grid.n.x(); ++x) {
         const std::uint64_t k0 = grid.index({x, y, z});
-        int count = 0;
-        for (int c = 0; c < 8; ++c) count += is_inside(k0 + (c & 1) + ((c >> 1) & 1) * grid.n.x() +
-                                                       ((c >> 2) & 1) * static_cast<std::uint64_t>(grid.n.x()) * grid.n.y());
-        if (count == 0 || count == 8) continue;
-        cells.push_back(k0);
+        const unsigned first = state[k0] & 7u;
+        bool mixed = first != 0u && first != 7u;
+        for (int c = 1; c < 8 && !mixed; ++c) mixed = (state[corner_of(k0, c)] & 7u) != first;
+        if (mixed) cells.push_back(k0);
       }
-  const auto corner_of = [&](std::uint64_t k0, int c) {
-    return k0 + (c & 1) + ((c >> 1) & 1) * grid.n.x() + ((c >> 2) & 1) * static_cast<std::uint64_t>(grid.n.x()) * grid.n.y();
-  };
   for (const std::uint64_t k0 : cells)
     for (int c = 0; c < 8; ++c) state[corner_of(k0, c)] |= 8u;
   // The blended Taubin distance at those corners: the blend's own weights where a ball holds the
@@ -400,6 +399,15 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
     if (it->second.w > 0) return it->second.wd / it->second.w;
     if (it->second.we > 0) return it->second.wde / it->second.we;
     return std::nullopt;
+  };
+  // A node the three lines agree on takes their side. Where they split (a line grazing the
+  // surface sees a chord the blend shows at a slant, or misses it), the distance's sign decides
+  // when the node is within a ball, else the majority.
+  const auto is_inside = [&](std::uint64_t k) {
+    const unsigned votes = state[k] & 7u;
+    if (votes == 0u || votes == 7u) return votes == 7u;
+    if (const auto it = acc.find(k); it != acc.end() && it->second.w > 0) return it->second.wd < 0;
+    return std::popcount(votes) >= 2;
   };
   std::unordered_map<std::uint64_t, int> crossings;  // edge (a·N + b) → vertex
   const Rgb grey{200, 200, 200};
@@ -526,7 +534,7 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
 }
 
 MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
-                             double reach) {
+                             double reach, double bound) {
   const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
   struct Sample {
     Eigen::Vector3d p, n;
@@ -579,6 +587,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
       continue;
     }
     found.push_back(x);
+    out.beyond += x > bound;
     out.max = std::max(out.max, x);
     sum2 += x * x;
   }
@@ -590,6 +599,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   }
   // A miss is at least `reach` away (nothing was hit within it).
   if (out.misses > 0) out.max = std::max(out.max, reach);
+  out.beyond += out.misses;
   return out;
 }
 
@@ -658,7 +668,20 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                              : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
                                         diagonal / 256.0);
 
+  const auto measure_surface_side = [&](ToMeshResult& r) {
+    if (r.mesh.face_count() > 0) {
+      const DataSurface data = DataSurface::from_mesh(r.mesh);
+      const SurfaceError se =
+          measure_surface_error(model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
+      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+    }
+    r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+  };
+  const auto share_beyond = [](const MeshDistance& d) {
+    return d.samples == 0 ? 0.0 : static_cast<double>(d.beyond) / static_cast<double>(d.samples);
+  };
   ToMeshResult best;
+  bool have_best = false;
   for (int level = 0; level <= o.max_refinements; ++level) {
     if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
     Builder b;
@@ -678,19 +701,20 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     r.bound = bound;
     r.refinements = level;
     r.mesh = std::move(b.mesh);
-    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach);
+    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound);
     r.open_edges = count_open_edges(r.mesh);
-    const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
-    if ((r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0) || last) {
-      if (r.mesh.face_count() > 0) {
-        const DataSurface data = DataSurface::from_mesh(r.mesh);
-        const SurfaceError se = measure_surface_error(
-            model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
-        r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0};
-      }
-      r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+    // A refinement that leaves more than a quarter of the previous share of samples beyond the
+    // bound is not converging there (cracks or gaps of the blend itself, which no resolution
+    // closes): the previous, smaller mesh is kept.
+    if (have_best && share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface)) {
+      measure_surface_side(best);
+      break;
     }
+    const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
+    const bool close = r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0;
+    if (close || last) measure_surface_side(r);
     best = std::move(r);
+    have_best = true;
     if (best.within || last) break;
   }
   if (o.progress) o.progress(1.0);

@@ -34,6 +34,7 @@ struct MeshDistance {
   double max = 0, rms = 0, p99 = 0;
   std::size_t samples = 0;
   std::size_t misses = 0;  ///< mesh → surface: samples whose normal line met no surface nearby
+  std::size_t beyond = 0;  ///< samples farther than the bound (misses included)
 };
 
 struct ToMeshResult {
