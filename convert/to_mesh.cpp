@@ -682,7 +682,19 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   };
   ToMeshResult best;
   bool have_best = false;
+  const Eigen::Vector3d slim_extent = [&] {
+    Box3 b;
+    for (const auto& s : model.slims) b.extend(bounds(s));
+    return model.slims.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(b.max - b.min);
+  }();
   for (int level = 0; level <= o.max_refinements; ++level) {
+    // The SLIM grid keeps a byte per node: no doubling past kMaxNodes of them.
+    constexpr double kMaxNodes = 1.5e9;
+    if (have_best && !model.slims.empty() &&
+        ((slim_extent / (slim_h0 / (1 << level))).array() + 4.0).prod() > kMaxNodes) {
+      if (best.surface_to_mesh.samples == 0) measure_surface_side(best);
+      break;
+    }
     if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
     Builder b;
     b.colours = has_any_colour(model);
