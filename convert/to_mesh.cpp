@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -271,77 +272,181 @@ struct SlimGrid {
   std::uint64_t index(const Eigen::Vector3i& i) const {
     return (static_cast<std::uint64_t>(i.z()) * n.y() + i.y()) * n.x() + i.x();
   }
+  Eigen::Vector3i node(std::uint64_t k) const {
+    return {static_cast<int>(k % n.x()), static_cast<int>(k / n.x() % n.y()), static_cast<int>(k / n.x() / n.y())};
+  }
   Eigen::Vector3d at(const Eigen::Vector3i& i) const { return origin + h * i.cast<double>(); }
 };
 
-void mesh_slims(const Model& model, double h, Builder& out) {
+/// Where the drawn blend crosses the line o + s·dir (0 ≤ s ≤ length): entries (front faces seen
+/// going +dir) and exits (front faces seen going −dir), as +1/−1 events sorted by s. A blended hit
+/// is passed by starting the next trace behind every patch hit it blended.
+std::vector<std::pair<double, int>> blend_crossings(const ReferenceScene& scene, const TraceOptions& trace,
+                                                    const Eigen::Vector3d& o, const Eigen::Vector3d& dir, double length) {
+  std::vector<std::pair<double, int>> events;
+  thread_local std::vector<SlimSample> used;
+  for (const int side : {+1, -1}) {
+    const Ray ray{side > 0 ? o : Eigen::Vector3d(o + length * dir), side * dir};
+    double tmin = 0;
+    for (int k = 0; k < 64; ++k) {
+      const auto hit = scene.trace(ray, tmin, length, trace, &used);
+      if (!hit) break;
+      events.emplace_back(side > 0 ? hit->t : length - hit->t, side);
+      double behind = hit->t;
+      for (const SlimSample& u : used) behind = std::max(behind, u.hit.t);
+      tmin = behind + 1e-9 * length;
+    }
+  }
+  std::sort(events.begin(), events.end());
+  return events;
+}
+
+/// SLIM patches as marching tetrahedra (Kuhn split of a grid of spacing h). Which side of the
+/// surface a node lies on is decided by the drawn blend itself: along the grid lines through it
+/// (one per axis), a node is inside when the last crossing before it is an entry, and the
+/// majority of the three lines decides, so one line grazing a gap cannot flip it. Sides from one
+/// consistent labelling make the triangles closed wherever the surface is. Crossings on cell
+/// edges are placed by the blended Taubin distance Σwᵢdᵢ/Σwᵢ; the caller moves them onto the blend.
+void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, double h, Builder& out,
+                std::vector<std::uint8_t>& on_surface) {
   Box3 box;
   for (const auto& s : model.slims) box.extend(bounds(s));
   SlimGrid grid;
   grid.h = h;
   grid.origin = box.min - Eigen::Vector3d::Constant(h);
   grid.n = ((box.max - grid.origin) / h).array().ceil().cast<int>() + 2;
+  const std::uint64_t total = static_cast<std::uint64_t>(grid.n.x()) * grid.n.y() * grid.n.z();
+  // Bits 0–2: inside as seen along x, y, z; bit 3: a corner of a cell the surface crosses.
+  std::vector<std::uint8_t> state(total, 0);
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    const int n1 = grid.n[a1], n2 = grid.n[a2], len = grid.n[axis];
+    const Eigen::Vector3d dir = Eigen::Vector3d::Unit(axis);
+    tbb::parallel_for(tbb::blocked_range<int>(0, n1 * n2), [&](const tbb::blocked_range<int>& r) {
+      for (int line = r.begin(); line < r.end(); ++line) {
+        Eigen::Vector3i i = Eigen::Vector3i::Zero();
+        i[a1] = line % n1;
+        i[a2] = line / n1;
+        const auto events = blend_crossings(scene, trace, grid.at(i), dir, (len - 1) * h);
+        if (events.empty()) continue;
+        std::size_t e = 0;
+        bool inside = false;
+        for (int k = 0; k < len; ++k) {
+          while (e < events.size() && events[e].first <= k * h) inside = events[e++].second > 0;
+          if (!inside) continue;
+          i[axis] = k;
+          state[grid.index(i)] |= static_cast<std::uint8_t>(1u << axis);  // lines write disjoint nodes
+        }
+      }
+    });
+  }
+  const auto corner_of = [&](std::uint64_t k0, int c) {
+    return k0 + (c & 1) + ((c >> 1) & 1) * grid.n.x() + ((c >> 2) & 1) * static_cast<std::uint64_t>(grid.n.x()) * grid.n.y();
+  };
+  // Cells whose corners are not all unanimous alike (all three lines inside, or all outside):
+  // the surface may cross them. Their corners get the blended distance.
+  std::vector<std::uint64_t> cells;
+  for (int z = 0; z + 1 < grid.n.z(); ++z)
+    for (int y = 0; y + 1 < grid.n.y(); ++y)
+      for (int x = 0; x + 1 < grid.n.x(); ++x) {
+        const std::uint64_t k0 = grid.index({x, y, z});
+        const unsigned first = state[k0] & 7u;
+        bool mixed = first != 0u && first != 7u;
+        for (int c = 1; c < 8 && !mixed; ++c) mixed = (state[corner_of(k0, c)] & 7u) != first;
+        if (mixed) cells.push_back(k0);
+      }
+  for (const std::uint64_t k0 : cells)
+    for (int c = 0; c < 8; ++c) state[corner_of(k0, c)] |= 8u;
+  // The blended Taubin distance at those corners: the blend's own weights where a ball holds the
+  // node, else weights over balls grown by kReach (so every corner near the surface has a value).
   struct Acc {
     double w = 0, wd = 0;
+    double we = 0, wde = 0;
   };
+  constexpr double kReach = 1.5;
   std::unordered_map<std::uint64_t, Acc> acc;
+  acc.reserve(cells.size() * 2);
   for (const SlimPatch& s : model.slims) {
-    const Eigen::Vector3i lo = ((s.centre.array() - s.radius - grid.origin.array()) / h).floor().cast<int>().max(0);
+    const double reach = kReach * s.radius;
+    const Eigen::Vector3i lo = ((s.centre.array() - reach - grid.origin.array()) / h).floor().cast<int>().max(0);
     const Eigen::Vector3i hi =
-        ((s.centre.array() + s.radius - grid.origin.array()) / h).ceil().cast<int>().min(grid.n.array() - 1);
+        ((s.centre.array() + reach - grid.origin.array()) / h).ceil().cast<int>().min(grid.n.array() - 1);
     for (int z = lo.z(); z <= hi.z(); ++z)
       for (int y = lo.y(); y <= hi.y(); ++y)
         for (int x = lo.x(); x <= hi.x(); ++x) {
           const Eigen::Vector3i i(x, y, z);
+          const std::uint64_t k = grid.index(i);
+          if (!(state[k] & 8u)) continue;
           const Eigen::Vector3d u = (grid.at(i) - s.centre) / s.radius;
-          const double w = slim_weight(u.norm());
-          if (!(w > 0.0) || (s.clip && !s.clip->keeps(u))) continue;
+          const double r = u.norm();
+          const double we = slim_weight(r / kReach);
+          if (!(we > 0.0)) continue;
           const double gn = s.local.gradient(u).norm();
           if (!(gn > 1e-12)) continue;
-          Acc& a = acc[grid.index(i)];
+          const double d = s.radius * s.local.eval(u) / gn;  // Taubin's distance, world units
+          Acc& a = acc[k];
+          a.we += we;
+          a.wde += we * d;
+          const double w = slim_weight(r);
+          if (!(w > 0.0) || (s.clip && !s.clip->keeps(u))) continue;
           a.w += w;
-          a.wd += w * s.radius * s.local.eval(u) / gn;  // Taubin's distance, world units
+          a.wd += w * d;
         }
   }
-  std::vector<std::uint64_t> keys;
-  keys.reserve(acc.size());
-  for (const auto& [k, a] : acc) keys.push_back(k);
-  std::sort(keys.begin(), keys.end());
+  const auto value = [&](std::uint64_t k) -> std::optional<double> {
+    const auto it = acc.find(k);
+    if (it == acc.end()) return std::nullopt;
+    if (it->second.w > 0) return it->second.wd / it->second.w;
+    if (it->second.we > 0) return it->second.wde / it->second.we;
+    return std::nullopt;
+  };
+  // A node the three lines agree on takes their side. Where they split (a line grazing the
+  // surface sees a chord the blend shows at a slant, or misses it), the distance's sign decides
+  // when the node is within a ball, else the majority.
+  const auto is_inside = [&](std::uint64_t k) {
+    const unsigned votes = state[k] & 7u;
+    if (votes == 0u || votes == 7u) return votes == 7u;
+    if (const auto it = acc.find(k); it != acc.end() && it->second.w > 0) return it->second.wd < 0;
+    return std::popcount(votes) >= 2;
+  };
   std::unordered_map<std::uint64_t, int> crossings;  // edge (a·N + b) → vertex
-  const std::uint64_t total = static_cast<std::uint64_t>(grid.n.x()) * grid.n.y() * grid.n.z();
   const Rgb grey{200, 200, 200};
-  for (const std::uint64_t k0 : keys) {
-    const Eigen::Vector3i base(static_cast<int>(k0 % grid.n.x()), static_cast<int>(k0 / grid.n.x() % grid.n.y()),
-                               static_cast<int>(k0 / grid.n.x() / grid.n.y()));
-    if ((base.array() + 1 >= grid.n.array()).any()) continue;
-    std::array<double, 8> f;
-    std::array<std::uint64_t, 8> id;
-    bool complete = true;
-    for (int c = 0; c < 8 && complete; ++c) {
-      const Eigen::Vector3i i = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-      id[c] = grid.index(i);
-      const auto it = acc.find(id[c]);
-      complete = it != acc.end() && it->second.w > 0;
-      if (complete) f[c] = it->second.wd / it->second.w;
-    }
-    if (!complete) continue;
+  for (const std::uint64_t k0 : cells) {
+    const Eigen::Vector3i base = grid.node(k0);
     for (const auto& perm : kPermutations) {
       std::array<int, 4> corner{0, 0, 0, 0};
       for (int s = 0; s < 3; ++s) corner[s + 1] = corner[s] | (1 << perm[s]);
       std::array<Eigen::Vector3d, 4> p;
-      std::array<double, 4> fv;
+      std::array<double, 4> side;
+      std::array<std::uint64_t, 4> id;
       for (int s = 0; s < 4; ++s) {
         const int c = corner[s];
         p[s] = grid.at(base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
-        fv[s] = f[c];
+        id[s] = corner_of(k0, c);
+        side[s] = is_inside(id[s]) ? -1.0 : 1.0;
       }
-      march(p, fv, out, [&](int i, int j) {
-        const std::uint64_t a = id[corner[i]], b = id[corner[j]];
+      march(p, side, out, [&](int i, int j) {
+        const std::uint64_t a = id[i], b = id[j];
         const std::uint64_t ek = std::min(a, b) * total + std::max(a, b);
         if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
-        const double s = fv[i] / (fv[i] - fv[j]);
-        const int v = out.add_vertex(p[i] + s * (p[j] - p[i]), grey);
+        // The blend where the edge enters it, seen from its outer end, as a ray would see it.
+        const int o = side[i] > 0 ? i : j, n = o == i ? j : i;
+        const Eigen::Vector3d d = p[n] - p[o];
+        const double len = d.norm();
+        if (const auto hit = scene.trace({p[o], d / len}, 0.0, len, trace); hit && hit->kind == PrimitiveKind::slim) {
+          const int v = out.add_vertex(hit->point, hit->colour);
+          crossings.emplace(ek, v);
+          on_surface.push_back(1);
+          return v;
+        }
+        // Else the distance's root where its signs agree with the sides, else the edge's middle;
+        // the caller moves it onto the blend along its normal.
+        double t = 0.5;
+        const auto fa = value(a), fb = value(b);
+        if (fa && fb && *fa * side[i] >= 0 && *fb * side[j] >= 0 && *fa != *fb) t = std::clamp(*fa / (*fa - *fb), 0.0, 1.0);
+        const int v = out.add_vertex(p[i] + t * (p[j] - p[i]), grey);
         crossings.emplace(ek, v);
+        on_surface.push_back(0);
         return v;
       });
     }
@@ -384,24 +489,52 @@ double line_distance(const ReferenceScene& scene, const TraceOptions& trace, con
   return best;
 }
 
-/// Moves each SLIM-made vertex onto the drawn surface along its normal.
+/// Moves each SLIM-made vertex onto the drawn surface along its normal, then drops the triangles
+/// with a vertex whose normal line met no SLIM surface within reach: they span a hole of the
+/// blend (an open scan's SLIM fit), where the grid's closed labelling put a cap the renderer does
+/// not draw.
 void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, double reach, std::size_t first,
-                     Builder& out) {
+                     const std::vector<std::uint8_t>& on_surface, Builder& out) {
   const std::vector<Eigen::Vector3d> normals = vertex_normals(out.mesh);
+  std::vector<std::uint8_t> snapped(out.mesh.vertices.size(), 1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(first, out.mesh.vertices.size()),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t v = r.begin(); v < r.end(); ++v) {
+                        if (on_surface[v - first]) continue;
+                        snapped[v] = 0;
                         if (!(normals[v].norm() > 0)) continue;
                         const auto hit = along_normal(scene, trace, out.mesh.vertices[v], normals[v], reach);
                         if (!hit || hit->kind != PrimitiveKind::slim) continue;
                         out.mesh.vertices[v] = hit->point;
                         if (out.colours) out.mesh.colours[v] = hit->colour;
+                        snapped[v] = 1;
                       }
                     });
+  PolygonMesh kept;
+  std::vector<int> remap(out.mesh.vertices.size(), -1);
+  for (std::size_t v = 0; v < first; ++v) remap[v] = static_cast<int>(v);
+  kept.vertices.assign(out.mesh.vertices.begin(), out.mesh.vertices.begin() + first);
+  if (out.colours) kept.colours.assign(out.mesh.colours.begin(), out.mesh.colours.begin() + first);
+  for (std::size_t f = 0; f < out.mesh.face_count(); ++f) {
+    const auto face = out.mesh.face(f);
+    if (!std::all_of(face.begin(), face.end(), [&](int v) { return snapped[v] != 0; })) continue;
+    std::array<int, 3> tri;
+    for (int i = 0; i < 3; ++i) {
+      int& m = remap[face[i]];
+      if (m < 0) {
+        m = static_cast<int>(kept.vertices.size());
+        kept.vertices.push_back(out.mesh.vertices[face[i]]);
+        if (out.colours) kept.colours.push_back(out.mesh.colours[face[i]]);
+      }
+      tri[i] = m;
+    }
+    kept.add_face(tri);
+  }
+  out.mesh = std::move(kept);
 }
 
 MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
-                             double reach) {
+                             double reach, double bound) {
   const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
   struct Sample {
     Eigen::Vector3d p, n;
@@ -454,6 +587,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
       continue;
     }
     found.push_back(x);
+    out.beyond += x > bound;
     out.max = std::max(out.max, x);
     sum2 += x * x;
   }
@@ -465,6 +599,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   }
   // A miss is at least `reach` away (nothing was hit within it).
   if (out.misses > 0) out.max = std::max(out.max, reach);
+  out.beyond += out.misses;
   return out;
 }
 
@@ -516,6 +651,13 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   const double bound = o.max_error > 0 ? o.max_error : 1e-3 * diagonal;
   if (!std::isfinite(bound) || !(bound > 0)) throw InvalidInput(fmt::format("mesh: max error {} is not positive", bound));
   const ReferenceScene scene(model);
+  // The sides of SLIM grid nodes are read from the blend alone (tets and glyphs would hide it).
+  Model slims_only;
+  std::optional<ReferenceScene> slim_scene;
+  if (!model.slims.empty() && (!model.tets.empty() || !model.glyphs.empty() || !model.implicits.empty())) {
+    slims_only.slims = model.slims;
+    slim_scene.emplace(slims_only);
+  }
   TraceOptions trace;
   trace.slim.offset = o.slim_offset >= 0 ? o.slim_offset : slim_offset_of(model);
   // SLIM grid: a chord of length h sits about h²κ/8 off a surface of curvature κ; patches bend
@@ -526,8 +668,33 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                              : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
                                         diagonal / 256.0);
 
+  const auto measure_surface_side = [&](ToMeshResult& r) {
+    if (r.mesh.face_count() > 0) {
+      const DataSurface data = DataSurface::from_mesh(r.mesh);
+      const SurfaceError se =
+          measure_surface_error(model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
+      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+    }
+    r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+  };
+  const auto share_beyond = [](const MeshDistance& d) {
+    return d.samples == 0 ? 0.0 : static_cast<double>(d.beyond) / static_cast<double>(d.samples);
+  };
   ToMeshResult best;
+  bool have_best = false;
+  const Eigen::Vector3d slim_extent = [&] {
+    Box3 b;
+    for (const auto& s : model.slims) b.extend(bounds(s));
+    return model.slims.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(b.max - b.min);
+  }();
   for (int level = 0; level <= o.max_refinements; ++level) {
+    // The SLIM grid keeps a byte per node: no doubling past kMaxNodes of them.
+    constexpr double kMaxNodes = 1.5e9;
+    if (have_best && !model.slims.empty() &&
+        ((slim_extent / (slim_h0 / (1 << level))).array() + 4.0).prod() > kMaxNodes) {
+      if (best.surface_to_mesh.samples == 0) measure_surface_side(best);
+      break;
+    }
     if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
     Builder b;
     b.colours = has_any_colour(model);
@@ -537,27 +704,29 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (!model.slims.empty()) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
-      mesh_slims(model, h, b);
-      snap_to_surface(scene, trace, 1.5 * h, first, b);
+      std::vector<std::uint8_t> on_surface;
+      mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, b, on_surface);
+      snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
       reach = std::max(reach, 1.5 * h);
     }
     ToMeshResult r;
     r.bound = bound;
     r.refinements = level;
     r.mesh = std::move(b.mesh);
-    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach);
+    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound);
     r.open_edges = count_open_edges(r.mesh);
-    const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
-    if ((r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0) || last) {
-      if (r.mesh.face_count() > 0) {
-        const DataSurface data = DataSurface::from_mesh(r.mesh);
-        const SurfaceError se = measure_surface_error(
-            model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
-        r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0};
-      }
-      r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+    // A refinement that leaves more than a quarter of the previous share of samples beyond the
+    // bound is not converging there (cracks or gaps of the blend itself, which no resolution
+    // closes): the previous, smaller mesh is kept.
+    if (have_best && share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface)) {
+      measure_surface_side(best);
+      break;
     }
+    const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
+    const bool close = r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0;
+    if (close || last) measure_surface_side(r);
     best = std::move(r);
+    have_best = true;
     if (best.within || last) break;
   }
   if (o.progress) o.progress(1.0);

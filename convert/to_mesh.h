@@ -4,13 +4,15 @@
 /// | primitives | how                                                                       |
 /// |------------|---------------------------------------------------------------------------|
 /// | tetrahedron patches | each tetrahedron's edgewise subdivision into k³ tetrahedra, marching tetrahedra on its quadric; crossings are the quadric's exact roots on the edges; lattice points and crossings welded across shared faces (watertight where neighbours agree in sign) |
-/// | SLIM       | marching tetrahedra (Kuhn split) on a grid of the blended signed distance Σwᵢdᵢ/Σwᵢ (dᵢ Taubin's distance to patch i), then each vertex moved onto the per-ray blend (core/slim.h) seen along its normal |
+/// | SLIM       | marching tetrahedra (Kuhn split) on a grid whose nodes are labelled inside/outside by the per-ray blend itself (core/slim.h): the crossings of the grid lines through each node, majority of the three axes, the blended Taubin distance Σwᵢdᵢ/Σwᵢ deciding split votes; each vertex is where its grid edge enters the blend (else moved onto it along its normal); triangles over holes of the blend are left out (open edges there) |
 /// | glyphs     | icospheres (spheres, ellipsoids) and n-gon prisms with capped ends (cylinders), vertices on the surface |
 ///
 /// The error is measured both ways: mesh → surface at every vertex, edge midpoint and face
 /// centroid (distance along the sample's normal to what the CPU reference ray caster draws,
 /// core/reference.h; an upper bound of the Euclidean distance), and surface → mesh from rendered
-/// views (fit/surface_error.h). The resolution doubles until both are within the bound.
+/// views (fit/surface_error.h). The resolution doubles until both are within the bound, or
+/// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
+/// itself, which no resolution closes); then the smaller mesh is kept.
 #include <cstddef>
 #include <functional>
 
@@ -34,6 +36,7 @@ struct MeshDistance {
   double max = 0, rms = 0, p99 = 0;
   std::size_t samples = 0;
   std::size_t misses = 0;  ///< mesh → surface: samples whose normal line met no surface nearby
+  std::size_t beyond = 0;  ///< samples farther than the bound (misses included)
 };
 
 struct ToMeshResult {

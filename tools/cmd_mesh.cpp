@@ -24,7 +24,8 @@ struct MeshArgs {
 };
 
 nlohmann::json distance_json(const MeshDistance& d) {
-  return {{"max", d.max}, {"rms", d.rms}, {"p99", d.p99}, {"samples", d.samples}, {"misses", d.misses}};
+  return {{"max", d.max}, {"rms", d.rms}, {"p99", d.p99}, {"samples", d.samples}, {"misses", d.misses},
+          {"beyond", d.beyond}};
 }
 
 int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
