@@ -11,6 +11,7 @@
 
 #include "core/bvh.h"
 #include "core/error.h"
+#include "core/morton.h"
 #include "core/ray.h"
 #include "fit/point_index.h"
 
@@ -107,22 +108,30 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
   m.disc.assign(m.points.size(), 0.0);
   m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
+  // Visited in Morton order (neighbouring queries share the tree's cache lines: a 1M-point cloud
+  // in random order spent 39 s here). Neighbours on the same sheet only (normals within 60°):
+  // across a thin part or a gap the other sheet's points are no evidence of this sheet's spacing
+  // or boundary. The nearest `needed` are asked first, twice as many when some were filtered.
+  const std::vector<std::uint32_t> order = morton_order(m.points);
+  const std::size_t needed = std::max(options.spacing_neighbour, options.boundary_neighbours) + 1;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.points.size(), 1024), [&](const auto& r) {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> same;  // tangential offsets of same-sheet neighbours
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      // Neighbours on the same sheet only (normals within 60°): across a thin part or a gap the
-      // other sheet's points are no evidence of this sheet's spacing or boundary.
-      const std::size_t k = 2 * std::max(options.spacing_neighbour, options.boundary_neighbours) + 1;
-      m.index->nearest(m.points[i], k, nb);
+    std::vector<double> dist;
+    for (std::size_t o = r.begin(); o != r.end(); ++o) {
+      const std::size_t i = order[o];
       const Eigen::Vector3d& n = m.normals[i];
-      same.clear();
-      std::vector<double> dist;
-      for (std::size_t j = 1; j < nb.size(); ++j) {
-        if (m.normals[nb[j].first].dot(n) < 0.5) continue;
-        const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
-        same.push_back(v - n.dot(v) * n);
-        dist.push_back(std::sqrt(nb[j].second));
+      for (const std::size_t k : {needed, 2 * needed - 1}) {
+        m.index->nearest(m.points[i], k, nb);
+        same.clear();
+        dist.clear();
+        for (std::size_t j = 1; j < nb.size(); ++j) {
+          if (m.normals[nb[j].first].dot(n) < 0.5) continue;
+          const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
+          same.push_back(v - n.dot(v) * n);
+          dist.push_back(std::sqrt(nb[j].second));
+        }
+        if (same.size() + 1 >= needed || nb.size() < k) break;
       }
       if (same.empty()) continue;
       m.disc[i] = options.disc_factor * dist[std::min(options.spacing_neighbour, dist.size()) - 1];
@@ -151,11 +160,18 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
   }
   if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
   // Open edges (used by one face): their vertices and midpoints, with the tangent into the face.
-  std::map<std::pair<int, int>, int> uses;
+  // Edge uses by sorting (with a std::map here from_mesh was 6.7 % of a bunny fit profile).
+  std::vector<std::pair<int, int>> edges;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
-    for (std::size_t k = 0; k < vs.size(); ++k) ++uses[std::minmax(vs[k], vs[(k + 1) % vs.size()])];
+    for (std::size_t k = 0; k < vs.size(); ++k) edges.push_back(std::minmax(vs[k], vs[(k + 1) % vs.size()]));
   }
+  std::sort(edges.begin(), edges.end());
+  const auto open_edge = [&](int a, int b) {
+    const std::pair<int, int> key = std::minmax(a, b);
+    const auto [lo, hi] = std::equal_range(edges.begin(), edges.end(), key);
+    return hi - lo == 1;
+  };
   std::map<int, Eigen::Vector3d> vertex_inward;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
@@ -164,7 +180,7 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
     centroid /= double(vs.size());
     for (std::size_t k = 0; k < vs.size(); ++k) {
       const int a = vs[k], b = vs[(k + 1) % vs.size()];
-      if (uses[std::minmax(a, b)] != 1) continue;
+      if (!open_edge(a, b)) continue;
       const Eigen::Vector3d e = (mesh.vertices[b] - mesh.vertices[a]).normalized();
       const Eigen::Vector3d mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
       Eigen::Vector3d in = centroid - mid;

@@ -73,7 +73,8 @@ SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data
           }
         if (!interior) continue;
         ++out.data_pixels;
-        if (dist[i] < 0) ++out.holes;
+        if (dist[i] < 0 && ++out.holes <= o.keep_hole_points)
+          out.hole_points.push_back(cam.pixel_ray(x + 0.5, y + 0.5).at(data_t[i]));
       }
   }
   out.pixels = all.size();

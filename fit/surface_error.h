@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <functional>
 #include <optional>
+#include <vector>
 
 #include "core/mesh_io.h"
 #include "core/model.h"
@@ -24,6 +25,8 @@ struct SurfaceErrorOptions {
   /// Hole band: a data pixel counts only when every pixel within max(band_px, bound in pixels)
   /// of it is covered by the data too (away from the silhouette).
   double band_px = 1.0;
+  /// Keep where the first this many holes are (the data's points there), e.g. to log them.
+  std::size_t keep_hole_points = 0;
 };
 
 struct SurfaceError {
@@ -35,6 +38,7 @@ struct SurfaceError {
   std::size_t holes = 0;           ///< of those, pixels the surface left empty
   double hole_share = 0;           ///< holes / data_pixels
   bool has_holes_measure = false;  ///< data had faces
+  std::vector<Eigen::Vector3d> hole_points;  ///< up to keep_hole_points, world units
 };
 
 /// A ray caster: the distance t along the ray (unit dir) to the first visible surface.

@@ -292,9 +292,12 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
                  fit.stats.time_total, se.count_above(Eabs)};
         log::info("bench fit: {}: surface side of SLIM at E = {:g}", d.name, E);
-        set_surface(slim, measure_surface_error(fit.model, data, data_box,
-                                                {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs}),
-                    d.diagonal);
+        const SurfaceError slim_surface = measure_surface_error(
+            fit.model, data, data_box, {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs, .keep_hole_points = 8});
+        for (const auto& h : slim_surface.hole_points)
+          log::debug("bench fit: {} at E = {:g}: hole of the SLIM surface where the data is at ({:.6g}, {:.6g}, {:.6g})", d.name, E,
+                     h.x(), h.y(), h.z());
+        set_surface(slim, slim_surface, d.diagonal);
         rows.push_back(slim);
         nlohmann::json run = {{"max_error", E},
                               {"slim",

@@ -4,38 +4,17 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/morton.h"
+
 namespace quadrix::render {
-namespace {
-
-// Interleaves the low 21 bits of x with two zero bits between each.
-std::uint64_t spread3(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
-}  // namespace
 
 Chunks make_chunks(std::span<const Box3> boxes, const ChunkOptions& o) {
   Chunks c;
   const std::size_t n = boxes.size();
   if (n == 0) return c;
-  Box3 all;
-  for (const Box3& b : boxes) all.extend(b.centre());
-  const Eigen::Vector3d extent = (all.max - all.min).cwiseMax(Eigen::Vector3d::Constant(1e-300));
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d u = ((boxes[i].centre() - all.min).array() / extent.array()).cwiseMax(0.0).cwiseMin(1.0);
-    const auto q = [&](int k) { return static_cast<std::uint64_t>(u[k] * double((1 << 21) - 1)); };
-    keyed[i] = {spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2, static_cast<std::uint32_t>(i)};
-  }
-  std::sort(keyed.begin(), keyed.end());
-  c.order.resize(n);
-  for (std::size_t i = 0; i < n; ++i) c.order[i] = keyed[i].second;
+  std::vector<Eigen::Vector3d> centres(n);
+  for (std::size_t i = 0; i < n; ++i) centres[i] = boxes[i].centre();
+  c.order = morton_order(centres);
   const std::size_t size = std::max<std::size_t>(1, o.chunk_size);
   for (std::size_t s = 0; s < n; s += size) {
     const std::size_t e = std::min(n, s + size);
