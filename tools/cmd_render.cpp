@@ -42,7 +42,7 @@ struct RenderArgs {
   std::string shading = "phong", mesh, background = "255,255,255";
   ViewArgs view;  // camera options shared with `view`
   bool no_cull = false, contact_sheet = false, shadows = false, outlines = false;
-  int frames = 1, supersample = 1, turntable = 0, shadow_map = 2048;
+  int frames = 1, supersample = 1, turntable = 0, shadow_map = 0;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
@@ -469,8 +469,9 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0.5, .hi = 64}))
       ->capture_default_str();
   app->add_flag("--shadows", a->shadows, "Shadows of the key light (GL: shadow map with soft edges; cpu: shadow rays)");
-  app->add_option("--shadow-map", a->shadow_map, "Shadow map size in pixels per side (GL)")
-      ->check(number({.lo = 16, .hi = 16384}))
+  app->add_option("--shadow-map", a->shadow_map,
+                  "Shadow map size in pixels per side (GL); 0: two texels per view pixel at the scene's centre")
+      ->check(number({.lo = 0, .hi = 16384}))
       ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
   app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
