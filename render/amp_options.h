@@ -18,6 +18,10 @@ struct AmpOptions {
   /// to a root along the ray), so fast oscillations (Chmutov 50 near its cube's faces) are not
   /// stepped over; 0 gives [Singh10]'s rule alone.
   double newton_fraction = 0.5;
+  /// Remainder factor κ of the step test (core/implicit/march.h, MarchSettings::remainder): a
+  /// step without a sign change whose Taylor lines come within κ·L·h²/2 of zero is quartered,
+  /// so a pair of close roots inside one step is not stepped over; 0 turns the test off.
+  double remainder = 2;
   double min_step_fraction = 1.0 / 32;  ///< the cap never takes the step below b times this
   int bisections = 10;     ///< Algorithm 1 step 11
   int max_steps = 20000;   ///< marching steps per ray before the pixel is given up

@@ -71,7 +71,7 @@ struct Renderer::Impl {
 };
 
 ShadowMap Renderer::Impl::draw_shadow_map(const Camera& camera, const Box3& scene, const RenderOptions& o) {
-  const int size = std::clamp(o.shadow_map_size, 16, 16384);
+  const int size = o.shadow_map_size > 0 ? std::clamp(o.shadow_map_size, 16, 16384) : matched_shadow_map_size(camera, scene);
   const Camera light = shadow_light_camera(camera, scene, size);
   light_targets.resize(size, size);
   const CameraUniforms light_uniforms(light);

@@ -59,7 +59,9 @@ struct RenderOptions {
   /// Shadows of the key light (core/lighting.h) from a shadow map of every primitive kind, with
   /// adaptive percentage-closer filtering ([Sigg06] §5: 8 samples, 64 in the penumbra).
   bool shadows = false;
-  int shadow_map_size = 2048;     ///< pixels per side of the light's view
+  /// Pixels per side of the light's view; 0: kShadowTexelsPerPixel texels per view pixel at
+  /// the scene's centre (core/lighting.h, matched_shadow_map_size).
+  int shadow_map_size = 0;
   float shadow_softness = 1.5f;   ///< PCF kernel radius, shadow-map texels
   /// Black silhouette and crease lines (core/outlines.h, the CPU reference's detector); NPR
   /// shading draws them too.

@@ -327,6 +327,7 @@ double max_gradient(const implicit::CompiledImplicit& c) {
 struct Row {
   std::string surface, method, test;
   double step_divisions = 0, step = 0;
+  double remainder = -1;  // κ of the AMP remainder test (−1: not AMP)
   ImageError error;
   double ms_frame = 0, compile_ms = 0;
   std::string note;
@@ -379,6 +380,7 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
     std::vector<std::string> surfaces;
     std::vector<double> divisions{100, 200, 400, 800};
     std::vector<std::string> tests{"sign", "taylor"};
+    std::vector<double> remainders{render::AmpOptions{}.remainder};
     std::string out = ".";
     std::string context = "auto";
     int size = 512;
@@ -398,6 +400,10 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
   app->add_option("--tests", a->tests, "Root tests to run (sign, taylor)")
       ->delimiter(',')
       ->check(CLI::IsMember({"sign", "taylor"}))
+      ->capture_default_str();
+  app->add_option("--remainders", a->remainders, "Remainder factors of the AMP step test (0: off) to run")
+      ->delimiter(',')
+      ->check(number({.lo = 0, .hi = 1e3}))
       ->capture_default_str();
   app->add_option("--out", a->out, "Folder for bench_implicit.{csv,json,png} and the POV-Ray scenes")
       ->capture_default_str();
@@ -457,9 +463,11 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
       const double diagonal = g.surface.bounds.diagonal();
       std::optional<double> best_amp_ms;
       for (const std::string& test : a->tests)
-        for (double div : a->divisions) {
+        for (double div : a->divisions)
+          for (double kappa : a->remainders) {
           render::AmpOptions o;
           o.step_divisions = div;
+          o.remainder = kappa;
           o.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
           const auto c0 = std::chrono::steady_clock::now();
           renderer.set_model(m, o);
@@ -471,12 +479,13 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
           const render::GBuffer gb = renderer.read_gbuffer();
           Row r;
           r.surface = g.name, r.method = "amp", r.test = test, r.step_divisions = div, r.step = diagonal / div;
+          r.remainder = kappa;
           r.ms_frame = ms[ms.size() / 2];
           // Program generation and compile, plus the driver's JIT in the first frame.
           r.compile_ms = std::max(0.0, set_ms - r.ms_frame);
           r.error = image_error(ref, band, gb.coverage, gb.depth);
-          log::info("bench implicit: {} AMP {} b = d/{:g}: {:.1f} ms, mismatch {:.4f}, depth {:.4f} (first {:.0f} ms)",
-                    g.name, test, div, r.ms_frame, r.error.coverage_mismatch, r.error.depth_error, first);
+          log::info("bench implicit: {} AMP {} b = d/{:g} κ = {:g}: {:.1f} ms, mismatch {:.4f}, depth {:.4f} (first {:.0f} ms)",
+                    g.name, test, div, kappa, r.ms_frame, r.error.coverage_mismatch, r.error.depth_error, first);
           if (r.error.coverage_mismatch <= 0.005 && r.error.depth_error <= 0.005)
             best_amp_ms = std::min(best_amp_ms.value_or(INFINITY), r.ms_frame);
           rows.push_back(r);
@@ -536,12 +545,13 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
     if (n) j["geometric_mean_ratio_amp_to_isosurface"] = std::exp(log_sum / n);
 
     write_file_atomically(out_dir / "bench_implicit.csv", [&](std::ostream& os) {
-      os << "surface,method,test,step_divisions,step,coverage_mismatch,depth_error_share,depth_mean_rel,"
+      os << "surface,method,test,step_divisions,step,remainder,coverage_mismatch,depth_error_share,depth_mean_rel,"
             "reference_covered,ms_frame,compile_ms,note\n";
       for (const auto& r : rows)
-        os << fmt::format("{},{},{},{},{},{},{},{:.1f},{:.1f},{}\n", r.surface, r.method, r.test,
+        os << fmt::format("{},{},{},{},{},{},{},{},{:.1f},{:.1f},{}\n", r.surface, r.method, r.test,
                           r.step_divisions > 0 ? fmt::format("{:g}", r.step_divisions) : "",
                           r.step > 0 ? fmt::format("{:.6g}", r.step) : "",
+                          r.remainder >= 0 ? fmt::format("{:g}", r.remainder) : "",
                           r.note.empty() ? fmt::format("{:.6g},{:.6g},{:.3g}", r.error.coverage_mismatch,
                                                        r.error.depth_error, r.error.depth_mean)
                                          : ",,",
@@ -551,11 +561,12 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
     write_png(draw_plot(rows), out_dir / "bench_implicit.png");
     report.json["bench_implicit"] = j;
     if (!common.quiet) {
-      std::cout << fmt::format("{:<14} {:<18} {:<7} {:>6} {:>10} {:>10} {:>11} {:>10}  {}\n", "surface", "method",
-                               "test", "b=d/", "mismatch", "depth>1e-4", "ms/frame", "compile ms", "note");
+      std::cout << fmt::format("{:<14} {:<18} {:<7} {:>6} {:>4} {:>10} {:>10} {:>11} {:>10}  {}\n", "surface",
+                               "method", "test", "b=d/", "κ", "mismatch", "depth>1e-4", "ms/frame", "compile ms", "note");
       for (const auto& r : rows)
-        std::cout << fmt::format("{:<14} {:<18} {:<7} {:>6} {:>10} {:>10} {:>11.1f} {:>10.1f}  {}\n", r.surface,
+        std::cout << fmt::format("{:<14} {:<18} {:<7} {:>6} {:>4} {:>10} {:>10} {:>11.1f} {:>10.1f}  {}\n", r.surface,
                                  r.method, r.test, r.step_divisions > 0 ? fmt::format("{:g}", r.step_divisions) : "-",
+                                 r.remainder >= 0 ? fmt::format("{:g}", r.remainder) : "-",
                                  r.note.empty() ? fmt::format("{:.5f}", r.error.coverage_mismatch) : "-",
                                  r.note.empty() ? fmt::format("{:.5f}", r.error.depth_error) : "-", r.ms_frame,
                                  r.compile_ms, r.note);

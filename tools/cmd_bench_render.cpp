@@ -29,7 +29,7 @@ namespace {
 
 struct Row {
   std::string name;
-  double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0;
+  double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0, ms_shadows = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
   std::uint64_t chunks = 0, chunks_culled = 0, culled_in_chunks = 0;  // tetrahedron chunks
   std::uint64_t chunks_occluded = 0, occluded_in_chunks = 0;
@@ -40,8 +40,9 @@ struct Row {
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
             double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false,
-            bool tet_early_depth = true, bool tet_occlusion = true) {
+            bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0) {
   render::RenderOptions o;
+  o.shadow_map_size = shadow_map_size;
   o.tet_occlusion = tet_occlusion;
   o.cull = cull;
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
@@ -72,16 +73,18 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.ms_min = ms.front();
   // Per-pass split, from separate frames with a glFinish after each pass.
   o.time_passes = true;
-  std::vector<double> c, geo, sl, s;
+  std::vector<double> c, geo, sl, s, shadow;
   for (int f = 0; f < std::max(3, frames / 2); ++f) {
     const auto st = r.draw(cam, o);
     c.push_back(st.ms_clear), geo.push_back(st.ms_geometry), sl.push_back(st.ms_slim), s.push_back(st.ms_shading);
+    shadow.push_back(st.ms_shadows);
   }
   const auto med = [](std::vector<double>& v) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
   };
   row.ms_clear = med(c), row.ms_geometry = med(geo), row.ms_slim = med(sl), row.ms_shading = med(s);
+  row.ms_shadows = med(shadow);
   return row;
 }
 
@@ -161,6 +164,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
   struct Args {
     std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline;
     int frames = 10;
+    int shadow_map = 0;
     double azimuth = 30, elevation = 20;
   };
   auto a = std::make_shared<Args>();
@@ -172,6 +176,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
   app->add_option("--size", a->size, "Image size WxH");
   app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(number({.lo = 1, .hi = 1000}));
   app->add_option("--azimuth", a->azimuth, "Camera azimuth (degrees)")->check(finite());
+  app->add_option("--shadow-map", a->shadow_map, "Shadow map side of the shadows+outlines rows (0: as render)")
+      ->check(number({.lo = 0, .hi = 16384}));
   app->add_option("--elevation", a->elevation, "Camera elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const auto [w, h] = parse_size(a->size);
@@ -200,7 +206,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
                           if (!model.glyphs.empty())
                             rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, true));
+                                                   slim_offset_of(model), true, true, true, true, a->shadow_map));
                           if (!model.tets.empty()) {  // without chunk occlusion; with each fragment writing its hit's depth
                             rows.push_back(measure("quadrics, no occlusion", r, cam, true, a->frames,
                                                    slim_offset_of(model), true, false, true, false));
@@ -219,7 +225,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           r.set_mesh(*mesh);
                           rows.push_back(measure("tessellated glyphs", r, cam, false, a->frames));
                           rows.push_back(measure("tessellated, shadows+outlines", r, cam, false, a->frames,
-                                                 SlimBlendOptions{}.offset, true, true));
+                                                 SlimBlendOptions{}.offset, true, true, true, true, a->shadow_map));
                           mesh.reset();
                         }
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);
@@ -243,7 +249,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
                                                {"ms_geometry", r.ms_geometry}, {"ms_slim", r.ms_slim},
-                                               {"ms_shading", r.ms_shading},
+                                               {"ms_shading", r.ms_shading}, {"ms_shadows", r.ms_shadows},
                                                {"primitives", r.primitives},
                                                {"culled", r.culled}, {"fragment_invocations", r.fragments},
                                                {"covered_pixels", r.covered},
@@ -260,9 +266,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                              r.chunks, r.chunks_culled, r.culled_in_chunks, r.chunks_occluded,
                                              r.occluded_in_chunks);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
-                                      "shading %.1f)  %7llu culled  %6.2f invocations/covered px",
+                                      "shading %.1f, shadow map %.1f)  %7llu culled  %6.2f invocations/covered px",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
-                                      r.ms_shading, (unsigned long long)r.culled, r.invocations_per_covered());
+                                      r.ms_shading, r.ms_shadows, (unsigned long long)r.culled, r.invocations_per_covered());
                           if (!model.slims.empty()) std::printf("  waste %.1f %%", 100.0 * r.slim_waste);
                           if (!model.glyphs.empty()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
                           if (r.chunks)

@@ -42,12 +42,13 @@ struct RenderArgs {
   std::string shading = "phong", mesh, background = "255,255,255";
   ViewArgs view;  // camera options shared with `view`
   bool no_cull = false, contact_sheet = false, shadows = false, outlines = false;
-  int frames = 1, supersample = 1, turntable = 0, shadow_map = 2048;
+  int frames = 1, supersample = 1, turntable = 0, shadow_map = 0;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
   std::vector<std::string> params;
   double radius = 0, amp_step = 0, amp_tau1 = 0, amp_tau2 = 0, amp_tau3 = 0;
+  double amp_remainder = render::AmpOptions{}.remainder;
   // Seeing the error: --colour-by, its range, and a point cloud drawn over the model.
   std::string colour_by = "none", colour_range, points;
   double point_size = 1.5;
@@ -362,6 +363,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     auto context = render::create_context(a.context, {.width = width, .height = height});
     render::Renderer renderer(*context);
     render::AmpOptions amp{.step = a.amp_step, .tau1 = a.amp_tau1, .tau2 = a.amp_tau2, .tau3 = a.amp_tau3};
+    amp.remainder = a.amp_remainder;
     const std::string test = a.amp_test != "auto" ? a.amp_test : implicit_surface ? implicit_surface->second : "sign";
     amp.test = test == "taylor" ? render::RootTest::taylor : render::RootTest::sign;
     renderer.set_model(model, amp);
@@ -469,8 +471,9 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0.5, .hi = 64}))
       ->capture_default_str();
   app->add_flag("--shadows", a->shadows, "Shadows of the key light (GL: shadow map with soft edges; cpu: shadow rays)");
-  app->add_option("--shadow-map", a->shadow_map, "Shadow map size in pixels per side (GL)")
-      ->check(number({.lo = 16, .hi = 16384}))
+  app->add_option("--shadow-map", a->shadow_map,
+                  "Shadow map size in pixels per side (GL); 0: two texels per view pixel at the scene's centre")
+      ->check(number({.lo = 0, .hi = 16384}))
       ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
   app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
@@ -492,6 +495,10 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--amp-tau1", a->amp_tau1, "AMP proximity threshold τ1 on |S| (default: 0.05 · median |S| over the bounds)")->check(positive())->default_str("");
   app->add_option("--amp-tau2", a->amp_tau2, "AMP far threshold τ2 on |S| (default 2·τ1)")->check(positive())->default_str("");
   app->add_option("--amp-tau3", a->amp_tau3, "AMP horizon threshold τ3 on |∇S·D| (default: 0.1 · median |∇S|)")->check(positive())->default_str("");
+  app->add_option("--amp-remainder", a->amp_remainder,
+                  "AMP remainder factor κ: a step whose Taylor lines come within κ·|ΔS′|·s/8 of 0 is quartered (0: off)")
+      ->check(number({.lo = 0, .hi = 1e3}))
+      ->capture_default_str();
   app->add_option("--amp-test", a->amp_test, "AMP root test: auto (the gallery's choice, else sign), sign or taylor")
       ->check(CLI::IsMember({"auto", "sign", "taylor"}));
   commands.push_back({app, [a](const CommonOptions& c, Report& r) {

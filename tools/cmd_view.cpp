@@ -1,6 +1,6 @@
 // quadrix view MODEL: an interactive GLFW window. Left drag orbits about the up axis, right drag
 // pans, the wheel zooms; C toggles culling, S cycles the shading, B the SLIM ball outlines (red:
-// culled), K saves the camera as JSON, P a screenshot, R resets the view, Esc quits. The title
+// culled), H the key light's shadows, L the silhouette and crease lines, K saves the camera as JSON, P a screenshot, R resets the view, Esc quits. The title
 // shows the frame time. The first view is the one `render` gives for the same options (tight
 // framing, --up, --view, --camera, …). --frames N renders N frames and exits (scripts and tests),
 // --press KEYS presses keys after the first frame. --animate NAME=FROM:TO:SECONDS sweeps a
@@ -87,6 +87,8 @@ struct ViewState {
   void key(int key) {
     if (key == GLFW_KEY_C) options.cull = !options.cull;
     if (key == GLFW_KEY_B) options.slim_outlines = !options.slim_outlines;
+    if (key == GLFW_KEY_H) options.shadows = !options.shadows;
+    if (key == GLFW_KEY_L) options.outlines = !options.outlines;
     if (key == GLFW_KEY_S) options.shading = static_cast<render::Shading>((static_cast<int>(options.shading) + 1) % 3);
     if (key == GLFW_KEY_R) camera = start;
     if (key == GLFW_KEY_K) save_camera = true;
@@ -141,6 +143,7 @@ void add_view(CLI::App& root, Commands& commands) {
     std::vector<std::string> animate;
     bool no_cull = false;
     bool outlines = false;
+    bool shadows = false, lines = false;
   };
   auto a = std::make_shared<Args>();
   app->add_option("MODEL", a->model, "Model file (.qxm), or a molecule (.pdb, .cif); optional with --surface");
@@ -156,6 +159,8 @@ void add_view(CLI::App& root, Commands& commands) {
       ->capture_default_str();
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
   app->add_flag("--outlines", a->outlines, "Start with the SLIM ball outlines shown (key B)");
+  app->add_flag("--shadows", a->shadows, "Start with the key light's shadows (key H), as render --shadows");
+  app->add_flag("--lines", a->lines, "Start with silhouette and crease lines (key L), as render --outlines");
   app->add_option("--frames", a->frames, "Render this many frames, then exit (0: until closed)")
       ->check(non_negative())
       ->capture_default_str();
@@ -202,6 +207,8 @@ void add_view(CLI::App& root, Commands& commands) {
                         ViewState st;
                         st.options.cull = !a->no_cull;
                         st.options.slim_outlines = a->outlines;
+                        st.options.shadows = a->shadows;
+                        st.options.outlines = a->lines;
                         st.options.shading = a->shading == "envmap" ? render::Shading::envmap
                                              : a->shading == "npr"  ? render::Shading::npr
                                                                     : render::Shading::phong;

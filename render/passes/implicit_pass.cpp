@@ -42,7 +42,10 @@ AmpSettings amp_settings(const ImplicitSurface& surface, const AmpOptions& o) {
   s.tau3 = o.tau3 > 0 ? o.tau3 : 0.1 * median(slopes);
   s.taylor = o.test == RootTest::taylor;
   s.newton_fraction = std::max(o.newton_fraction, 0.0);
+  s.remainder = std::max(o.remainder, 0.0);
   s.min_step = s.step * o.min_step_fraction;
+  s.bisections = o.bisections;
+  s.max_steps = o.max_steps;
   return s;
 }
 
@@ -97,9 +100,10 @@ void ImplicitPass::run(const Frame& f) {
     p.set("u_tau", Eigen::Vector3f(float(s.amp.tau1), float(s.amp.tau2), float(s.amp.tau3)));
     p.set("u_taylor", s.amp.taylor ? 1 : 0);
     p.set("u_newton", static_cast<float>(s.amp.newton_fraction));
+    p.set("u_remainder", static_cast<float>(s.amp.remainder));
     p.set("u_min_step", static_cast<float>(s.amp.min_step));
-    p.set("u_bisections", options_.bisections);
-    p.set("u_max_steps", options_.max_steps);
+    p.set("u_bisections", s.amp.bisections);
+    p.set("u_max_steps", s.amp.max_steps);
     p.set("u_colour", s.colour);
     p.set("u_id", primitive_id(PrimitiveKind::implicit, i));
     for (std::size_t k = 0; k < s.parameters.size(); ++k) p.set(fmt::format("S_p{}", k).c_str(), s.parameters[k]);

@@ -10,18 +10,15 @@
 #include <string>
 #include <vector>
 
+#include "core/implicit/march.h"
 #include "core/model.h"
 #include "render/amp_options.h"
 #include "render/passes/frame.h"
 
 namespace quadrix::render {
 
-/// What the march of one surface uses, after defaults were derived.
-struct AmpSettings {
-  double step = 0, tau1 = 0, tau2 = 0, tau3 = 0;
-  double newton_fraction = 0, min_step = 0;
-  bool taylor = false;
-};
+/// What the march of one surface uses, after defaults were derived (the CPU march takes the same).
+using AmpSettings = implicit::MarchSettings;
 
 /// Derives the AMP settings of a surface (see above); RootTest::automatic is the sign test.
 /// \throws InvalidInput as implicit::compile.

@@ -17,7 +17,8 @@ uniform float u_step;        // base step b, world units
 uniform vec3 u_tau;          // τ₁ τ₂ τ₃ of eq. 2
 uniform int u_taylor;        // 0: sign test, 1: Taylor test
 uniform float u_newton;      // step cap: this fraction of |S|/|∇S·D| (0: off)
-uniform float u_min_step;    // the cap's floor
+uniform float u_remainder;   // κ of the remainder test (0: off)
+uniform float u_min_step;    // floor of the cap and of quartering
 uniform int u_bisections;
 uniform int u_max_steps;
 uniform uint u_colour;
@@ -47,7 +48,9 @@ void main() {
   float f0 = g0.x, df0 = dot(g0.yzw, d);
   bool found = false;
   float a = 0.0, b = 0.0, fa = 0.0, fb = 0.0;
-  for (int i = 0; i < u_max_steps && t < te; ++i) {
+  // The same maths as the CPU march, core/implicit/march.cpp (march_step, step_is_suspect).
+  int steps = 0;
+  while (steps < u_max_steps && t < te) {
     // Step size, eq. 2: proximity |S| and horizon |∇S·D|.
     float s = u_step;
     float af = abs(f0);
@@ -59,9 +62,22 @@ void main() {
       float cap = isnan(df0) || isinf(df0) ? 0.0 : u_newton * af / abs(df0);
       s = max(min(s, cap), min(s, u_min_step));
     }
-    float t1 = min(t + s, te);
-    vec4 g1 = S_grad(u_eye + t1 * d);
-    float f1 = g1.x, df1 = dot(g1.yzw, d);
+    float t1, f1, df1;
+    for (;;) {
+      t1 = min(t + s, te);
+      vec4 g1 = S_grad(u_eye + t1 * d);
+      f1 = g1.x, df1 = dot(g1.yzw, d);
+      ++steps;
+      if (sign_change(f0, f1) || steps >= u_max_steps || s <= u_min_step || u_remainder <= 0.0) break;
+      // Remainder test: the Taylor lines from both ends to the middle must stay on the ends'
+      // sign by κ·L·h²/2, L = |ΔF′|/s estimating |F″|; else a pair of roots may hide here.
+      float w = t1 - t, h = 0.5 * w;
+      float sg = f0 < 0.0 ? -1.0 : 1.0;
+      float margin = 0.5 * u_remainder * abs(df1 - df0) / w * h * h;
+      float q = sg * (f0 + df0 * h) - margin, r = sg * (f1 - df1 * h) - margin;
+      if (q > 0.0 && r > 0.0) break;
+      s = max(0.25 * s, u_min_step);
+    }
     if (sign_change(f0, f1)) {
       a = t, b = t1, fa = f0, fb = f1;
       found = true;

@@ -1,9 +1,13 @@
 // The CPU reference ray caster against analytic truth.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "core/bounds.h"
+#include "core/camera.h"
+#include "core/lighting.h"
 #include "core/reference.h"
 #include "core/synth.h"
 
@@ -186,5 +190,34 @@ TEST(Reference, CylinderCapsAndEllipsoidOnSurface) {
         }
       }
     EXPECT_GT(covered, 500) << kind;
+  }
+}
+
+// The shadow light's view fits the box's corners (none outside, one near the edge) and never
+// widens past the bounding sphere; the default map size follows the view's pixel size.
+TEST(ShadowLight, FrustumFitsTheBoxAndTheMapFollowsTheView) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1), ext(0.05, 2);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Eigen::Vector3d c(3 * u(rng), 3 * u(rng), 3 * u(rng)), h(ext(rng), ext(rng), ext(rng));
+    const Box3 box{c - h, c + h};
+    const Camera view = frame_box(box, {.azimuth_deg = 180 * u(rng), .elevation_deg = 80 * u(rng), .width = 512, .height = 512});
+    const Camera light = shadow_light_camera(view, box, 1024);
+    const Eigen::Matrix4d P = light.projection() * light.view();
+    double widest = 0;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d p((k & 1 ? box.max : box.min).x(), (k & 2 ? box.max : box.min).y(),
+                              (k & 4 ? box.max : box.min).z());
+      const Eigen::Vector4d q = P * p.homogeneous();
+      widest = std::max({widest, std::abs(q.x() / q.w()), std::abs(q.y() / q.w())});
+      EXPECT_LT(std::abs(q.z() / q.w()), 1.0);
+    }
+    EXPECT_LT(widest, 1.0) << "a corner outside the light's view";
+    EXPECT_GT(widest, 0.95) << "the light's view is not tight";
+    EXPECT_LE(light.fov_y_deg, 2.0 * std::asin(1.02 / kShadowLightDistance) * 180.0 / 3.14159265358979 + 1e-9);
+    Camera big = view;
+    big.width = big.height = 1024;
+    const int n = matched_shadow_map_size(view, box), m = matched_shadow_map_size(big, box);
+    if (n > 256 && m < 4096) EXPECT_NEAR(double(m) / n, 2.0, 0.01);
   }
 }

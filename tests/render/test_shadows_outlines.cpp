@@ -79,8 +79,8 @@ Model blob_volume_scene() {
   return convert_volume(v, o).model;
 }
 
-Camera camera_for(const Model& m) {
-  return frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 25, .width = kSize, .height = kSize});
+Camera camera_for(const Model& m, int size = kSize) {
+  return frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 25, .width = size, .height = size});
 }
 
 int channel_sum(const Image8& img, std::size_t i) { return img.rgba[4 * i] + img.rgba[4 * i + 1] + img.rgba[4 * i + 2]; }
@@ -115,8 +115,9 @@ protected:
     return renderer_->read_colour();
   }
 
-  ShadowAgreement shadows(const Model& m) {
-    const Camera cam = camera_for(m);
+  // map_size 0: the default, two texels per view pixel.
+  ShadowAgreement shadows(const Model& m, int size = kSize, int map_size = 1024) {
+    const Camera cam = camera_for(m, size);
     const ReferenceScene scene(m);
     const ReferenceImage ref = render_reference(scene, cam, {.shadows = true});
     // What the key light adds where lit: the reference shaded fully lit and fully dark.
@@ -124,7 +125,7 @@ protected:
     std::fill(lit.key_light.begin(), lit.key_light.end(), 1.0f);
     std::fill(dark.key_light.begin(), dark.key_light.end(), 0.0f);
     const Image8 cpu_lit = shade_phong(lit, cam), cpu_dark = shade_phong(dark, cam);
-    const Image8 gl_plain = draw(m, cam, {}), gl_shadow = draw(m, cam, {.shadows = true, .shadow_map_size = 1024});
+    const Image8 gl_plain = draw(m, cam, {}), gl_shadow = draw(m, cam, {.shadows = true, .shadow_map_size = map_size});
     const int w = ref.width, h = ref.height;
     std::vector<std::uint8_t> boundary(ref.coverage.size(), 0);
     for (int y = 0; y < h; ++y)
@@ -215,6 +216,12 @@ TEST_F(ShadowsOutlines, GlyphShadowsMatchShadowRays) { expect_shadows_agree(shad
 TEST_F(ShadowsOutlines, TetPatchShadowsMatchShadowRays) { expect_shadows_agree(shadows(tet_scene())); }
 TEST_F(ShadowsOutlines, SlimShadowsMatchShadowRays) { expect_shadows_agree(shadows(slim_scene())); }
 TEST_F(ShadowsOutlines, VolumeShadowsMatchShadowRays) { expect_shadows_agree(shadows(volume_scene())); }
+// The default map (two texels per view pixel, fitted to the scene's box) at a view size where
+// it is not clamped: the same tolerance as the 8-texel maps above.
+TEST_F(ShadowsOutlines, DefaultMapSizeMatchesShadowRays) {
+  expect_shadows_agree(shadows(glyph_scene(), 512, 0));
+  expect_shadows_agree(shadows(volume_scene(), 512, 0));
+}
 
 TEST_F(ShadowsOutlines, GlyphOutlinesMatchReference) { expect_outlines_agree(outlines(glyph_scene())); }
 TEST_F(ShadowsOutlines, TetPatchOutlinesMatchReference) { expect_outlines_agree(outlines(tet_scene())); }

@@ -130,3 +130,23 @@ TEST(View, CameraOptionsAndKeysSaveACameraThatRenderReproduces) {
   ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/other.png --size 160x120 --view front --quiet"), 0);
   EXPECT_LT(same_share(shot, quadrix::read_png(dir / "other.png")), 0.95);
 }
+
+// Keys H and L turn on the shadows and the lines: the window then shows what render --shadows
+// --outlines draws, and not the plain picture (the comparison can fail).
+TEST(View, ShadowAndLineKeysMatchRender) {
+  if (sh("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  ScratchDir dir("view-effects");
+  const std::string q = QUADRIX_BINARY, d = dir.path().string();
+  const std::string model = d + "/g.qxm";
+  ASSERT_EQ(sh(q + " synth glyphs --count 30 -o " + model), 0);
+  const std::string view_args = " --size 160x120 --azimuth 30 --elevation 25";
+  const int rc = sh("xvfb-run -a -s '-screen 0 640x480x24' " + q + " view " + model + view_args +
+                    " --frames 3 --press hl --screenshot " + d + "/window.png --quiet");
+  if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
+  ASSERT_EQ(rc, 0);
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/effects.png" + view_args + " --shadows --outlines --quiet"), 0);
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/plain.png" + view_args + " --quiet"), 0);
+  const auto shot = quadrix::read_png(dir / "window.png");
+  EXPECT_GE(same_share(shot, quadrix::read_png(dir / "effects.png")), 0.999);
+  EXPECT_LT(same_share(shot, quadrix::read_png(dir / "plain.png")), 0.98);
+}
