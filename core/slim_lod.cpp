@@ -68,6 +68,7 @@ using SampleTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adap
                                                        3, std::uint32_t>;
 
 constexpr int kSampleGrid = 2;
+constexpr std::size_t kNearest = 8;  // nearest leaves whose quadrics refine a distance
 
 // Taubin distance from a ball's quadric to a world point, world units (capped at 2R: a flat spot
 // of g away from its zero set).
@@ -77,8 +78,8 @@ double ball_distance(const SlimPatch& ball, const Eigen::Vector3d& p) {
 }
 
 // Two-sided, per ball: (1) the leaves' zero-set samples below it that lie in its ball, to its
-// quadric; (2) its own zero-set samples to the nearest leaf sample (refined by that leaf's
-// quadric when the sample lies in the leaf's ball): spurious sheets of a merged ball count.
+// quadric; (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
+// of the 8 nearest leaves whose ball holds the sample: spurious sheets of a merged ball count.
 std::vector<double> measure_errors(const Model& m, const Tree& t) {
   const SlimHierarchy& h = m.slim_hierarchy;
   const std::size_t n = h.size();
@@ -111,9 +112,14 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
   });
   for (const auto& p : partial)
     for (std::size_t b = 0; b < n; ++b) err[b] = std::max(err[b], p[b]);
-  // (2) each merged ball's zero set → the leaves' surface.
+  // (2) each merged ball's zero set → the leaves' surface: the nearest leaf sample, or nearer, the
+  // quadric of one of the nearest leaves whose ball holds the point.
   SampleTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
+  SampleCloud leaf_centres;
+  for (std::int32_t leaf : leaves) leaf_centres.points.push_back(slim_ball(m, static_cast<std::size_t>(leaf)).centre);
+  SampleTree centre_tree(3, leaf_centres, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  centre_tree.buildIndex();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, interior.size(), 64), [&](const auto& range) {
     std::vector<SlimSurfaceSample> samples;
     for (std::size_t k = range.begin(); k < range.end(); ++k) {
@@ -126,8 +132,13 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
         double d2 = 0;
         tree.knnSearch(s.point.data(), 1, &j, &d2);
         double d = std::sqrt(d2);
-        const SlimPatch& leaf = slim_ball(m, static_cast<std::size_t>(owner[j]));
-        if ((s.point - leaf.centre).squaredNorm() <= leaf.radius * leaf.radius) d = std::min(d, ball_distance(leaf, s.point));
+        std::uint32_t near[kNearest];
+        double near_d2[kNearest];
+        const std::size_t found = centre_tree.knnSearch(s.point.data(), kNearest, near, near_d2);
+        for (std::size_t q = 0; q < found; ++q) {
+          const SlimPatch& leaf = slim_ball(m, static_cast<std::size_t>(leaves[near[q]]));
+          if (near_d2[q] <= leaf.radius * leaf.radius) d = std::min(d, ball_distance(leaf, s.point));
+        }
         worst = std::max(worst, d);
       }
       err[b] = std::max(err[b], worst);  // one writer per ball
