@@ -11,11 +11,13 @@
 #include <set>
 
 #include "core/error.h"
+#include "core/model_io.h"
 #include "core/reference.h"
 #include "core/slim_lod.h"
 #include "render/renderer.h"
 #include "tests/render/gl_compare.h"
 #include "tests/render/gl_test.h"
+#include "tests/tools/cli_support.h"
 
 using namespace quadrix;
 using Eigen::Vector3d;
@@ -252,4 +254,28 @@ TEST_F(GlSlimLod, HalfAPixelStaysCloseToFullDetail) {
   std::printf("balls: full %llu, 0.5 px %llu, 8 px %llu; symmetric difference 0.5 px %.4f, 8 px %.4f\n",
               (unsigned long long)full_balls, (unsigned long long)lod_balls, (unsigned long long)coarse_balls, d_lod,
               d_coarse);
+}
+
+// The CLI: both backends choose the same cut for the same view; 0 px draws every leaf.
+class SlimLodCli : public test_support::TempDir {};
+
+TEST_F(SlimLodCli, RenderReportsTheSameCutOnBothBackends) {
+  using test_support::q;
+  const auto model = dir_ / "sphere.qxm";
+  write_model(sphere_hierarchy(4096, 0.004, 0.012), model, {});
+  const auto balls = [&](const std::string& backend, const std::string& pixel_error) -> long {
+    const auto report = dir_ / (backend + pixel_error + ".json");
+    const auto r = test_support::quadrix_run("render " + q(model) + " -o " + q(dir_ / "out.png") + " --backend " + backend +
+                                             " --size 96x96 --pixel-error " + pixel_error + " --report " + q(report));
+    if (r.code == 6 && backend == "gl") return -2;  // no usable GL context here (exit code of a GL error)
+    EXPECT_EQ(r.code, 0) << r.out;
+    if (r.code != 0) return -1;
+    return test_support::read_json(report)["render"]["slim_lod"]["balls"].get<long>();
+  };
+  const long cpu = balls("cpu", "0.5"), gl = balls("gl", "0.5");
+  EXPECT_GT(cpu, 0);
+  EXPECT_LT(cpu, 4096);
+  if (gl == -2) GTEST_SKIP() << "no OpenGL context for the GL backend";
+  EXPECT_EQ(gl, cpu);
+  EXPECT_EQ(balls("gl", "0"), 4096);
 }
