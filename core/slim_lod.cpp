@@ -68,6 +68,7 @@ using SampleTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adap
                                                        3, std::uint32_t>;
 
 constexpr int kSampleGrid = 2;
+constexpr double kCore = 0.5;        // a leaf's core: r ≤ ½, where its weight w(r) = exp(−8r²) dominates
 constexpr std::size_t kNearest = 8;  // nearest leaves whose quadrics refine a distance
 
 // Taubin distance from a ball's quadric to a world point, world units (capped at 2R: a flat spot
@@ -77,8 +78,8 @@ double ball_distance(const SlimPatch& ball, const Eigen::Vector3d& p) {
   return std::isfinite(d) ? std::min(d, 2 * ball.radius) : 2 * ball.radius;
 }
 
-// Two-sided, per ball: (1) the leaves' zero-set samples below it that lie in its ball, to its
-// quadric; (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
+// Two-sided, per ball, against the leaves directly: (1) the leaves' zero-set samples below it that
+// lie in its ball, to its quadric (core samples outside it, by their distance to the ball); (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
 // of the 8 nearest leaves whose ball holds the sample: spurious sheets of a merged ball count.
 std::vector<double> measure_errors(const Model& m, const Tree& t) {
   const SlimHierarchy& h = m.slim_hierarchy;
@@ -106,8 +107,11 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
       for (const SlimSurfaceSample& s : per_leaf[k])
         for (std::int32_t a = h.parent[static_cast<std::size_t>(leaves[k])]; a >= 0; a = h.parent[static_cast<std::size_t>(a)]) {
           const SlimPatch& ball = slim_ball(m, static_cast<std::size_t>(a));
-          if ((s.point - ball.centre).squaredNorm() > ball.radius * ball.radius) continue;
-          e[static_cast<std::size_t>(a)] = std::max(e[static_cast<std::size_t>(a)], ball_distance(ball, s.point));
+          const double outside = (s.point - ball.centre).norm() - ball.radius;
+          // A sample of the leaf's core (where its weight dominates) outside the ball is a hole
+          // the ball leaves: it counts by its distance to the ball. Rim samples only count inside.
+          const double d = outside <= 0 ? ball_distance(ball, s.point) : s.r <= kCore ? outside : 0.0;
+          e[static_cast<std::size_t>(a)] = std::max(e[static_cast<std::size_t>(a)], d);
         }
   });
   for (const auto& p : partial)
@@ -144,11 +148,6 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
       err[b] = std::max(err[b], worst);  // one writer per ball
     }
   });
-  // At least the children's: a ball never claims to be closer to the leaves than what it replaces.
-  for (auto it = t.order.rbegin(); it != t.order.rend(); ++it) {
-    const auto b = static_cast<std::size_t>(*it);
-    if (h.parent[b] >= 0) err[static_cast<std::size_t>(h.parent[b])] = std::max(err[static_cast<std::size_t>(h.parent[b])], err[b]);
-  }
   return err;
 }
 

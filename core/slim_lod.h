@@ -28,12 +28,12 @@ struct SlimLodCut {
 
 /// Each ball's error as a distance, world units. A fitted hierarchy (.qxm) stores distances and
 /// they are returned as stored. Kanai's .slim2t stores a fitting energy (metadata
-/// `source_format slim2t`), so there the distance is measured, two-sided, on zero-set samples
-/// (core/slim.h sample_slim_patch, a 2×2 lattice per ball): the largest of (1) the Taubin distance
-/// |g|/‖∇g‖ from the ball's quadric to its leaves' samples inside its ball and (2) the distance
-/// from the ball's own samples to the nearest leaf sample (or, when nearer, to the quadric of
-/// one of the 8 nearest leaves whose ball holds the sample);
-/// at least the largest of its children's; leaves 0.
+/// `source_format slim2t`), so there the distance is measured, two-sided, against the leaves, on
+/// zero-set samples (core/slim.h sample_slim_patch, a 2×2 lattice per ball): the largest of
+/// (1) the Taubin distance |g|/‖∇g‖ from the ball's quadric to its leaves' samples inside its
+/// ball, and the distance to the ball of their core samples (r ≤ ½) outside it (a hole), and
+/// (2) the distance from the ball's own samples to the nearest leaf sample (or, when nearer, to
+/// the quadric of one of the 8 nearest leaves whose ball holds the sample). Leaves 0.
 /// \throws InvalidInput for an invalid hierarchy (validate_slim_hierarchy).
 std::vector<double> slim_lod_errors(const Model& model);
 
