@@ -182,11 +182,13 @@ SlimLod::SlimLod(const Model& m) {
   }
   Tree t = make_tree(h);
   error_ = errors_of(m, t);
+  reach_ = radius_;
   for (auto it = t.order.rbegin(); it != t.order.rend(); ++it) {
     const auto b = static_cast<std::size_t>(*it);
     if (h.parent[b] >= 0) {
-      auto& hp = height_[static_cast<std::size_t>(h.parent[b])];
-      hp = std::max(hp, height_[b] + 1u);
+      const auto p = static_cast<std::size_t>(h.parent[b]);
+      height_[p] = std::max(height_[p], height_[b] + 1u);
+      reach_[p] = std::max(reach_[p], (centre_[b] - centre_[p]).norm() + reach_[b]);
     }
     levels_ = std::max<std::size_t>(levels_, height_[b] + 1);
   }
@@ -209,6 +211,17 @@ SlimLodCut SlimLod::cut(const Camera& camera, const SlimLodOptions& options) con
   const double focal = 0.5 * camera.height / std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
   const Eigen::Vector3d eye = camera.eye, forward = camera.forward();
   const double P = options.pixel_error;
+  // The frustum's side planes in eye coordinates (x right, y up, z along the view).
+  const Eigen::Vector3d right = forward.cross(camera.up).normalized(), up = right.cross(forward);
+  const double ty = std::tan(0.5 * camera.fov_y_deg * std::numbers::pi / 180.0);
+  const double tx = ty * camera.width / std::max(camera.height, 1);
+  const double cy = 1 / std::sqrt(1 + ty * ty), cx = 1 / std::sqrt(1 + tx * tx);
+  const auto outside = [&](const Eigen::Vector3d& centre, double r) {
+    const Eigen::Vector3d d = centre - eye;
+    const double x = d.dot(right), y = d.dot(up), z = d.dot(forward);
+    return z + r < camera.near_plane || z - r > camera.far_plane || (std::abs(x) - z * tx) * cx > r ||
+           (std::abs(y) - z * ty) * cy > r;
+  };
   std::vector<std::int32_t> stack(roots_.rbegin(), roots_.rend());
   while (!stack.empty()) {
     const auto b = static_cast<std::size_t>(stack.back());
@@ -216,8 +229,10 @@ SlimLodCut SlimLod::cut(const Camera& camera, const SlimLodOptions& options) con
     const bool leaf = first_child_[b] == first_child_[b + 1];
     if (!leaf && P > 0) {
       const double z = std::max(camera.near_plane, (centre_[b] - eye).dot(forward) - radius_[b]);
-      if (error_[b] * focal <= P * z) {
+      const bool hidden = options.skip_outside_view && outside(centre_[b], reach_[b]);
+      if (hidden || error_[b] * focal <= P * z) {
         c.balls.push_back(static_cast<std::int32_t>(b));
+        c.outside_view += hidden;
         continue;
       }
     }

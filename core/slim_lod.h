@@ -16,6 +16,9 @@ struct SlimLodOptions {
   /// seen at the nearest point of its ball (eye-space depth), spans at most this many pixels.
   /// 0 (or less): the leaves, full detail.
   double pixel_error = 0.5;
+  /// A ball whose subtree (every ball below it, and itself) lies outside the view frustum is
+  /// taken as it is, not refined: nothing in it can show, so the image is the same.
+  bool skip_outside_view = true;
 };
 
 /// A cut of the hierarchy: every leaf lies under exactly one of its balls.
@@ -23,6 +26,7 @@ struct SlimLodCut {
   std::vector<std::int32_t> balls;        ///< ball ids (SlimHierarchy), increasing
   /// Balls of the cut per level: [0] leaves, [k] balls k merges above their deepest leaf.
   std::vector<std::size_t> level_counts;
+  std::size_t outside_view = 0;  ///< balls taken unrefined because their subtree is outside the view
   bool operator==(const SlimLodCut& o) const { return balls == o.balls; }
 };
 
@@ -57,6 +61,7 @@ public:
 private:
   std::vector<Eigen::Vector3d> centre_;
   std::vector<double> radius_, error_;
+  std::vector<double> reach_;                // radius about centre_ of the ball's subtree's balls
   std::vector<std::uint32_t> first_child_;  // CSR: children of b are child_[first_child_[b] .. first_child_[b+1])
   std::vector<std::int32_t> child_, roots_;
   std::vector<std::uint32_t> height_;       // 0 at the leaves

@@ -135,8 +135,9 @@ TEST(SlimLod, EachBallPassesItsOwnProjectedTestAndEachRefinedOneFailsIt) {
   for (const double distance : {2.0, 2.5, 3.0}) {
     const Camera cam = camera_at(distance);
     const double P = 0.5, f = focal(cam);
-    const SlimLodCut c = lod.cut(cam, {.pixel_error = P});
+    const SlimLodCut c = lod.cut(cam, {.pixel_error = P, .skip_outside_view = false});
     ASSERT_TRUE(is_cut(m, c.balls));
+    EXPECT_EQ(c.outside_view, 0u);
     std::vector<char> chosen(n, 0), refined(n, 0);
     for (std::int32_t b : c.balls) {
       chosen[static_cast<std::size_t>(b)] = 1;
@@ -159,6 +160,28 @@ TEST(SlimLod, EachBallPassesItsOwnProjectedTestAndEachRefinedOneFailsIt) {
     EXPECT_GT(coarse, 0) << distance;
     EXPECT_GT(near_leaves, far_leaves) << distance;
   }
+}
+
+TEST(SlimLod, BallsWhoseSubtreeIsOutsideTheViewStayCoarseAndTheImageIsTheSame) {
+  const Model m = sphere_hierarchy(4096, 0.004, 0.012);
+  const SlimLod lod(m);
+  Camera cam = camera_at(2.2, 96);
+  cam.fov_y_deg = 12;  // zoomed in on a part of the sphere
+  const SlimLodCut skip = lod.cut(cam, {.pixel_error = 0.5});
+  const SlimLodCut all = lod.cut(cam, {.pixel_error = 0.5, .skip_outside_view = false});
+  EXPECT_TRUE(is_cut(m, skip.balls));
+  EXPECT_GT(skip.outside_view, 0u);
+  EXPECT_LT(skip.balls.size(), all.balls.size() / 2);
+  const Model a = slim_cut_model(m, skip.balls), b = slim_cut_model(m, all.balls);
+  const ReferenceScene sa(a), sb(b);
+  const ReferenceImage ia = render_reference(sa, cam), ib = render_reference(sb, cam);
+  std::size_t covered = 0, differ = 0;
+  for (std::size_t i = 0; i < ia.coverage.size(); ++i) {
+    covered += ib.coverage[i];
+    differ += ia.coverage[i] != ib.coverage[i] || (ia.coverage[i] && ia.depth[i] != ib.depth[i]);
+  }
+  EXPECT_GT(covered, ia.coverage.size() / 2);
+  EXPECT_EQ(differ, 0u);
 }
 
 TEST(SlimLod, Slim2tEnergiesAreReplacedByMeasuredDistances) {
