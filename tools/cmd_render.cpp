@@ -339,9 +339,12 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   };
 
   // SLIM level of detail: the pixel bound in the pixels rendered (supersampled ones are smaller).
+  // --colour-by error|patch colours the leaves (the patches fitted): those are drawn then.
   const bool has_lod = !model.slim_hierarchy.empty();
-  const SlimLodOptions lod_options{.pixel_error = a.pixel_error * ss};
-  j["pixel_error"] = a.pixel_error;
+  const bool leaves_only = has_lod && (colour_by == ColourMode::error || colour_by == ColourMode::patch);
+  if (leaves_only && a.pixel_error > 0) log::info("--colour-by {} colours the leaves: drawn at full detail", a.colour_by);
+  const SlimLodOptions lod_options{.pixel_error = leaves_only ? 0.0 : a.pixel_error * ss};
+  j["pixel_error"] = leaves_only ? 0.0 : a.pixel_error;
   const auto lod_json = [](const SlimLodCut& c) {
     return nlohmann::json{{"balls", c.balls.size()}, {"level_counts", c.level_counts}};
   };

@@ -302,3 +302,25 @@ TEST_F(SlimLodCli, RenderReportsTheSameCutOnBothBackends) {
   EXPECT_EQ(gl, cpu);
   EXPECT_EQ(balls("gl", "0"), 4096);
 }
+
+// The viewer chooses the cut per frame and uploads it only when it changes: a still view uploads
+// once, and its cut is the one `render` chooses for the same view.
+TEST_F(SlimLodCli, ViewerUploadsAStillViewsCutOnce) {
+  using test_support::q;
+  if (test_support::run_command("command -v", "xvfb-run").code != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  const auto model = dir_ / "sphere.qxm";
+  write_model(sphere_hierarchy(4096, 0.004, 0.012), model, {});
+  const std::string view = " --size 160x120 --azimuth 40 --elevation 30 --pixel-error 0.5";
+  const auto v = test_support::run_command("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(QUADRIX_BINARY),
+                                           "view " + q(model) + view + " --frames 4 --quiet --report " + q(dir_ / "v.json"));
+  if (v.code == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
+  ASSERT_EQ(v.code, 0) << v.out;
+  const auto lod = test_support::read_json(dir_ / "v.json")["view"]["slim_lod"];
+  EXPECT_EQ(lod["cut_uploads"].get<int>(), 1);
+  const auto r = test_support::quadrix_run("render " + q(model) + " -o " + q(dir_ / "r.png") + view + " --report " +
+                                           q(dir_ / "r.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const long balls = test_support::read_json(dir_ / "r.json")["render"]["slim_lod"]["balls"].get<long>();
+  EXPECT_LT(balls, 4096);
+  EXPECT_EQ(lod["balls_last_frame"].get<long>(), balls);
+}
