@@ -68,7 +68,6 @@ using SampleTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adap
                                                        3, std::uint32_t>;
 
 constexpr int kSampleGrid = 2;
-constexpr double kCore = 0.5;        // a leaf's core: r ≤ ½, where its weight w(r) = exp(−8r²) dominates
 constexpr std::size_t kNearest = 8;  // nearest leaves whose quadrics refine a distance
 
 // Taubin distance from a ball's quadric to a world point, world units (capped at 2R: a flat spot
@@ -79,7 +78,7 @@ double ball_distance(const SlimPatch& ball, const Eigen::Vector3d& p) {
 }
 
 // Two-sided, per ball, against the leaves directly: (1) the leaves' zero-set samples below it that
-// lie in its ball, to its quadric (core samples outside it, by their distance to the ball); (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
+// lie in its ball, to its quadric (samples outside it, a hole, by their distance to the ball); (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
 // of the 8 nearest leaves whose ball holds the sample: spurious sheets of a merged ball count.
 std::vector<double> measure_errors(const Model& m, const Tree& t) {
   const SlimHierarchy& h = m.slim_hierarchy;
@@ -108,9 +107,9 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
         for (std::int32_t a = h.parent[static_cast<std::size_t>(leaves[k])]; a >= 0; a = h.parent[static_cast<std::size_t>(a)]) {
           const SlimPatch& ball = slim_ball(m, static_cast<std::size_t>(a));
           const double outside = (s.point - ball.centre).norm() - ball.radius;
-          // A sample of the leaf's core (where its weight dominates) outside the ball is a hole
-          // the ball leaves: it counts by its distance to the ball. Rim samples only count inside.
-          const double d = outside <= 0 ? ball_distance(ball, s.point) : s.r <= kCore ? outside : 0.0;
+          // A leaf sample outside the ball is a hole the ball would leave: it counts by its
+          // distance to the ball (a nearest-parent hierarchy of independent fits leaves seams).
+          const double d = outside <= 0 ? ball_distance(ball, s.point) : outside;
           e[static_cast<std::size_t>(a)] = std::max(e[static_cast<std::size_t>(a)], d);
         }
   });

@@ -35,7 +35,7 @@ struct SlimLodCut {
 /// `source_format slim2t`), so there the distance is measured, two-sided, against the leaves, on
 /// zero-set samples (core/slim.h sample_slim_patch, a 2×2 lattice per ball): the largest of
 /// (1) the Taubin distance |g|/‖∇g‖ from the ball's quadric to its leaves' samples inside its
-/// ball, and the distance to the ball of their core samples (r ≤ ½) outside it (a hole), and
+/// ball, and the distance to the ball of their samples outside it (a hole the ball leaves), and
 /// (2) the distance from the ball's own samples to the nearest leaf sample (or, when nearer, to
 /// the quadric of one of the 8 nearest leaves whose ball holds the sample). Leaves 0.
 /// \throws InvalidInput for an invalid hierarchy (validate_slim_hierarchy).

@@ -38,7 +38,7 @@ std::vector<Vector3d> fibonacci(int n) {
 // The unit sphere as a three-level hierarchy: n leaves on a Fibonacci set carrying the sphere
 // itself, then n/4 and n/16 balls carrying the spheres of radius 1 + delta1 and 1 − delta2, so
 // each ball's error (a distance to the leaves' surface) is exactly |delta| of its level. Each
-// ball's parent is the nearest ball of the next level.
+// ball's parent is the nearest ball of the next level, grown to hold its children's balls.
 Model sphere_hierarchy(int n, double delta1, double delta2) {
   Model m;
   const int counts[3] = {n, n / 4, n / 16};
@@ -68,6 +68,16 @@ Model sphere_hierarchy(int n, double delta1, double delta2) {
       parent[static_cast<std::size_t>(level_start[static_cast<std::size_t>(level)] + i)] =
           level_start[static_cast<std::size_t>(level + 1)] + static_cast<std::int32_t>(best);
     }
+  // A merged ball holds its children's balls (as Kanai's merges do), so it leaves no hole.
+  for (std::size_t b = 0; b < balls.size(); ++b)
+    if (parent[b] >= 0) {
+      SlimPatch& p = balls[static_cast<std::size_t>(parent[b])];
+      p.radius = std::max(p.radius, (balls[b].centre - p.centre).norm() + balls[b].radius);
+    }
+  for (std::size_t b = static_cast<std::size_t>(n); b < balls.size(); ++b) {
+    const double rho_b = b < static_cast<std::size_t>(level_start[2]) ? rho[1] : rho[2];
+    balls[b].local = Quadric::sphere(Vector3d::Zero(), rho_b).to_local(balls[b].centre, balls[b].radius);
+  }
   m.slims.assign(balls.begin(), balls.begin() + n);
   m.slim_hierarchy.others.assign(balls.begin() + n, balls.end());
   m.slim_hierarchy.parent = parent;
@@ -201,6 +211,20 @@ TEST(SlimLod, Slim2tEnergiesAreReplacedByMeasuredDistances) {
     EXPECT_GE(measured[b], 0.9 * truth[b]) << "ball " << b;
     EXPECT_LE(measured[b], 1.2 * truth[b]) << "ball " << b;
   }
+}
+
+TEST(SlimLod, AMergedBallThatLeavesAHoleMeasuresTheHole) {
+  Model m = sphere_hierarchy(1024, 0.01, 0.03);
+  m.metadata["source_format"] = "slim2t";
+  const std::size_t b = m.slims.size();  // the first merged ball
+  SlimPatch& ball = m.slim_hierarchy.others[0];
+  const double before = slim_lod_errors(m)[b];
+  ball.radius *= 0.5;  // its children's balls now reach out of it
+  ball.local = Quadric::sphere(Vector3d::Zero(), 1.01).to_local(ball.centre, ball.radius);
+  const double after = slim_lod_errors(m)[b];
+  EXPECT_LE(before, 0.012);
+  EXPECT_GT(after, 0.1 * ball.radius);
+  EXPECT_GT(after, 3 * before);
 }
 
 TEST(SlimLod, CutModelHoldsTheCutsBallsInOrder) {
