@@ -77,8 +77,9 @@ double ball_distance(const SlimPatch& ball, const Eigen::Vector3d& p) {
   return std::isfinite(d) ? std::min(d, 2 * ball.radius) : 2 * ball.radius;
 }
 
-// Two-sided, per ball, against the leaves directly: (1) the leaves' zero-set samples below it that
-// lie in its ball, to its quadric (samples outside it, a hole, by their distance to the ball); (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
+// Two-sided, per ball, against the leaves directly: (1) the leaves' zero-set samples below it
+// that lie in its ball, to its quadric (samples outside it, a hole, by their distance to the
+// ball); (2) its own zero-set samples to the nearest leaf sample, or nearer, the quadric of one
 // of the 8 nearest leaves whose ball holds the sample: spurious sheets of a merged ball count.
 std::vector<double> measure_errors(const Model& m, const Tree& t) {
   const SlimHierarchy& h = m.slim_hierarchy;
