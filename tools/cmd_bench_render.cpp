@@ -305,7 +305,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"level_mix", r.level_mix},
                                                {"symmetric_difference", r.symmetric_difference},
                                                {"depth_p99_over_diagonal", r.depth_p99}});
-                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f},{},{},{},{},{},{:g},{},{},{:.5f},{:.3g}\n", model_name,
+                          csv += fmt::format("{},\"{}\",{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f},{},{},{},{},{},{:g},{},{},{:.5f},{:.3g}\n", model_name,
                                              r.name, r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments,
                                              r.covered, r.invocations_per_covered(), r.slim_waste, r.glyph_waste,
                                              r.chunks, r.chunks_culled, r.culled_in_chunks, r.chunks_occluded,
