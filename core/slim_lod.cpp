@@ -22,7 +22,10 @@ void require_valid(const Model& m) {
     throw InvalidInput("invalid SLIM hierarchy: " + why);
 }
 
+// `slim_hierarchy_error distance` (fit --lod-levels) says the errors are distances; without that
+// line, a .slim2t's are Kanai's fitting energies.
 bool errors_are_energies(const Model& m) {
+  if (const auto unit = m.metadata.find("slim_hierarchy_error"); unit != m.metadata.end()) return unit->second != "distance";
   const auto it = m.metadata.find("source_format");
   return it != m.metadata.end() && it->second == "slim2t";
 }

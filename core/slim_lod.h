@@ -30,9 +30,10 @@ struct SlimLodCut {
   bool operator==(const SlimLodCut& o) const { return balls == o.balls; }
 };
 
-/// Each ball's error as a distance, world units. A fitted hierarchy (.qxm) stores distances and
-/// they are returned as stored. Kanai's .slim2t stores a fitting energy (metadata
-/// `source_format slim2t`), so there the distance is measured, two-sided, against the leaves, on
+/// Each ball's error as a distance, world units. A fitted hierarchy (`fit --lod-levels`, metadata
+/// `slim_hierarchy_error distance`) stores distances and they are returned as stored. Kanai's
+/// .slim2t stores a fitting energy (metadata `source_format slim2t`, or a `slim_hierarchy_error`
+/// other than `distance`), so there the distance is measured, two-sided, against the leaves, on
 /// zero-set samples (core/slim.h sample_slim_patch, a 2×2 lattice per ball): the largest of
 /// (1) the Taubin distance |g|/‖∇g‖ from the ball's quadric to its leaves' samples inside its
 /// ball, and the distance to the ball of their samples outside it (a hole the ball leaves), and

@@ -200,6 +200,9 @@ TEST(SlimLod, Slim2tEnergiesAreReplacedByMeasuredDistances) {
   const std::vector<double> truth = m.slim_hierarchy.error;
   for (double& e : m.slim_hierarchy.error) e = e > 0 ? 1e6 / e : 0;  // an energy, not a distance
   m.metadata["source_format"] = "slim2t";
+  m.metadata["slim_hierarchy_error"] = "distance";  // as fit --lod-levels says: kept as stored
+  EXPECT_EQ(slim_lod_errors(m), m.slim_hierarchy.error);
+  m.metadata.erase("slim_hierarchy_error");
   const std::vector<double> measured = slim_lod_errors(m);
   ASSERT_EQ(measured.size(), truth.size());
   for (std::size_t b = 0; b < truth.size(); ++b) {
