@@ -112,8 +112,9 @@ void Renderer::set_model(const Model& model, const AmpOptions& amp) {
   const auto tetrahedra = model.metadata.find("tetrahedra");
   impl_->tet.upload(model.tets, tetrahedra != model.metadata.end() && tetrahedra->second == "tessellation");
   impl_->glyph.upload(model.glyphs);
-  impl_->slim.upload(model.slims);
+  impl_->slim.upload(model);
   impl_->box = bounds(model);
+  for (const SlimPatch& s : model.slim_hierarchy.others) impl_->box.extend(bounds(s));  // coarser cuts
   impl_->closed = surfaces_are_closed(model);
   impl_->implicit.upload(model.implicits, amp);
 }
@@ -135,6 +136,9 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   const auto start = Clock::now();
   I.targets.resize(camera.width, camera.height);
   FrameStats st;
+  st.slim_cut_uploaded = I.slim.select_cut(camera, {.pixel_error = o.slim_pixel_error});
+  st.slim_balls = I.slim.count();
+  if (I.slim.has_hierarchy()) st.slim_level_counts = I.slim.cut().level_counts;
   st.primitives = I.tet.count() + I.glyph.count() + I.slim.count() + I.implicit.count();
   const CameraUniforms camera_uniforms(camera);
   // Back sides are culled only where no ray from the eye can see them (core/culling.h).

@@ -42,6 +42,10 @@ struct RenderOptions {
   /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,
   /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
   bool slim_tight_splats = true;
+  /// SLIM level of detail, for models with a hierarchy (core/slim_lod.h): each frame draws the
+  /// coarsest cut whose balls' errors project below this many pixels at their distance (the cut
+  /// is uploaded only when it changes). 0: the leaves, full detail.
+  double slim_pixel_error = 0.5;
   /// Debug overlay: the screen bound of every SLIM ball, red where the patch is culled.
   bool slim_outlines = false;
   /// Tetrahedra drawn nearest chunk first, testing and writing their entry faces' depth, so the
@@ -92,6 +96,10 @@ struct FrameStats {
   double glyph_waste() const {
     return glyph_proxy_fragments ? double(glyph_proxy_fragments - glyph_hit_fragments) / glyph_proxy_fragments : 0.0;
   }
+  std::uint64_t slim_balls = 0;        ///< SLIM balls drawn (with a hierarchy: the cut's)
+  bool slim_cut_uploaded = false;      ///< this frame's view chose a new cut and uploaded it
+  /// The cut's balls per level above the leaves (core/slim_lod.h); empty without a hierarchy.
+  std::vector<std::size_t> slim_level_counts;
   double ms_clear = 0;                 ///< clearing the G-buffer (time_passes only)
   double ms_geometry = 0;              ///< G-buffer passes (time_passes only)
   double ms_slim = 0;                  ///< the three SLIM passes (time_passes only)

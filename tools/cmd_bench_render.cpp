@@ -35,14 +35,23 @@ struct Row {
   std::uint64_t chunks_occluded = 0, occluded_in_chunks = 0;
   double slim_waste = 0;
   double glyph_waste = 0;  // glyph proxy fragments outside their glyph over those run
+  // SLIM level of detail (models with a hierarchy): the bound, the cut, its image error.
+  double pixel_error = 0;
+  std::uint64_t slim_balls = 0;
+  std::string level_mix;             // "level:balls …", level 0 the leaves
+  double symmetric_difference = 0;   // covered pixels differing from full detail / those covered there
+  double depth_p99 = 0;              // |depth − full detail's| where both covered, p99, / model diagonal
+  std::vector<std::uint8_t> coverage;
+  std::vector<float> depth;
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
             double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false,
-            bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0) {
+            bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0) {
   render::RenderOptions o;
   o.shadow_map_size = shadow_map_size;
+  o.slim_pixel_error = pixel_error;
   o.tet_occlusion = tet_occlusion;
   o.cull = cull;
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
@@ -64,6 +73,12 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.slim_waste = st.slim_waste();
   row.glyph_waste = st.glyph_waste();
   row.covered = std::count(g.coverage.begin(), g.coverage.end(), 1);
+  row.pixel_error = pixel_error;
+  row.slim_balls = st.slim_balls;
+  for (std::size_t k = 0; k < st.slim_level_counts.size(); ++k)
+    if (st.slim_level_counts[k]) row.level_mix += fmt::format("{}{}:{}", row.level_mix.empty() ? "" : " ", k, st.slim_level_counts[k]);
+  row.coverage = g.coverage;
+  row.depth = g.depth;
   o.statistics = false;
   r.draw(cam, o);  // warm-up
   std::vector<double> ms;
@@ -157,6 +172,24 @@ PolygonMesh tessellate_glyphs(const Model& m, const Camera& cam, double max_px, 
   return mesh;
 }
 
+// The image error of a row against the full-detail row: symmetric difference of the covered
+// pixels (over those covered at full detail) and the p99 of the depth difference where both cover.
+void image_error(Row& row, const Row& full, double diagonal) {
+  std::size_t diff = 0, covered = 0;
+  std::vector<double> dd;
+  for (std::size_t i = 0; i < full.coverage.size() && i < row.coverage.size(); ++i) {
+    covered += full.coverage[i];
+    diff += full.coverage[i] != row.coverage[i];
+    if (full.coverage[i] && row.coverage[i]) dd.push_back(std::abs(double(row.depth[i]) - double(full.depth[i])));
+  }
+  row.symmetric_difference = covered ? double(diff) / double(covered) : 0.0;
+  if (!dd.empty()) {
+    const auto p = dd.begin() + static_cast<std::ptrdiff_t>(dd.size() * 99 / 100);
+    std::nth_element(dd.begin(), p, dd.end());
+    row.depth_p99 = *p / std::max(diagonal, 1e-300);
+  }
+}
+
 }  // namespace
 
 void add_bench_render(CLI::App& bench, Commands& commands) {
@@ -166,6 +199,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
     int frames = 10;
     int shadow_map = 0;
     double azimuth = 30, elevation = 20;
+    std::vector<double> pixel_errors{0.25, 0.5, 1, 2, 4};
   };
   auto a = std::make_shared<Args>();
   app->add_option("INPUT", a->input, "A quad mesh (.obj/.off/.ply: converted here) or a .qxm/.slim2t model")->required();
@@ -179,6 +213,11 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
   app->add_option("--shadow-map", a->shadow_map, "Shadow map side of the shadows+outlines rows (0: as render)")
       ->check(number({.lo = 0, .hi = 16384}));
   app->add_option("--elevation", a->elevation, "Camera elevation (degrees)")->check(number({.lo = -89.9, .hi = 89.9}));
+  app->add_option("--pixel-errors", a->pixel_errors, "For a SLIM hierarchy: the --pixel-error levels of the LOD rows "
+                                                     "(the other rows draw full detail)")
+      ->delimiter(',')
+      ->check(number({.lo = 0, .hi = 1000}))
+      ->capture_default_str();
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const auto [w, h] = parse_size(a->size);
                         const std::string ext = std::filesystem::path(a->input).extension().string();
@@ -216,6 +255,13 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
                                                    slim_offset_of(model), false));
+                          // SLIM level of detail: time against image error, each against full detail (row 0).
+                          if (!model.slim_hierarchy.empty())
+                            for (const double P : a->pixel_errors) {
+                              rows.push_back(measure(fmt::format("LOD {:g} px", P), r, cam, true, a->frames,
+                                                     slim_offset_of(model), true, false, true, true, 0, P));
+                              image_error(rows.back(), rows.front(), bounds(model).diagonal());
+                            }
                         }
                         std::size_t triangles = 0;
                         if (!model.glyphs.empty() && !mesh && a->baseline.empty()) {
@@ -244,7 +290,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         const std::string model_name = std::filesystem::path(a->input).stem().string();
                         std::string csv = "model,configuration,ms_median,ms_min,primitives,culled,fragment_invocations,"
                                           "covered_pixels,invocations_per_covered_pixel,slim_splat_waste,glyph_proxy_waste,chunks,chunks_culled,"
-                                          "culled_in_chunks,chunks_occluded,occluded_in_chunks\n";
+                                          "culled_in_chunks,chunks_occluded,occluded_in_chunks,pixel_error,slim_balls,level_mix,"
+                                          "symmetric_difference,depth_p99_over_diagonal\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
@@ -259,18 +306,26 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"chunks_culled", r.chunks_culled},
                                                {"culled_in_chunks", r.culled_in_chunks},
                                                {"chunks_occluded", r.chunks_occluded},
-                                               {"occluded_in_chunks", r.occluded_in_chunks}});
-                          csv += fmt::format("{},{},{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f},{},{},{},{},{}\n", model_name,
+                                               {"occluded_in_chunks", r.occluded_in_chunks},
+                                               {"pixel_error", r.pixel_error}, {"slim_balls", r.slim_balls},
+                                               {"level_mix", r.level_mix},
+                                               {"symmetric_difference", r.symmetric_difference},
+                                               {"depth_p99_over_diagonal", r.depth_p99}});
+                          csv += fmt::format("{},\"{}\",{:.3f},{:.3f},{},{},{},{},{:.3f},{:.4f},{:.4f},{},{},{},{},{},{:g},{},{},{:.5f},{:.3g}\n", model_name,
                                              r.name, r.ms_median, r.ms_min, r.primitives, r.culled, r.fragments,
                                              r.covered, r.invocations_per_covered(), r.slim_waste, r.glyph_waste,
                                              r.chunks, r.chunks_culled, r.culled_in_chunks, r.chunks_occluded,
-                                             r.occluded_in_chunks);
+                                             r.occluded_in_chunks, r.pixel_error, r.slim_balls, r.level_mix,
+                                             r.symmetric_difference, r.depth_p99);
                           std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
                                       "shading %.1f, shadow map %.1f)  %7llu culled  %6.2f invocations/covered px",
                                       r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
                                       r.ms_shading, r.ms_shadows, (unsigned long long)r.culled, r.invocations_per_covered());
                           if (!model.slims.empty()) std::printf("  waste %.1f %%", 100.0 * r.slim_waste);
                           if (!model.glyphs.empty()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
+                          if (!model.slim_hierarchy.empty())
+                            std::printf("  %llu balls, sym. diff %.2f %%, depth p99 %.2g", (unsigned long long)r.slim_balls,
+                                        100 * r.symmetric_difference, r.depth_p99);
                           if (r.chunks)
                             std::printf("  chunks %llu: %llu outside, %llu hidden", (unsigned long long)r.chunks,
                                         (unsigned long long)r.chunks_culled, (unsigned long long)r.chunks_occluded);

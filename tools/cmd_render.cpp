@@ -27,6 +27,7 @@
 #include "core/points_io.h"
 #include "core/reference.h"
 #include "core/slim.h"
+#include "core/slim_lod.h"
 #include "core/shade.h"
 #include "fit/patch_error.h"
 #include "render/context.h"
@@ -44,6 +45,7 @@ struct RenderArgs {
   bool no_cull = false, contact_sheet = false, shadows = false, outlines = false;
   int frames = 1, supersample = 1, turntable = 0, shadow_map = 0;
   double slim_offset = -1;  // < 0: the model's own (core/slim.h slim_offset_of)
+  double pixel_error = SlimLodOptions{}.pixel_error;  // SLIM level of detail (core/slim_lod.h)
   // Implicit surfaces ([Singh10]): an expression or a gallery surface, added to the model.
   std::string implicit, surface, bounds, amp_test = "auto";
   std::vector<std::string> params;
@@ -337,17 +339,44 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     return c;
   };
 
+  // SLIM level of detail: the pixel bound in the pixels rendered (supersampled ones are smaller).
+  // --colour-by error|patch colours the leaves (the patches fitted): those are drawn then.
+  const bool has_lod = !model.slim_hierarchy.empty();
+  const bool leaves_only = has_lod && (colour_by == ColourMode::error || colour_by == ColourMode::patch);
+  if (leaves_only && a.pixel_error > 0) log::info("--colour-by {} colours the leaves: drawn at full detail", a.colour_by);
+  const SlimLodOptions lod_options{.pixel_error = leaves_only ? 0.0 : a.pixel_error * ss};
+  j["pixel_error"] = leaves_only ? 0.0 : a.pixel_error;
+  const auto lod_json = [](const SlimLodCut& c) {
+    return nlohmann::json{{"balls", c.balls.size()}, {"level_counts", c.level_counts}};
+  };
   if (backend == "cpu") {
     const double t0 = report.elapsed();
-    const ReferenceScene scene(model);
+    // With a hierarchy, each camera's cut is drawn (the same cut the GL renderer chooses).
+    std::optional<SlimLod> lod;
+    if (has_lod) lod.emplace(model);
+    Model cut_model;
+    std::optional<ReferenceScene> scene;
+    const auto scene_for = [&](const Camera& c) -> const ReferenceScene& {
+      if (!lod) {
+        if (!scene) scene.emplace(model);
+        return *scene;
+      }
+      const SlimLodCut cut = lod->cut(c, lod_options);
+      if (!j.contains("slim_lod")) j["slim_lod"] = lod_json(cut);
+      scene.reset();
+      cut_model = slim_cut_model(model, cut.balls);
+      return scene.emplace(cut_model);
+    };
+    scene_for(magnified(cameras.front()));
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
     ro.trace.slim.offset = slim_offset;
     ro.shadows = a.shadows;
     if (cameras.size() == 1) ro.progress = progress.callback();
     const double t1 = report.elapsed();
-    for (const Camera& c : cameras) {
-      const ReferenceImage img = render_reference(scene, magnified(c), ro);
+    for (std::size_t k = 0; k < cameras.size(); ++k) {
+      const Camera& c = cameras[k];
+      const ReferenceImage img = render_reference(k == 0 ? *scene : scene_for(magnified(c)), magnified(c), ro);
       finish(shade_phong(img, magnified(c), {.background = background, .outlines = a.outlines}), magnified(c),
              img.coverage, img.depth, img.normal);
       if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
@@ -355,7 +384,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     }
     const double t2 = report.elapsed();
     j["covered_pixels"] = covered;
-    j["bvh_nodes"] = scene.bvh_node_count();
+    j["bvh_nodes"] = scene->bvh_node_count();
     j["seconds_bvh"] = t1 - t0;
     j["seconds_trace"] = t2 - t1;
     log::info("cpu: {}x{} in {:.3f} s", width, height, t2 - t1);
@@ -381,6 +410,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     ro.shadows = a.shadows;
     ro.shadow_map_size = a.shadow_map;
     ro.outlines = a.outlines;
+    ro.slim_pixel_error = lod_options.pixel_error;
     // One frame with statistics (counted separately: the counters cost time), then N timed
     // frames of the first camera.
     ro.statistics = true;
@@ -408,6 +438,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     j["fragment_shader_invocations"] = has_fs ? nlohmann::json(stats.fragments) : nlohmann::json(nullptr);
     j["fragments_hit"] = stats.fragments_hit;
     if (!model.slims.empty()) j["slim_splat_waste"] = stats.slim_waste();
+    if (has_lod) j["slim_lod"] = {{"balls", stats.slim_balls}, {"level_counts", stats.slim_level_counts}};
     j["ms_frame_median"] = median(total);
     log::info("{}: {}x{}, {:.2f} ms/frame (median of {}), {} drawn, {} culled", context->name(), width, height,
               median(total), a.frames, stats.primitives - stats.culled, stats.culled);
@@ -484,6 +515,10 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--slim-offset", a->slim_offset, "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
       ->check(number({.lo = 0, .hi = 10}))
       ->default_str("");
+  app->add_option("--pixel-error", a->pixel_error, "SLIM level of detail for models with a hierarchy: draw the "
+                                                   "coarsest balls whose error projects below P pixels (0: full detail)")
+      ->check(number({.lo = 0, .hi = 1000}))
+      ->capture_default_str();
   app->add_option("--implicit", a->implicit, "Implicit surface S(x,y,z) = 0 to draw (with MODEL if given), e.g. \"x^4 + y^4 + z^4 - 1\"");
   app->add_option("--surface", a->surface, "Built-in implicit surface of [Singh10]'s gallery; 'list' lists them");
   app->add_option("--param", a->params, "Parameter of the implicit expression, NAME=VALUE (repeat)")->default_str("");

@@ -144,6 +144,7 @@ void add_view(CLI::App& root, Commands& commands) {
     bool no_cull = false;
     bool outlines = false;
     bool shadows = false, lines = false;
+    double pixel_error = render::RenderOptions{}.slim_pixel_error;
   };
   auto a = std::make_shared<Args>();
   app->add_option("MODEL", a->model, "Model file (.qxm), or a molecule (.pdb, .cif); optional with --surface");
@@ -158,6 +159,11 @@ void add_view(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember({"phong", "envmap", "npr"}))
       ->capture_default_str();
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
+  app->add_option("--pixel-error", a->pixel_error, "SLIM level of detail for models with a hierarchy: each frame "
+                                                   "draws the coarsest balls whose error projects below P pixels "
+                                                   "(0: full detail)")
+      ->check(number({.lo = 0, .hi = 1000}))
+      ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Start with the SLIM ball outlines shown (key B)");
   app->add_flag("--shadows", a->shadows, "Start with the key light's shadows (key H), as render --shadows");
   app->add_flag("--lines", a->lines, "Start with silhouette and crease lines (key L), as render --outlines");
@@ -213,6 +219,7 @@ void add_view(CLI::App& root, Commands& commands) {
                                              : a->shading == "npr"  ? render::Shading::npr
                                                                     : render::Shading::phong;
                         st.options.slim_offset = static_cast<float>(slim_offset_of(model));
+                        st.options.slim_pixel_error = a->pixel_error;
                         // The start view as `render` resolves it (tools/view_options.h).
                         const VisibleFn visible = [&](const Camera& c) {
                           return visible_points(model, mesh ? &*mesh : nullptr, c,
@@ -253,7 +260,8 @@ void add_view(CLI::App& root, Commands& commands) {
                           if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) glfwSetWindowShouldClose(wnd, GLFW_TRUE);
                           static_cast<ViewState*>(glfwGetWindowUserPointer(wnd))->key(key);
                         });
-                        int frame = 0;
+                        int frame = 0, cut_uploads = 0;
+                        std::uint64_t slim_balls = 0;
                         double ms = 0;
                         const double start = glfwGetTime();
                         std::map<std::string, double> values;
@@ -269,6 +277,8 @@ void add_view(CLI::App& root, Commands& commands) {
                           const Camera camera = st.at_size(fw, fh);
                           const auto stats = renderer.draw(camera, st.options);
                           ms = stats.ms_total;
+                          cut_uploads += stats.slim_cut_uploaded;
+                          slim_balls = stats.slim_balls;
                           // Saved files land when the window closes, with the command's other outputs.
                           if (st.save_screenshot) write_png(renderer.read_colour(), st.screenshot_file), ++st.saved_screenshots;
                           if (st.save_camera) write_camera(camera, st.camera_file), ++st.saved_cameras;
@@ -277,6 +287,7 @@ void add_view(CLI::App& root, Commands& commands) {
                           context->swap_buffers();
                           std::string shown;
                           for (const auto& [k, v] : values) shown += fmt::format(", {} = {:.4g}", k, v);
+                          if (!model.slim_hierarchy.empty()) shown += fmt::format(", {} SLIM balls", slim_balls);
                           glfwSetWindowTitle(win, fmt::format("quadrix {} — {:.1f} ms/frame, culling {}{}", title, ms,
                                                               st.options.cull ? "on" : "off", shown)
                                                       .c_str());
@@ -294,6 +305,10 @@ void add_view(CLI::App& root, Commands& commands) {
                         report.json["view"] = {{"frames", frame}, {"ms_last_frame", ms}, {"context", context->description()},
                                                {"camera", camera_json(st.at_size(fw, fh))}};
                         if (!values.empty()) report.json["view"]["parameters_last_frame"] = values;
+                        if (!model.slim_hierarchy.empty())
+                          report.json["view"]["slim_lod"] = {{"pixel_error", a->pixel_error},
+                                                             {"balls_last_frame", slim_balls},
+                                                             {"cut_uploads", cut_uploads}};
                         report.summary = fmt::format("{} frames, {} screenshots, {} cameras saved", frame,
                                                      st.saved_screenshots + !a->screenshot.empty(),
                                                      st.saved_cameras + !a->view.save_camera.empty());

@@ -1,2 +1,2 @@
-# nanoflann (Debian: libnanoflann-dev), header-only kd-tree: used only by fit/point_index.cpp.
+# nanoflann (Debian: libnanoflann-dev), header-only kd-tree: used by fit/point_index.cpp and core/slim_lod.cpp.
 find_package(nanoflann REQUIRED)

@@ -1,5 +1,8 @@
 #include "render/passes/slim_pass.h"
 
+#include <cstddef>
+#include <cstring>
+
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -19,6 +22,8 @@ struct GpuBall {
   float slab[4];
 };
 static_assert(sizeof(GpuBall) == 112);
+constexpr std::size_t kBallFloats = sizeof(GpuBall) / sizeof(float);
+constexpr std::size_t kIdFloat = offsetof(GpuBall, q2) / sizeof(float) + 2;  // q2[2]: the primitive id
 
 // `origin`: the model's origin, which the stored centre is relative to.
 GpuBall pack(const SlimPatch& b, std::int32_t id, const Eigen::Vector3d& origin) {
@@ -76,6 +81,50 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
     data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i), origin_));
   balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
   count_ = data.size();
+}
+
+void SlimPass::upload(const Model& model) {
+  lod_.reset();
+  cut_ = {};
+  has_cut_ = false;
+  packed_.clear();
+  if (model.slim_hierarchy.empty()) {
+    upload(model.slims);
+    return;
+  }
+  lod_.emplace(model);
+  const std::size_t n = lod_->size();
+  if (n > kMaxPrimitiveIndex + 1)
+    throw InvalidInput(fmt::format("{} SLIM balls: the GL renderer draws at most 2^{}", n, kPrimitiveIndexBits));
+  Box3 box;
+  for (std::size_t b = 0; b < n; ++b) box.extend(slim_ball(model, b).centre);
+  origin_ = box.centre();
+  packed_.resize(n * kBallFloats);
+  for (std::size_t b = 0; b < n; ++b) {
+    const GpuBall g = pack(slim_ball(model, b), 0, origin_);
+    std::memcpy(packed_.data() + b * kBallFloats, &g, sizeof g);
+  }
+  // Room for every ball: a cut never holds more balls than the hierarchy.
+  balls_ = gl::make_buffer(static_cast<GLsizeiptr>(n * sizeof(GpuBall)), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  count_ = 0;
+}
+
+bool SlimPass::select_cut(const Camera& camera, const SlimLodOptions& options) {
+  if (!lod_) return false;
+  SlimLodCut c = lod_->cut(camera, options);
+  if (has_cut_ && c == cut_) return false;
+  std::vector<float> data(c.balls.size() * kBallFloats);
+  for (std::size_t i = 0; i < c.balls.size(); ++i) {
+    std::memcpy(data.data() + i * kBallFloats, packed_.data() + static_cast<std::size_t>(c.balls[i]) * kBallFloats,
+                sizeof(GpuBall));
+    data[i * kBallFloats + kIdFloat] = bits_float(static_cast<std::uint32_t>(primitive_id(PrimitiveKind::slim, i)));
+  }
+  if (!data.empty())
+    glNamedBufferSubData(balls_.id(), 0, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data());
+  count_ = c.balls.size();
+  cut_ = std::move(c);
+  has_cut_ = true;
+  return true;
 }
 
 void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {

@@ -3,9 +3,12 @@
 /// the first hit), accumulation (additive weighted normal, depth, colour), resolve (divide by Σw
 /// into the G-buffer, shaded later with everything else). And the debug overlay of their splats.
 #include <array>
+#include <optional>
 #include <span>
+#include <vector>
 
 #include "core/model.h"
+#include "core/slim_lod.h"
 #include "render/passes/frame.h"
 
 namespace quadrix::render {
@@ -15,6 +18,15 @@ public:
   SlimPass();  ///< compiles the three programs. \throws GlError.
   /// \throws InvalidInput past kMaxPrimitiveIndex patches, GlError (out of GPU memory).
   void upload(std::span<const SlimPatch> patches);
+  /// A model's patches; with a hierarchy, every ball packed once and nothing drawn until
+  /// select_cut uploads a cut. \throws as upload above, InvalidInput for an invalid hierarchy.
+  void upload(const Model& model);
+  /// Level of detail (core/slim_lod.h): the cut for this view, uploaded only when it differs
+  /// from the one drawn. Returns true when it uploaded. Without a hierarchy: nothing, false.
+  bool select_cut(const Camera& camera, const SlimLodOptions& options);
+  /// The cut drawn (empty without a hierarchy).
+  const SlimLodCut& cut() const { return cut_; }
+  bool has_hierarchy() const { return lod_.has_value(); }
   std::size_t count() const { return count_; }
   /// The packed balls (SSBO, `Ball` in slim.vert).
   GLuint balls() const { return balls_.id(); }
@@ -47,6 +59,11 @@ private:
   std::array<Accumulation, 2> acc_;
   Accumulation* current_ = nullptr;  // the one this frame draws with
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
+  // Level of detail: every ball of the hierarchy packed (kBallFloats each), the cut drawn.
+  std::optional<SlimLod> lod_;
+  std::vector<float> packed_;
+  SlimLodCut cut_;
+  bool has_cut_ = false;
 };
 
 /// Debug overlay over the shaded image: the screen bound of every SLIM ball, red where the
