@@ -45,8 +45,9 @@ struct Level {
 // instead of them leaves no hole) with a quadric fitted to the points inside.
 class Merger {
 public:
-  Merger(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, const DataSurface& data, double mu)
-      : P_(P), N_(N), index_(P), data_(data), mu_(mu) {}
+  Merger(const std::vector<Eigen::Vector3d>& P, const std::vector<Eigen::Vector3d>& N, const DataSurface& data, double mu,
+         double reach)
+      : P_(P), N_(N), index_(P), data_(data), mu_(mu), reach_(reach) {}
 
   Level merge(const std::vector<SlimPatch>& fine, const std::vector<double>& fine_error) const {
     const std::size_t n = fine.size();
@@ -57,12 +58,18 @@ public:
     std::vector<std::size_t> order(n);
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) { return fine[a].radius > fine[b].radius; });
+    // Reach of a group: reach × the larger of its lead's radius and the level's median radius
+    // (balls far smaller than their neighbours, e.g. single noisy points, join a group too).
+    std::vector<double> radii;
+    for (const auto& b : fine) radii.push_back(b.radius);
+    std::nth_element(radii.begin(), radii.begin() + std::ptrdiff_t(n / 2), radii.end());
+    const double median = radii[n / 2];
     std::vector<std::int32_t> group_of(n, -1);
     std::vector<std::vector<std::uint32_t>> groups;
     std::vector<Neighbour> near;
     for (const auto i : order) {
       if (group_of[i] >= 0) continue;
-      centre_index.radius(fine[i].centre, fine[i].radius, near);
+      centre_index.radius(fine[i].centre, reach_ * std::max(fine[i].radius, median), near);
       std::vector<std::uint32_t> g{std::uint32_t(i)};
       group_of[i] = std::int32_t(groups.size());
       for (const auto& [j, d2] : near)
@@ -145,7 +152,7 @@ private:
   const std::vector<Eigen::Vector3d>& N_;
   PointIndex index_;
   const DataSurface& data_;
-  double mu_;
+  double mu_, reach_;
 };
 
 }  // namespace
@@ -159,7 +166,7 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
   const DataSurface data = surface ? DataSurface::from_mesh(*surface) : DataSurface::from_points(cloud.points, cloud.normals);
   std::vector<Eigen::Vector3d> N(cloud.normals.size());
   for (std::size_t i = 0; i < N.size(); ++i) N[i] = cloud.normals[i].normalized();
-  const Merger merger(cloud.points, N, data, fit.normal_weight);
+  const Merger merger(cloud.points, N, data, fit.normal_weight, options.reach);
 
   std::vector<std::vector<SlimPatch>> balls{fine.model.slims};
   std::vector<std::vector<double>> errors{fit_errors(fine, cloud, surface ? &data : nullptr)};
