@@ -66,16 +66,16 @@ std::vector<std::pair<int, int>> scan_pdb(const fs::path& path, const std::strin
     pos = end + 1;
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    if (line.starts_with("ENDMDL")) break;  // the first model's records only
+    if (line.substr(0, 6) == "ENDMDL") break;  // the first model's records only
     const std::string where = fmt::format("{}:{}", path.string(), line_no);
-    if (line.starts_with("ATOM  ") || line.starts_with("HETATM")) {
+    if (line.substr(0, 6) == "ATOM  " || line.substr(0, 6) == "HETATM") {
       if (line.size() < 54)
         throw FormatError(fmt::format("{}: {} record has {} columns, coordinates need 54", where, line.substr(0, 6),
                                       line.size()));
       pdb_number(line, 30, 8, where, "x");
       pdb_number(line, 38, 8, where, "y");
       pdb_number(line, 46, 8, where, "z");
-    } else if (line.starts_with("CONECT") && line.size() >= 16) {
+    } else if (line.substr(0, 6) == "CONECT" && line.size() >= 16) {
       const auto serial = [&](std::size_t first) {
         const std::string t = trim(line.substr(first, std::min<std::size_t>(5, line.size() - first)));
         int v = 0;

@@ -12,6 +12,7 @@
 #include "core/culling.h"
 #include "core/error.h"
 #include "core/lighting.h"
+#include "core/limits.h"
 #include "render/context.h"
 #include "render/gl/objects.h"
 #include "render/passes/frame.h"
@@ -109,11 +110,13 @@ Renderer::~Renderer() = default;
 void Renderer::set_model(const Model& model) { set_model(model, AmpOptions{}); }
 
 void Renderer::set_model(const Model& model, const AmpOptions& amp) {
+  const Box3 box = bounds(model);
+  check_drawable_extent(box.min, box.max, "the model");
   const auto tetrahedra = model.metadata.find("tetrahedra");
   impl_->tet.upload(model.tets, tetrahedra != model.metadata.end() && tetrahedra->second == "tessellation");
   impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model);
-  impl_->box = bounds(model);
+  impl_->box = box;
   for (const SlimPatch& s : model.slim_hierarchy.others) impl_->box.extend(bounds(s));  // coarser cuts
   impl_->closed = surfaces_are_closed(model);
   impl_->implicit.upload(model.implicits, amp);

@@ -17,6 +17,7 @@
 #include "core/colour_map.h"
 #include "core/culling.h"
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/image.h"
 #include "core/implicit/gallery.h"
 #include "core/implicit/surface.h"
@@ -254,6 +255,10 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     mesh = read_mesh(a.model);
   }
   if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
+  if (!model.empty()) {
+    const Box3 box = bounds(model);
+    check_drawable_extent(box.min, box.max, a.model.empty() ? std::string("the implicit surface") : std::string(a.model));
+  }
   const ColourMode colour_by = parse_colour_mode(a.colour_by);
   if (!a.colour_range.empty() && colour_by != ColourMode::error && colour_by != ColourMode::depth)
     throw CLI::ValidationError("--colour-range", "applies to --colour-by error or depth");

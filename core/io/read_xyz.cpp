@@ -27,7 +27,10 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
       if (n < v.size()) v[n] = x;
     }
     if (n == 1 && count_line && columns == 0 && declared < 0 && v[0] >= 0 && v[0] == std::floor(v[0])) {
-      declared = static_cast<long long>(v[0]);  // .pts: a leading point count
+      // .pts: a leading point count; each point takes at least 6 bytes ("0 0 0\n").
+      if (v[0] > static_cast<double>(text.size()) / 6)
+        r.fail("the count line declares {:g} points, more than the file's {} bytes can hold", v[0], text.size());
+      declared = static_cast<long long>(v[0]);
       continue;
     }
     if (n != 3 && n != 6) r.fail("{} values (expected 3: x y z, or 6: x y z nx ny nz)", n);

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/primitive.h"
 #include "render/shaders.h"
 
@@ -18,7 +19,7 @@ struct GpuGlyph {
   float centre_hi[4];
   float centre_lo[4];
   float inv[3][4];
-  float s0[4], s1[4];
+  float s0[4], s1[4];  // S / s² (six entries), then s (the glyph's size)
   float axis[4];
 };
 static_assert(sizeof(GpuGlyph) == 128);
@@ -33,17 +34,11 @@ Eigen::Vector3d orthogonal(const Eigen::Vector3d& a) {
 GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) {
   // M maps the parameter space (unit sphere, or unit cylinder |u_z| ≤ 1) to world offsets.
   Eigen::Matrix3d M;
-  Eigen::Matrix3d S;  // M Mᵀ, or one end disc's for a cylinder
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
+  double disc_radius = 0;  // cylinder
   switch (g.kind) {
-    case GlyphKind::sphere:
-      M = g.radius * Eigen::Matrix3d::Identity();
-      S = M * M.transpose();
-      break;
-    case GlyphKind::ellipsoid:
-      M = g.axes;
-      S = M * M.transpose();
-      break;
+    case GlyphKind::sphere: M = g.radius * Eigen::Matrix3d::Identity(); break;
+    case GlyphKind::ellipsoid: M = g.axes; break;
     case GlyphKind::cylinder: {
       axis = g.axes.col(0);
       const double h = axis.norm();
@@ -51,13 +46,26 @@ GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) 
       M.col(0) = g.radius * e1;
       M.col(1) = g.radius * e2;
       M.col(2) = axis;
-      S = g.radius * g.radius * (Eigen::Matrix3d::Identity() - a * a.transpose());
+      disc_radius = g.radius;
       break;
     }
   }
+  // The glyph's size s (its longest semi-axis): S is stored as S / s², so neither S nor the
+  // projection's fourth powers of lengths leave float's range for huge or tiny glyphs.
+  const double size = M.colwise().stableNorm().maxCoeff();
   const Eigen::Matrix3d inv = M.inverse();
-  if (!inv.allFinite() || !(std::abs(M.determinant()) > 0))
+  if (size > 0 && size < kMinWorldSize)
+    throw InvalidInput(fmt::format("glyph {}: its size {:g} is below {:g}, the smallest the GL renderer draws", index,
+                                   size, kMinWorldSize));
+  if (!(size > 0) || !inv.allFinite() || !(std::abs((M / size).determinant()) > 0))
     throw InvalidInput(fmt::format("glyph {}: its axes are singular (no volume)", index));
+  Eigen::Matrix3d S;  // (M Mᵀ, or one end disc's for a cylinder) / s²
+  if (g.kind == GlyphKind::cylinder) {
+    const Eigen::Vector3d a = axis.normalized();
+    S = (disc_radius / size) * (disc_radius / size) * (Eigen::Matrix3d::Identity() - a * a.transpose());
+  } else {
+    S = (M / size) * (M / size).transpose();
+  }
   GpuGlyph p{};
   const Split cs = split(g.centre - origin);
   for (int i = 0; i < 3; ++i) {
@@ -71,7 +79,7 @@ GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) 
   p.centre_lo[3] = bits_float(col[0] | (col[1] << 8) | (col[2] << 16));
   p.inv[0][3] = bits_float(static_cast<std::uint32_t>(primitive_id(PrimitiveKind::glyph, index)));
   p.s0[0] = float(S(0, 0)), p.s0[1] = float(S(1, 1)), p.s0[2] = float(S(2, 2)), p.s0[3] = float(S(0, 1));
-  p.s1[0] = float(S(1, 2)), p.s1[1] = float(S(0, 2));
+  p.s1[0] = float(S(1, 2)), p.s1[1] = float(S(0, 2)), p.s1[2] = float(size);
   return p;
 }
 

@@ -6,6 +6,7 @@
 in vec3 v_dir;
 in vec3 v_offset;
 flat in float v_centre_z;
+flat in float v_scale;  // the ray parameter σ below is s / v_scale (huge and tiny glyphs stay in float)
 flat in vec3 v_inv0;
 flat in vec3 v_inv1;
 flat in vec3 v_inv2;
@@ -32,7 +33,8 @@ float s_best;
 vec3 g_best;  // gradient in parameter space at the best hit
 bool found = false;
 
-void consider(float s, vec3 grad_u, vec3 d) {
+void consider(float sigma, vec3 grad_u, vec3 d) {
+  float s = sigma * v_scale;
   if (s <= v_centre_z || (found && s >= s_best)) return;  // behind the eye, or not nearer
   if (u_cull != 0 && dot(grad_u, d) >= 0.0) return;     // back-facing
   s_best = s;
@@ -43,8 +45,8 @@ void consider(float s, vec3 grad_u, vec3 d) {
 void main() {
   if (u_count_stats != 0) atomicAdd(stats.glyph_fragments, 1u);
   mat3 inv = transpose(mat3(v_inv0, v_inv1, v_inv2));
-  vec3 o = inv * v_offset;  // ray in parameter space: u(s) = o + s·d
-  vec3 d = inv * v_dir;
+  vec3 o = inv * v_offset;  // ray in parameter space: u(σ) = o + σ·d
+  vec3 d = inv * (v_dir * v_scale);  // per unit σ
   if (u_proxy != 0) {
     s_best = 0.0;
     g_best = -d;
@@ -73,7 +75,8 @@ void main() {
   if (!found) discard;
   if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);
   // [Sigg06] eq. 9: the normal is M⁻ᵀ times the parameter-space gradient (eye axes here).
-  vec3 n = normalize(transpose(inv) * g_best);
+  vec3 n = transpose(inv) * g_best;
+  n = normalize(n / max(max(abs(n.x), abs(n.y)), abs(n.z)));  // |n|² would leave float for tiny glyphs
   if (dot(n, v_dir) > 0.0) n = -n;  // two-sided when culling is off
   float z = v_centre_z - s_best;    // eye-space z of the hit (the ray's z falls by 1 per unit s)
   gl_FragDepth = window_depth(z, u_proj);

@@ -20,8 +20,8 @@ struct Glyph {
   vec4 inv0;       // rows of M⁻¹ (world → parameter space); inv0.w: primitive id bits
   vec4 inv1;
   vec4 inv2;
-  vec4 s0;         // S = M Mᵀ (world): xx yy zz xy; cylinder: S of one end disc
-  vec4 s1;         // yz xz, —, —
+  vec4 s0;         // S / s², S = M Mᵀ (world): xx yy zz xy; cylinder: S of one end disc
+  vec4 s1;         // yz xz, s (the glyph's size, its longest semi-axis), —
   vec4 axis;       // cylinder: half axis a (caps at C ± a)
 };
 layout(std430, binding = 0) readonly buffer Glyphs { Glyph glyphs[]; };
@@ -38,6 +38,7 @@ uniform int u_first;  // index of this draw's first glyph
 out vec3 v_dir;     // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;  // ray point in the centre's view plane, relative to the centre (eye axes)
 flat out float v_centre_z;  // C.z; the ray's eye-space z is C.z − s, the eye at s = C.z
+flat out float v_scale;     // the fragment stage's unit of s: the glyph's distance (or size)
 flat out vec3 v_inv0;     // rows of M⁻¹ in eye axes
 flat out vec3 v_inv1;
 flat out vec3 v_inv2;
@@ -51,6 +52,8 @@ int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 
 // The projected ellipse (NDC) of x = C + M u (eye space), S = M Mᵀ: centre c and shape S2 =
 // L Lᵀ. From the dual conic D = P Q* Pᵀ normalised by −D₃₃ = C_z² − S_zz; the C Cᵀ terms of
 // c cᵀ + D₂ₓ₂ cancel analytically, so they are never formed (far, small glyphs keep their digits).
+// The result is invariant under (C, S) → (C/L, S/L²): callers pass lengths in units of the
+// glyph's distance, so the fourth powers stay within float's range.
 void project_ellipse(vec3 C, mat3 S, out vec2 c, out mat2 S2) {
   vec2 K = vec2(u_proj[0][0], u_proj[1][1]);
   float den = C.z * C.z - S[2][2];
@@ -74,10 +77,14 @@ void main() {
   mat3 Sw = mat3(g.s0.x, g.s0.w, g.s1.y,
                  g.s0.w, g.s0.y, g.s1.x,
                  g.s1.y, g.s1.x, g.s0.z);
-  mat3 S = u_view_rot * Sw * transpose(u_view_rot);
+  mat3 Sn = u_view_rot * Sw * transpose(u_view_rot);  // S / size²
+  float size = g.s1.z;
   vec3 a = u_view_rot * g.axis.xyz;
   // Nearest and farthest eye-space z of the glyph.
-  float reach = kind == 2u ? abs(a.z) + sqrt(max(S[2][2], 0.0)) : sqrt(max(S[2][2], 0.0));
+  float disc_reach = size * sqrt(max(Sn[2][2], 0.0));
+  float reach = kind == 2u ? abs(a.z) + disc_reach : disc_reach;
+  float L = max(abs(C.z), size);  // lengths below are in units of L
+  mat3 S = Sn * ((size / L) * (size / L));
   float z_near = C.z + reach;
   // Half a hundredth of a pixel of slack (NDC), so rounding never cuts a silhouette pixel.
   vec2 pad = 0.01 / u_viewport;
@@ -99,7 +106,7 @@ void main() {
     if (kind != 2u) {
       vec2 c;
       mat2 S2;
-      project_ellipse(C, S, c, S2);
+      project_ellipse(C / L, S, c, S2);
       S2 += mat2(pad.x * pad.x, 0.0, 0.0, pad.y * pad.y);
       // L Lᵀ = S2 (Cholesky), so c + L·(unit circle) is the ellipse.
       float l00 = sqrt(max(S2[0][0], 1e-30));
@@ -111,8 +118,8 @@ void main() {
     } else {
       vec2 c0, c1;
       mat2 S0, S1;
-      project_ellipse(C + a, S, c0, S0);
-      project_ellipse(C - a, S, c1, S1);
+      project_ellipse((C + a) / L, S, c0, S0);
+      project_ellipse((C - a) / L, S, c1, S1);
       S0 += mat2(pad.x * pad.x, 0.0, 0.0, pad.y * pad.y);
       S1 += mat2(pad.x * pad.x, 0.0, 0.0, pad.y * pad.y);
       vec2 d = c0 - c1;
@@ -136,6 +143,7 @@ void main() {
   v_dir = vec3(kk, -1.0);
   v_offset = vec3(kk * -C.z - C.xy, 0.0);
   v_centre_z = C.z;
+  v_scale = L;
   mat3 inv_world = transpose(mat3(g.inv0.xyz, g.inv1.xyz, g.inv2.xyz));  // rows → matrix
   mat3 inv_eye = inv_world * transpose(u_view_rot);
   v_inv0 = vec3(inv_eye[0][0], inv_eye[1][0], inv_eye[2][0]);

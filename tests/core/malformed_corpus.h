@@ -509,6 +509,9 @@ inline std::vector<IoCase> make_io_corpus(const std::filesystem::path& dir) {
   // Echoed tokens: a 300,000-digit number and control bytes are cut and escaped.
   add("points", "long_token.xyz", "1 2 3\n1 " + std::string(300000, '7') + "x 3\n", "bytes)");
   add("points", "control.xyz", "1 2 \x1b[31m\n", "\\x1b");
+  // Found by fuzzing (UBSan: a count past long long): refused against the file's size.
+  add("points", "count_huge.pts", "\n44444444444444444444\n\r\n3\n3", "count_huge.pts:2:");
+  add("points", "count_big.pts", "1000\n0 0 0\n", "declares 1000 points, more than the file's 11 bytes can hold");
   // PLY points with bytes after the declared vertices; a mesh PLY with a list beyond the file.
   {
     PlyDoc d;

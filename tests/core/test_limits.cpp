@@ -111,5 +111,21 @@ TEST(DegenerateTetrahedron, OneLimitEverywhere) {
   }
 }
 
+// The drawable extent: an absolute floor (kMinWorldSize) and one relative to the largest
+// coordinate (kMinRelativeExtent); empty boxes pass; tiny extents are measured without squares.
+TEST(DrawableExtent, AbsoluteAndRelativeFloors) {
+  const auto check = [](const Vector3d& lo, const Vector3d& hi) { check_drawable_extent(lo, hi, "m.qxm"); };
+  EXPECT_NO_THROW(check(Vector3d::Zero(), Vector3d(2 * kMinWorldSize, 0, 0)));
+  expect_refused<InvalidInput>([&] { check(Vector3d::Zero(), Vector3d::Constant(0.5 * kMinWorldSize)); }, "m.qxm",
+                               "the smallest size Quadrix draws");
+  expect_refused<InvalidInput>([&] { check(Vector3d::Zero(), Vector3d::Constant(1e-300)); }, "m.qxm", "1e-300");
+  const Vector3d far = Vector3d::Constant(1e12);
+  EXPECT_NO_THROW(check(far, far + Vector3d(0, 0, 2 * kMinRelativeExtent * 1e12)));
+  expect_refused<InvalidInput>([&] { check(far, far + Vector3d(0, 0, 0.5 * kMinRelativeExtent * 1e12)); }, "m.qxm",
+                               "of its largest coordinate 1e+12");
+  expect_refused<InvalidInput>([&] { check(-far, -far + Vector3d::Constant(1.0)); }, "m.qxm", "largest coordinate");
+  EXPECT_NO_THROW(check(Vector3d::Constant(1), Vector3d::Constant(-1)));  // empty
+}
+
 }  // namespace
 }  // namespace quadrix

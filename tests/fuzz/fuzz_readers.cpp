@@ -1,4 +1,5 @@
-// libFuzzer targets for every reader (one per build: -DQUADRIX_FUZZ_READER=NAME, see tools/fuzz.sh).
+// libFuzzer targets for every reader, in one binary: the reader is named by the program's name
+// (fuzz_NAME, a hard link per reader, see tools/fuzz.sh) or by QUADRIX_FUZZ_READER=NAME.
 // In-memory readers get the bytes; path-based readers get them through a file of the right
 // extension in a per-process folder. Every input must either parse or throw one of
 // core/error.h's errors; a crash, a sanitizer report or another exception is a finding.
@@ -7,24 +8,20 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <string_view>
 
-#ifndef QUADRIX_FUZZ_CORE_ONLY  // readers of core alone: linked without convert/
 #include "convert/balls.h"
 #include "convert/ellipsoids_csv.h"
 #include "convert/tetmesh_io.h"
 #include "convert/volume.h"
-#endif
 #include "core/error.h"
 #include "core/image.h"
 #include "core/implicit/expression.h"
 #include "core/io/formats.h"
 #include "core/model_io.h"
-
-#define QUADRIX_STR2(x) #x
-#define QUADRIX_STR(x) QUADRIX_STR2(x)
 
 namespace {
 
@@ -55,12 +52,34 @@ std::pair<std::string_view, std::string_view> split(std::string_view bytes) {
   return {bytes.substr(0, at), bytes.substr(at + 3)};
 }
 
+const char* const kReaders[] = {"off", "obj", "stl", "ply", "xyz", "pts", "qxm", "slim2t", "mesh", "tetgen", "values",
+                                "nrrd", "nhdr", "inr", "inrgz", "cin", "pdb", "csv", "png", "pfm", "implicit"};
+std::string_view reader;  // one of kReaders, set once before the first input
+
 }  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
+  std::string_view name;
+  if (const char* env = std::getenv("QUADRIX_FUZZ_READER")) name = env;
+  else if (*argc > 0) {
+    name = (*argv)[0];
+    if (const auto slash = name.rfind('/'); slash != std::string_view::npos) name.remove_prefix(slash + 1);
+    if (name.starts_with("fuzz_")) name.remove_prefix(5);
+  }
+  for (const char* r : kReaders)
+    if (name == r) reader = r;
+  if (reader.empty()) {
+    std::fprintf(stderr, "fuzz_readers: run as fuzz_NAME or with QUADRIX_FUZZ_READER=NAME, NAME one of:");
+    for (const char* r : kReaders) std::fprintf(stderr, " %s", r);
+    std::fprintf(stderr, "\n");
+    std::exit(2);
+  }
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace quadrix;
   const std::string_view bytes(reinterpret_cast<const char*>(data), size);
-  const std::string_view reader = QUADRIX_STR(QUADRIX_FUZZ_READER);
   try {
     if (reader == "off") io::read_off(bytes, "fuzz.off");
     else if (reader == "obj") io::read_obj(bytes, "fuzz.obj");
@@ -73,7 +92,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     else if (reader == "png") read_png(put("fuzz.png", bytes));
     else if (reader == "pfm") read_pfm(put("fuzz.pfm", bytes));
     else if (reader == "implicit") implicit::Expression::parse(bytes);
-#ifndef QUADRIX_FUZZ_CORE_ONLY
     else if (reader == "mesh") read_tet_mesh(put("fuzz.mesh", bytes));
     else if (reader == "tetgen") {  // NODE@@\nELE
       const auto [node, ele] = split(bytes);
@@ -90,7 +108,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     else if (reader == "cin") read_balls(put("fuzz.cin", bytes), {});
     else if (reader == "pdb") read_balls(put("fuzz.pdb", bytes), {});
     else if (reader == "csv") read_ellipsoids_csv(put("fuzz.csv", bytes));
-#endif
     else std::abort();  // a reader this target does not know
   } catch (const quadrix::Error&) {
   }
