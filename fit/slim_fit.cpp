@@ -1110,10 +1110,11 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
 
 SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options) {
   if (!options.cover_faces || !cloud.has_normals()) return SlimFitter(cloud, options, &surface).run();
-  // Each face's centroid joins the points with the face's normal, so coverage and the points
-  // side hold between the vertices too.
+  // Each face's centroid (and a lattice on faces much larger than their neighbours, core/io/io.h
+  // face_samples) joins the points with the face's normal, so coverage and the points side hold
+  // between the vertices too.
   PointCloud all = cloud;
-  const PointCloud faces = face_centroids(surface);
+  const PointCloud faces = face_samples(surface);
   all.points.insert(all.points.end(), faces.points.begin(), faces.points.end());
   all.normals.insert(all.normals.end(), faces.normals.begin(), faces.normals.end());
   SlimFitResult r = SlimFitter(all, options, &surface).run();

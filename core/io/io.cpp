@@ -251,6 +251,41 @@ PointCloud face_centroids(const PolygonMesh& mesh) {
   return cloud;
 }
 
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor) {
+  PointCloud cloud = face_centroids(mesh);
+  const std::size_t F = mesh.face_count();
+  if (F == 0) return cloud;
+  std::vector<double> longest(F, 0.0);
+  for (std::size_t f = 0; f < F; ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 0; k < vs.size(); ++k)
+      longest[f] = std::max(longest[f], (mesh.vertices[vs[(k + 1) % vs.size()]] - mesh.vertices[vs[k]]).norm());
+  }
+  std::vector<double> sorted = longest;
+  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(F / 2), sorted.end());
+  const double spacing = sorted[F / 2];
+  if (!(spacing > 0)) return cloud;
+  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
+  for (std::size_t f = 0; f < F; ++f) {
+    if (!(longest[f] > large_factor * spacing)) continue;
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+      if (!n.allFinite() || !(n.norm() > 1e-9 * L * L)) continue;
+      const int m = static_cast<int>(std::min(1000.0, std::ceil(L / spacing)));
+      for (int i = 0; i <= m; ++i)
+        for (int j = 0; i + j <= m; ++j) {
+          if ((i == 0 && j == 0) || i == m || j == m) continue;  // the corners
+          cloud.points.push_back(a + (double(i) / m) * (b - a) + (double(j) / m) * (c - a));
+          cloud.normals.push_back(sign * n.normalized());
+        }
+    }
+  }
+  return cloud;
+}
+
 void write_points_xyz(const PointCloud& cloud, const fs::path& path) { io::write_xyz(cloud, path); }
 
 }  // namespace quadrix

@@ -64,6 +64,13 @@ PointCloud points_from_mesh(const PolygonMesh& mesh);
 /// noise) are left out.
 PointCloud face_centroids(const PolygonMesh& mesh);
 
+/// face_centroids, plus samples on the faces much larger than their neighbours (longest edge
+/// above large_factor × the mesh's median longest edge): a barycentric lattice of spacing about
+/// that median over each triangle of the face's fan, corners left out (the vertices are points
+/// already). So the points a fit must cover leave no face interior uncovered (a filled scan hole
+/// in the bunny left a hole in its SLIM surface between a big face's vertices and centroid).
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0);
+
 /// Writes x y z [nx ny nz] lines (temporary file + rename).
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
 

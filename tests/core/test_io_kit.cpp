@@ -182,6 +182,46 @@ TEST(IoKit, ClosedMeshNormalsPointOutwardWhateverTheWinding) {
   EXPECT_NEAR(c.normals[0].norm(), 1.0, 1e-15);
 }
 
+// A strip of small triangles beside one triangle 10x larger: only the large one gets a lattice,
+// every sample lies on its face with the face's normal, and no point of the large face is farther
+// than about the small faces' size from a sample or a corner.
+TEST(IoKit, FaceSamplesCoverLargeFaces) {
+  PolygonMesh m;
+  for (int i = 0; i <= 20; ++i) m.vertices.push_back({0.1 * i, 0, 0}), m.vertices.push_back({0.1 * i, 0.1, 0});
+  for (int i = 0; i < 20; ++i) {
+    const int a = 2 * i, b = a + 1, c = a + 2, d = a + 3;
+    m.add_face(std::vector<int>{a, c, d});
+    m.add_face(std::vector<int>{a, d, b});
+  }
+  const int p = int(m.vertices.size());
+  m.vertices.push_back({0, 0.1, 0}), m.vertices.push_back({1, 0.1, 0}), m.vertices.push_back({0, 1.1, 0});
+  m.add_face(std::vector<int>{p, p + 1, p + 2});
+  const PointCloud centroids = face_centroids(m), samples = face_samples(m);
+  ASSERT_EQ(centroids.points.size(), 41u);
+  ASSERT_GT(samples.points.size(), centroids.points.size() + 40);
+  for (std::size_t i = centroids.points.size(); i < samples.points.size(); ++i) {
+    const Eigen::Vector3d& q = samples.points[i];
+    EXPECT_NEAR(q.z(), 0.0, 1e-15);
+    EXPECT_GE(q.y(), 0.1 - 1e-12);
+    EXPECT_LE(q.x() + q.y(), 1.1 + 1e-12);
+    EXPECT_NEAR(std::abs(samples.normals[i].z()), 1.0, 1e-12);
+  }
+  // Every point of the large face is within 0.1 (the lattice spacing, about the small faces'
+  // longest edge 0.141) of a sample or one of its corners; with centroids only, 0.33 away.
+  double worst = 0, worst_centroids = 0;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; i + j <= 40; ++j) {
+      const Eigen::Vector3d x(i / 40.0, 0.1 + j / 40.0, 0);
+      double d = std::min({(x - m.vertices[p]).norm(), (x - m.vertices[p + 1]).norm(), (x - m.vertices[p + 2]).norm()});
+      double dc = d;
+      for (const auto& q : centroids.points) dc = std::min(dc, (x - q).norm());
+      for (const auto& q : samples.points) d = std::min(d, (x - q).norm());
+      worst = std::max(worst, d), worst_centroids = std::max(worst_centroids, dc);
+    }
+  EXPECT_LE(worst, 0.1);
+  EXPECT_GT(worst_centroids, 0.3);
+}
+
 TEST(IoKit, PlyKindsByContent) {
   ScratchDir dir("io-kit");
   write_model(test::make_sample_model(false), dir / "m.ply");

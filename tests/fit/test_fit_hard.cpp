@@ -125,7 +125,7 @@ Outcome fit_and_measure(const Shape& s, double rel, const SlimFitOptions& extra 
   // neighbourhood (measure_point) includes them: measure the same set.
   PointCloud measured = input;
   if (with_faces && input.has_normals()) {
-    const PointCloud faces = face_centroids(s.mesh);
+    const PointCloud faces = face_samples(s.mesh);
     measured.points.insert(measured.points.end(), faces.points.begin(), faces.points.end());
     measured.normals.insert(measured.normals.end(), faces.normals.begin(), faces.normals.end());
   }
