@@ -114,8 +114,9 @@ struct SlimFitOptions {
   /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
   /// the model as `slim_offset`, and renderers use it.
   double blend_offset = 0.5;
-  /// With a mesh (the fit_slim overload below): its faces' centroids join the points, fitted and
-  /// covered like them, so the surface has no holes between the vertices.
+  /// With a mesh (the fit_slim overload below): its faces' centroids, and a lattice on faces much
+  /// larger than their neighbours (core/io/io.h face_samples), join the points, fitted and covered
+  /// like them, so the surface has no holes between the vertices.
   bool cover_faces = true;
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
