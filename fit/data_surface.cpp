@@ -155,10 +155,16 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
   auto& m = *s.impl_;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
-    for (std::size_t k = 1; k + 1 < vs.size(); ++k)
-      m.triangles.push_back({mesh.vertices[vs[0]], mesh.vertices[vs[k]], mesh.vertices[vs[k + 1]]});
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
+      // A degenerate triangle (a pole's sliver of a lat-long grid) carries no surface, but a ray
+      // along an edge of it "hits" it with no defined side: the probe heights then start inside.
+      const double L2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+      if (!((b - a).cross(c - a).norm() > 1e-12 * L2)) continue;
+      m.triangles.push_back({a, b, c});
+    }
   }
-  if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces");
+  if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces (of non-zero area)");
   // Open edges (used by one face): their vertices and midpoints, with the tangent into the face.
   // Edge uses by sorting (with a std::map here from_mesh was 6.7 % of a bunny fit profile).
   std::vector<std::pair<int, int>> edges;
