@@ -52,6 +52,7 @@ struct Ball {
   std::optional<ClipPlane> clip;  // sharp features: the patch keeps the sheet of its centre
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
   bool settled = false;      // the surface side (BallFitter::settle) was checked
+  std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return !clip || (clip->keeps(u) && n.dot(sheet) >= n.dot(other));
@@ -114,6 +115,66 @@ struct Subsamples {
   }
 };
 
+// The faces of the data's mesh, for face patches: which face each face sample lies on, and per
+// face the sample at its centroid and its largest centroid–vertex distance.
+struct FaceSet {
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const PolygonMesh* mesh = nullptr;
+  std::vector<std::uint32_t> face_of;   // per point: its face, or kNone (a cloud point)
+  std::vector<std::uint32_t> centroid;  // per face: the point at its centroid, or kNone
+  std::vector<double> reach;            // per face: largest centroid–vertex distance
+  std::vector<std::optional<Eigen::Vector3d>> open_edge;  // per face: its longest open edge's
+                                                          // inward normal in the face, through that edge
+  std::vector<double> open_offset;      // per face: that edge's offset along the normal from the centroid
+
+  FaceSet(const PolygonMesh& m, std::vector<std::uint32_t> of, const std::vector<Eigen::Vector3d>& P)
+      : mesh(&m), face_of(std::move(of)), centroid(m.face_count(), kNone), reach(m.face_count(), 0.0) {
+    for (std::size_t i = 0; i < face_of.size(); ++i) {
+      const auto f = face_of[i];
+      if (f == kNone || centroid[f] != kNone) continue;
+      centroid[f] = static_cast<std::uint32_t>(i);  // face_samples lists the centroids first
+      for (const int v : m.face(f)) reach[f] = std::max(reach[f], (m.vertices[v] - P[i]).norm());
+    }
+    // Open edges (used by one face), by sorting: the face's plane must stop there, not run on
+    // past the data's boundary.
+    std::vector<std::pair<int, int>> edges;
+    for (std::size_t f = 0; f < m.face_count(); ++f) {
+      const auto vs = m.face(f);
+      for (std::size_t k = 0; k < vs.size(); ++k) edges.push_back(std::minmax(vs[k], vs[(k + 1) % vs.size()]));
+    }
+    std::sort(edges.begin(), edges.end());
+    open_edge.resize(m.face_count());
+    open_offset.assign(m.face_count(), 0.0);
+    for (std::size_t f = 0; f < m.face_count(); ++f) {
+      if (centroid[f] == kNone) continue;
+      const auto vs = m.face(f);
+      const Eigen::Vector3d& c = P[centroid[f]];
+      double longest = 0;
+      for (std::size_t k = 0; k < vs.size(); ++k) {
+        const int a = vs[k], b = vs[(k + 1) % vs.size()];
+        const std::pair<int, int> key = std::minmax(a, b);
+        const auto [lo, hi] = std::equal_range(edges.begin(), edges.end(), key);
+        if (hi - lo != 1) continue;
+        const Eigen::Vector3d e = m.vertices[b] - m.vertices[a];
+        if (!(e.norm() > longest)) continue;
+        Eigen::Vector3d in = c - m.vertices[a];
+        in -= in.dot(e) / e.squaredNorm() * e;
+        if (!(in.norm() > 0)) continue;
+        longest = e.norm();
+        open_edge[f] = in.normalized();
+        open_offset[f] = in.norm();
+      }
+    }
+  }
+  double distance(std::uint32_t f, const Eigen::Vector3d& x) const {
+    const auto vs = mesh->face(f);
+    double d = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k)
+      d = std::min(d, point_triangle_distance(x, mesh->vertices[vs[0]], mesh->vertices[vs[k]], mesh->vertices[vs[k + 1]]));
+    return d;
+  }
+};
+
 struct BallFitter {
   const std::vector<Eigen::Vector3d>& P;
   const std::vector<Eigen::Vector3d>& N;
@@ -129,6 +190,43 @@ struct BallFitter {
   };
   const Subsamples* subsamples = nullptr;
   const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
+  const FaceSet* faces = nullptr;     // face patches (SlimFitOptions::face_patches)
+
+  // The face point ci lies on (its own, for a face sample; else among the faces of its nearest
+  // face samples), as a face patch: the face's plane around its centroid.
+  std::optional<Ball> face_ball(std::uint32_t ci, Scratch& s) const {
+    if (!faces) return std::nullopt;
+    // Only below the sampling (nearest sample farther than face_patch_spacing·E): above it a
+    // failed fit is a local defect, and the tangent disc below keeps it local.
+    index.nearest(P[ci], 2, s.nb);
+    if (s.nb.size() < 2 || !(std::sqrt(s.nb[1].second) > opt.face_patch_spacing * E)) return std::nullopt;
+    std::uint32_t f = faces->face_of[ci];
+    if (f == FaceSet::kNone) {
+      // A point of the cloud (a vertex): the face it lies on among its nearest samples' faces.
+      index.nearest(P[ci], 24, s.nb);
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& [j, d2] : s.nb) {
+        const auto fj = faces->face_of[j];
+        if (fj == FaceSet::kNone || fj == f) continue;
+        if (const double d = faces->distance(fj, P[ci]); d < best) best = d, f = fj;
+      }
+      if (!(best <= 1e-3 * E)) return std::nullopt;
+    }
+    const std::uint32_t c = faces->centroid[f];
+    const double R = c == FaceSet::kNone ? 0.0 : opt.face_patch_reach * faces->reach[f];
+    if (c == FaceSet::kNone || !(R > 0)) return std::nullopt;
+    if (!((P[ci] - P[c]).norm() < R)) return std::nullopt;  // it must cover ci
+    Ball b{c, R, Quadric::plane(N[c], 0.0), true, true, 0, 0, 0, std::nullopt};
+    if (const auto& in = faces->open_edge[f]) {
+      // Clipped along its open edge, a hair outside it so the edge's vertices stay.
+      const double offset = faces->open_offset[f] + in->dot(P[c] - P[faces->centroid[f]]);
+      b.clip = ClipPlane{*in, (offset + 1e-3 * E) / R};
+      b.sheet = N[c], b.other = -N[c];
+    }
+    b.face = f;
+    b.settled = true;
+    return b;
+  }
 
   // The local form of the surface side: the patch's zero set inside its ball stays within
   // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
@@ -207,7 +305,7 @@ struct BallFitter {
   // nothing does, the smallest ball within E on the points side (verification reports the rest).
   Ball settle(Ball b, Scratch& s) const {
     b.settled = true;
-    if (!b.is_bounded || surface_ok(b)) return b;
+    if (b.face >= 0 || !b.is_bounded || surface_ok(b)) return b;
     const std::uint32_t ci = b.centre;
     if (auto c = try_both_sides(ci, b.R, s)) return c->settled = true, *c;
     double R = b.R;
@@ -394,6 +492,8 @@ struct BallFitter {
         R *= 0.7;
         ok = try_ball(ci, R, s);
       }
+      if (!ok)
+        if (auto f = face_ball(ci, s)) return *f;
       if (!ok) {
         // Noise beyond E: the tangent plane at the centre in a ball that holds no other point, so
         // the blend at this point mixes it only with patches checked against it (bunny at 1e-4:
@@ -485,8 +585,9 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
 // verification on both sides of the contract and repair of the patches at fault.
 class SlimFitter {
 public:
-  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)
-      : cloud_(cloud), opt_(options), P_(cloud.points), surface_(surface) {}
+  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface,
+             std::vector<std::uint32_t> face_of = {})
+      : cloud_(cloud), opt_(options), P_(cloud.points), surface_(surface), face_of_(std::move(face_of)) {}
 
   SlimFitResult run() {
     const auto t_start = Clock::now();
@@ -542,6 +643,10 @@ private:
     fitter_ = std::make_unique<BallFitter>(BallFitter{P_, N_, *index_, opt_, E_, opt_.probe_factor * E_});
     fitter_->subsamples = subsamples_.get();
     fitter_->data = data_.get();
+    if (surface_ && opt_.face_patches && face_of_.size() == n) {
+      faces_ = std::make_unique<FaceSet>(*surface_, std::move(face_of_), P_);
+      fitter_->faces = faces_.get();
+    }
     fitter_->diagonal = st_.diagonal;
     st_.subsample_levels = subsamples_->levels.size();
     order_.resize(n);
@@ -581,6 +686,15 @@ private:
   void cover_of(std::size_t b, std::vector<Neighbour>& nb) {
     const Ball& ball = balls_[b];
     const Eigen::Vector3d& c = P_[ball.centre];
+    if (ball.face >= 0) {  // a face patch covers the points on its face
+      index_->radius(c, ball.R, nb);
+      auto& cov = covers_[b];
+      cov.clear();
+      for (const auto& [p, d2] : nb)
+        if (faces_->distance(std::uint32_t(ball.face), P_[p]) <= 1e-3 * E_) cov.push_back(p);
+      balls_[b].count = nb.size();
+      return;
+    }
     index_->radius(c, (ball.is_bounded ? opt_.cover_fraction : 0.5) * ball.R, nb);
     auto& cov = covers_[b];
     cov.clear();
@@ -985,7 +1099,10 @@ private:
       if (!(point_error_[i] <= E_) && covered_[i]) stubborn.push_back(std::uint32_t(i)), stubborn_caps.push_back(cap_[i]);
     if (stubborn.empty() || stubborn.size() > P_.size() / 100) return;
     const std::size_t first = balls_.size();
+    // Centred on the point itself: a face patch would centre on its face's centroid instead.
+    const FaceSet* faces = std::exchange(fitter_->faces, nullptr);
     evaluate(stubborn, &stubborn_caps);
+    fitter_->faces = faces;
     std::vector<std::uint32_t> fresh(balls_.size() - first);
     std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
     settle(fresh);
@@ -1100,6 +1217,8 @@ private:
   std::vector<double> point_reach_;                  // per point: how far its probe's blend looked
   std::vector<std::uint8_t> other_direction_;         // per point: measured along its neighbourhood's normal
   std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
+  std::vector<std::uint32_t> face_of_;                // per point: its face (face samples), until setup
+  std::unique_ptr<FaceSet> faces_;                    // face patches
 };
 
 }  // namespace
@@ -1114,10 +1233,11 @@ SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, cons
   // face_samples) joins the points with the face's normal, so coverage and the points side hold
   // between the vertices too.
   PointCloud all = cloud;
-  const PointCloud faces = face_samples(surface);
+  std::vector<std::uint32_t> face_of(cloud.points.size(), FaceSet::kNone);
+  const PointCloud faces = face_samples(surface, 2.0, &face_of);
   all.points.insert(all.points.end(), faces.points.begin(), faces.points.end());
   all.normals.insert(all.normals.end(), faces.normals.begin(), faces.normals.end());
-  SlimFitResult r = SlimFitter(all, options, &surface).run();
+  SlimFitResult r = SlimFitter(all, options, &surface, std::move(face_of)).run();
   r.model.metadata["face_samples"] = std::to_string(all.points.size() - cloud.points.size());
   return r;
 }

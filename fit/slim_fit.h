@@ -118,6 +118,16 @@ struct SlimFitOptions {
   /// larger than their neighbours (core/io/io.h face_samples), join the points, fitted and covered
   /// like them, so the surface has no holes between the vertices.
   bool cover_faces = true;
+  /// With cover_faces: where no quadric through a point's neighbours stays within E (a scan
+  /// whose vertices jitter by more than E, fitted below its noise), the point is covered by the
+  /// plane of the face it lies on, in a ball of face_patch_reach × the face's largest
+  /// centroid–vertex distance around the face's centroid. Faces sharing a vertex all pass
+  /// through it, so the blend keeps the vertex and joins up between vertices (no holes).
+  /// Only where E is below the sampling: the point's nearest sample (vertex or face sample)
+  /// farther than face_patch_spacing·E.
+  bool face_patches = true;
+  double face_patch_reach = 1.0;
+  double face_patch_spacing = 10.0;
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
   /// only and gets a clip plane (SlimPatch::clip) between the two sheets.

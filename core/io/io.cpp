@@ -231,7 +231,7 @@ PointCloud points_from_mesh(const PolygonMesh& mesh) {
   return cloud;
 }
 
-PointCloud face_centroids(const PolygonMesh& mesh) {
+PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_of) {
   const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
   PointCloud cloud;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
@@ -247,12 +247,13 @@ PointCloud face_centroids(const PolygonMesh& mesh) {
     if (!n.allFinite() || !(n.norm() > 1e-9 * edge2)) continue;
     cloud.points.push_back(c / double(vs.size()));
     cloud.normals.push_back(sign * n.normalized());
+    if (face_of) face_of->push_back(static_cast<std::uint32_t>(f));
   }
   return cloud;
 }
 
-PointCloud face_samples(const PolygonMesh& mesh, double large_factor) {
-  PointCloud cloud = face_centroids(mesh);
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vector<std::uint32_t>* face_of) {
+  PointCloud cloud = face_centroids(mesh, face_of);
   const std::size_t F = mesh.face_count();
   if (F == 0) return cloud;
   std::vector<double> longest(F, 0.0);
@@ -280,6 +281,7 @@ PointCloud face_samples(const PolygonMesh& mesh, double large_factor) {
           if ((i == 0 && j == 0) || i == m || j == m) continue;  // the corners
           cloud.points.push_back(a + (double(i) / m) * (b - a) + (double(j) / m) * (c - a));
           cloud.normals.push_back(sign * n.normalized());
+          if (face_of) face_of->push_back(static_cast<std::uint32_t>(f));
         }
     }
   }

@@ -17,7 +17,9 @@
 /// Every reader goes through io::read_file and io::TextReader or ply::File: counts are checked
 /// against the bytes left before anything is reserved, bytes after the declared data are an
 /// error, and every message names the file (`FILE:LINE:COL: …`, binary `FILE: byte N: …`).
+#include <cstdint>
 #include <filesystem>
+#include <vector>
 
 #include "core/io/point_cloud.h"
 #include "core/io/polygon_mesh.h"
@@ -62,14 +64,16 @@ PointCloud points_from_mesh(const PolygonMesh& mesh);
 /// One sample per face: its centroid with its unit normal, oriented as points_from_mesh orients
 /// its vertex normals. Slivers (area at rounding level against their longest edge, whose normal is
 /// noise) are left out.
-PointCloud face_centroids(const PolygonMesh& mesh);
+/// face_of (optional): the face index of each sample, appended.
+PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_of = nullptr);
 
 /// face_centroids, plus samples on the faces much larger than their neighbours (longest edge
 /// above large_factor × the mesh's median longest edge): a barycentric lattice of spacing about
 /// that median over each triangle of the face's fan, corners left out (the vertices are points
 /// already). So the points a fit must cover leave no face interior uncovered (a filled scan hole
 /// in the bunny left a hole in its SLIM surface between a big face's vertices and centroid).
-PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0);
+/// face_of (optional): the face index of each sample, appended (centroids first, as above).
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0, std::vector<std::uint32_t>* face_of = nullptr);
 
 /// Writes x y z [nx ny nz] lines (temporary file + rename).
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
