@@ -53,6 +53,7 @@ struct Ball {
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
   bool settled = false;      // the surface side (BallFitter::settle) was checked
   std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
+  int surface_lattice = 0;   // settle's surface_ok passed on a lattice this fine (lines per side)
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return !clip || (clip->keeps(u) && n.dot(sheet) >= n.dot(other));
@@ -305,13 +306,21 @@ struct BallFitter {
   // nothing does, the smallest ball within E on the points side (verification reports the rest).
   Ball settle(Ball b, Scratch& s) const {
     b.settled = true;
-    if (b.face >= 0 || !b.is_bounded || surface_ok(b)) return b;
+    if (b.face >= 0 || !b.is_bounded) return b;
+    // Passed surface_ok: its zero set was checked on a lattice of at least this many lines per
+    // side (finer where a sample could not vouch for its cell).
+    const auto passed = [&](Ball c) {
+      c.settled = true;
+      c.surface_lattice = opt.local_surface_grid << opt.local_surface_depth;
+      return c;
+    };
+    if (surface_ok(b)) return passed(b);
     const std::uint32_t ci = b.centre;
-    if (auto c = try_both_sides(ci, b.R, s)) return c->settled = true, *c;
+    if (auto c = try_both_sides(ci, b.R, s)) return passed(*c);
     double R = b.R;
     for (int k = 0; k < opt.shrink_steps; ++k) {
       R *= opt.shrink_step;
-      if (auto c = try_both_sides(ci, R, s)) return c->settled = true, *c;
+      if (auto c = try_both_sides(ci, R, s)) return passed(*c);
       if (auto c = try_ball(ci, R, s)) b = *c, b.settled = true;
     }
     return b;
@@ -922,7 +931,9 @@ private:
                                     opt_.verify_surface_grid, opt_.verify_max_grid);
         // A patch's own zero set does not change between rounds: checked once per candidate ball.
         double& excess = patch_excess_[chosen_[k]];
-        if (excess < 0) excess = zero_set_excess(slims[k], *data_, local, grid, 1);
+        // Skipped when settle's check already passed on a lattice at least as fine (same bound).
+        if (excess < 0)
+          excess = grid <= balls_[chosen_[k]].surface_lattice ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
         if (const double d = excess; d > 0) {
           at_fault[k] = 1;
           errors.push_back(d);
