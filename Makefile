@@ -24,8 +24,10 @@ build: configure
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 1500
 
-# ASan + UBSan on a fast subset: the core suites (I/O kit and readers, limits, math, reference,
-# implicits), run directly (no CLI binary, no GL, no CGAL): the code every command goes through.
+# ASan + UBSan on a fast subset: the core suites (I/O kit and readers, the checked-in malformed corpus
+# through them, limits, math, reference, implicits), run directly (no CLI binary, no GL, no CGAL): the
+# code every command goes through. Deterministic (fixed seeds, no fuzzing); CI runs it after `make
+# test` (.ci/run), in its own build folder: about 1,000 s of CPU cold, 30 s warm.
 SAN_TESTS ?= test_core_math test_core_io test_core_reference test_core_implicit
 test-sanitize: deps
 	cmake -S . -B $(SAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQUADRIX_SANITIZE=ON -DQUADRIX_BENCHMARKS=OFF $(CMAKE_ARGS)
