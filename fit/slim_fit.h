@@ -59,8 +59,11 @@ struct SlimFitOptions {
   /// 12.2 s; ×16: 2,433 candidates 199 patches 4.9 s; ×8: 238 patches 3.3 s; ×4: 249 patches
   /// 2.1 s. At 1e-3 (task-clock s, one run each, lazy_surface_check on): ×12 8,192 candidates,
   /// 1,504 patches, 6.3 s; ×4 5,697, 1,574, 5.0 s; ×3 1,616 patches; ×2 3,660, 1,677, 4.9 s.
-  /// The decimated mesh at that error has 5,086 triangles, so ×4 is 0.31× of it.
-  double candidates_per_patch = 4.0;
+  /// The decimated mesh at that error has 5,086 triangles, so ×4 is 0.31× of it. Later (quiet,
+  /// task-clock, verification's lone-patch lattice skipped where settle's was as fine): ×4 1,604
+  /// patches 3.56–3.89 s, ×3 1,650 patches 3.06 s, ×2 1,695 patches 3.16 s (bunny 1e-3; the
+  /// armadillo's 8,000-candidate cap binds at ×3 and ×4).
+  double candidates_per_patch = 3.0;
   /// Support radius search: geometric growth by this factor from the min_points-th neighbour
   /// distance, then this many bisection steps (in log R).
   double radius_growth = 2.0;
