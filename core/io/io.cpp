@@ -252,7 +252,8 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
   return cloud;
 }
 
-PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vector<std::uint32_t>* face_of) {
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vector<std::uint32_t>* face_of,
+                        double min_spacing) {
   PointCloud cloud = face_centroids(mesh, face_of);
   const std::size_t F = mesh.face_count();
   if (F == 0) return cloud;
@@ -265,7 +266,7 @@ PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vecto
   std::vector<double> sorted = longest;
   std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(F / 2), sorted.end());
   const double spacing = sorted[F / 2];
-  if (!(spacing > 0)) return cloud;
+  if (!(spacing > 0) || !(spacing > min_spacing)) return cloud;
   const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
   for (std::size_t f = 0; f < F; ++f) {
     if (!(longest[f] > large_factor * spacing)) continue;

@@ -73,7 +73,9 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
 /// already). So the points a fit must cover leave no face interior uncovered (a filled scan hole
 /// in the bunny left a hole in its SLIM surface between a big face's vertices and centroid).
 /// face_of (optional): the face index of each sample, appended (centroids first, as above).
-PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0, std::vector<std::uint32_t>* face_of = nullptr);
+/// The lattice is added only when that median edge exceeds min_spacing.
+PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0, std::vector<std::uint32_t>* face_of = nullptr,
+                        double min_spacing = 0.0);
 
 /// Writes x y z [nx ny nz] lines (temporary file + rename).
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
