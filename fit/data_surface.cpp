@@ -11,6 +11,7 @@
 
 #include "core/bvh.h"
 #include "core/error.h"
+#include "core/io/io.h"
 #include "core/morton.h"
 #include "core/ray.h"
 #include "fit/point_index.h"
@@ -167,17 +168,7 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
   if (m.triangles.empty()) throw InvalidInput("DataSurface: the mesh has no faces (of non-zero area)");
   // Open edges (used by one face): their vertices and midpoints, with the tangent into the face.
   // Edge uses by sorting (with a std::map here from_mesh was 6.7 % of a bunny fit profile).
-  std::vector<std::pair<int, int>> edges;
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    const auto vs = mesh.face(f);
-    for (std::size_t k = 0; k < vs.size(); ++k) edges.push_back(std::minmax(vs[k], vs[(k + 1) % vs.size()]));
-  }
-  std::sort(edges.begin(), edges.end());
-  const auto open_edge = [&](int a, int b) {
-    const std::pair<int, int> key = std::minmax(a, b);
-    const auto [lo, hi] = std::equal_range(edges.begin(), edges.end(), key);
-    return hi - lo == 1;
-  };
+  const EdgeUses uses(mesh);
   std::map<int, Eigen::Vector3d> vertex_inward;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
@@ -186,7 +177,7 @@ DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
     centroid /= double(vs.size());
     for (std::size_t k = 0; k < vs.size(); ++k) {
       const int a = vs[k], b = vs[(k + 1) % vs.size()];
-      if (!open_edge(a, b)) continue;
+      if (!uses.open(a, b)) continue;
       const Eigen::Vector3d e = (mesh.vertices[b] - mesh.vertices[a]).normalized();
       const Eigen::Vector3d mid = 0.5 * (mesh.vertices[a] + mesh.vertices[b]);
       Eigen::Vector3d in = centroid - mid;

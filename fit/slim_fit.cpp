@@ -18,6 +18,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "core/io/io.h"
 #include "core/log.h"
 #include "core/reference.h"
 #include "core/slim.h"
@@ -136,14 +137,9 @@ struct FaceSet {
       centroid[f] = static_cast<std::uint32_t>(i);  // face_samples lists the centroids first
       for (const int v : m.face(f)) reach[f] = std::max(reach[f], (m.vertices[v] - P[i]).norm());
     }
-    // Open edges (used by one face), by sorting: the face's plane must stop there, not run on
-    // past the data's boundary.
-    std::vector<std::pair<int, int>> edges;
-    for (std::size_t f = 0; f < m.face_count(); ++f) {
-      const auto vs = m.face(f);
-      for (std::size_t k = 0; k < vs.size(); ++k) edges.push_back(std::minmax(vs[k], vs[(k + 1) % vs.size()]));
-    }
-    std::sort(edges.begin(), edges.end());
+    // Open edges (used by one face): the face's plane must stop there, not run on past the
+    // data's boundary.
+    const EdgeUses uses(m);
     open_edge.resize(m.face_count());
     open_offset.assign(m.face_count(), 0.0);
     for (std::size_t f = 0; f < m.face_count(); ++f) {
@@ -153,9 +149,7 @@ struct FaceSet {
       double longest = 0;
       for (std::size_t k = 0; k < vs.size(); ++k) {
         const int a = vs[k], b = vs[(k + 1) % vs.size()];
-        const std::pair<int, int> key = std::minmax(a, b);
-        const auto [lo, hi] = std::equal_range(edges.begin(), edges.end(), key);
-        if (hi - lo != 1) continue;
+        if (!uses.open(a, b)) continue;
         const Eigen::Vector3d e = m.vertices[b] - m.vertices[a];
         if (!(e.norm() > longest)) continue;
         Eigen::Vector3d in = c - m.vertices[a];
@@ -220,8 +214,7 @@ struct BallFitter {
     Ball b{c, R, Quadric::plane(N[c], 0.0), true, true, 0, 0, 0, std::nullopt};
     if (const auto& in = faces->open_edge[f]) {
       // Clipped along its open edge, a hair outside it so the edge's vertices stay.
-      const double offset = faces->open_offset[f] + in->dot(P[c] - P[faces->centroid[f]]);
-      b.clip = ClipPlane{*in, (offset + 1e-3 * E) / R};
+      b.clip = ClipPlane{*in, (faces->open_offset[f] + 1e-3 * E) / R};
       b.sheet = N[c], b.other = -N[c];
     }
     b.face = f;

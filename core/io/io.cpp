@@ -188,6 +188,20 @@ PointCloud read_surface_points(const fs::path& path) {
   return cloud;
 }
 
+EdgeUses::EdgeUses(const PolygonMesh& mesh) {
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 0; k < vs.size(); ++k) edges_.push_back(std::minmax(vs[k], vs[(k + 1) % vs.size()]));
+  }
+  std::sort(edges_.begin(), edges_.end());
+}
+
+bool EdgeUses::open(int a, int b) const {
+  const std::pair<int, int> key = std::minmax(a, b);
+  const auto [lo, hi] = std::equal_range(edges_.begin(), edges_.end(), key);
+  return hi - lo == 1;
+}
+
 bool mesh_wound_inward(const PolygonMesh& mesh) {
   std::vector<std::uint64_t> edges;  // undirected edges, one entry per face using it
   double volume6 = 0;

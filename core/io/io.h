@@ -19,6 +19,7 @@
 /// error, and every message names the file (`FILE:LINE:COL: …`, binary `FILE: byte N: …`).
 #include <cstdint>
 #include <filesystem>
+#include <utility>
 #include <vector>
 
 #include "core/io/point_cloud.h"
@@ -55,6 +56,17 @@ PointCloud read_surface_points(const std::filesystem::path& path);
 /// a scan with a few holes, like bunny.ply: 0.2 %) encloses a negative signed volume, i.e. its faces
 /// are wound clockwise seen from outside. Open sheets: false (their winding is taken as it is).
 bool mesh_wound_inward(const PolygonMesh& mesh);
+
+/// Which edges of a mesh are open (used by one face): every face's edges, sorted once.
+class EdgeUses {
+public:
+  explicit EdgeUses(const PolygonMesh& mesh);
+  /// Whether the edge between vertices a and b is used by exactly one face.
+  bool open(int a, int b) const;
+
+private:
+  std::vector<std::pair<int, int>> edges_;  // (min, max) per face edge, sorted
+};
 
 /// The vertices used by some face, each with the unit area-weighted sum of its faces' normals
 /// (Newell's polygon normal), flipped when mesh_wound_inward, so they point outward.
