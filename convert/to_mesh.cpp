@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <numeric>
 #include <numbers>
 #include <tuple>
 #include <unordered_map>
@@ -14,6 +16,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "core/reference.h"
 #include "core/slim.h"
 #include "fit/data_surface.h"
@@ -474,17 +477,24 @@ std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceO
 
 /// Distance along the line p + s·n (|s| ≤ reach) to the nearest of up to four surfaces it meets
 /// (a glyph buried in another is met behind the one covering it), or −1 when it meets none.
+/// The line is traced both ways: a surface is as near whichever way it faces (where a grid's
+/// labelling reads a patch's sides the other way round, its triangles lie on the surface
+/// reversed; the ray along the triangle's normal sees only the surface's back there).
 double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
                      const Eigen::Vector3d& n, double reach) {
-  const Ray ray{p + reach * n, -n};
-  double best = -1.0, tmin = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
-    if (!hit) break;
-    const double d = std::abs(hit->t - reach);
-    if (best < 0 || d < best) best = d;
-    if (hit->t >= reach) break;  // later hits are farther from p
-    tmin = hit->t + 1e-9 * reach;
+  double best = -1.0;
+  for (const double side : {1.0, -1.0}) {
+    const Ray ray{p + side * reach * n, -side * n};
+    double tmin = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
+      if (!hit) break;
+      const double d = std::abs(hit->t - reach);
+      if (best < 0 || d < best) best = d;
+      if (hit->t >= reach) break;  // later hits are farther from p
+      tmin = hit->t + 1e-9 * reach;
+    }
+    if (best == 0.0) break;
   }
   return best;
 }
@@ -535,6 +545,15 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
 
 MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
                              double reach, double bound) {
+  static const std::vector<Eigen::Vector3d> kLines = [] {
+    std::vector<Eigen::Vector3d> v;
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z)
+          if (Eigen::Vector3i c(x, y, z); c.squaredNorm() > 0 && c.dot(Eigen::Vector3i(9, 3, 1)) > 0)  // one per line
+            v.push_back(c.cast<double>().normalized());
+    return v;
+  }();
   const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
   struct Sample {
     Eigen::Vector3d p, n;
@@ -563,6 +582,15 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const auto& [p, n] = samples[i];
       d[i] = line_distance(scene, trace, p, n, reach);
+      if (d[i] >= 0 && d[i] <= bound) continue;
+      // Along the normal the surface may lie at a slant (a crease of the mesh, a normal the grid
+      // tilted): every hit along any line through p bounds p's distance from above, so the 13
+      // lines through p towards its 26 grid neighbours tighten it (the normal's line stays one).
+      for (const Eigen::Vector3d& dir : kLines) {
+        const double dq = line_distance(scene, trace, p, dir, reach);
+        if (dq >= 0 && (d[i] < 0 || dq < d[i])) d[i] = dq;
+        if (d[i] >= 0 && d[i] <= bound) break;
+      }
       if (d[i] >= 0) continue;
       const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
       for (const double eps : {1e-3 * reach, 1e-2 * reach, 0.05 * reach, 0.2 * reach}) {
@@ -596,6 +624,19 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
     const std::size_t k = std::min(found.size() - 1, static_cast<std::size_t>(0.99 * found.size()));
     std::nth_element(found.begin(), found.begin() + k, found.end());
     out.p99 = found[k];
+  }
+  if (log::level() <= log::Level::debug) {  // where the mesh strays most: -vv
+    std::vector<std::size_t> order(d.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    const auto key = [&](std::size_t i) { return d[i] < 0 ? std::numeric_limits<double>::infinity() : d[i]; };
+    const std::size_t shown = std::min<std::size_t>(8, order.size());
+    std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(shown), order.end(),
+                      [&](std::size_t a, std::size_t b) { return key(a) > key(b); });
+    for (std::size_t k = 0; k < shown && key(order[k]) > bound; ++k) {
+      const auto& [p, n] = samples[order[k]];
+      log::debug("mesh: sample at ({:.6g}, {:.6g}, {:.6g}) normal ({:.3f}, {:.3f}, {:.3f}): {}", p.x(), p.y(), p.z(), n.x(),
+                 n.y(), n.z(), d[order[k]] < 0 ? std::string("no surface along its normal") : fmt::format("{:.3g} from the surface", d[order[k]]));
+    }
   }
   // A miss is at least `reach` away (nothing was hit within it).
   if (out.misses > 0) out.max = std::max(out.max, reach);
@@ -642,6 +683,14 @@ std::vector<std::array<Eigen::Vector3i, 4>> edgewise_subdivision(int k) {
           if (ok) out.push_back(t);
         }
   return out;
+}
+
+MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double reach, double bound) {
+  if (model.empty()) throw InvalidInput("mesh_distance: the model is empty (no primitives)");
+  const ReferenceScene scene(model);
+  TraceOptions trace;
+  trace.slim.offset = slim_offset_of(model);
+  return mesh_to_surface(scene, trace, mesh, reach, bound);
 }
 
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {

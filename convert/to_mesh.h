@@ -8,8 +8,9 @@
 /// | glyphs     | icospheres (spheres, ellipsoids) and n-gon prisms with capped ends (cylinders), vertices on the surface |
 ///
 /// The error is measured both ways: mesh → surface at every vertex, edge midpoint and face
-/// centroid (distance along the sample's normal to what the CPU reference ray caster draws,
-/// core/reference.h; an upper bound of the Euclidean distance), and surface → mesh from rendered
+/// centroid (distance along the sample's normal line, both ways, to what the CPU reference ray
+/// caster draws, core/reference.h, and along 13 more lines where that is beyond the bound; an
+/// upper bound of the Euclidean distance: see mesh_distance), and surface → mesh from rendered
 /// views (fit/surface_error.h). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes); then the smaller mesh is kept.
@@ -52,6 +53,13 @@ struct ToMeshResult {
 
 /// Meshes every primitive of the model. \throws InvalidInput for an empty model.
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& options = {});
+
+/// Mesh → drawn surface for any triangle mesh, as mesh_model measures its own: at every vertex,
+/// edge midpoint and face centroid, the nearest surface the CPU reference draws along the
+/// sample's normal line (both ways, within reach); where that is beyond the bound, also along
+/// the 13 lines towards the sample's grid neighbours. Every hit is a point of the surface, so
+/// each figure is an upper bound of the Euclidean distance. \throws InvalidInput for an empty model.
+MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double reach, double bound);
 
 /// The edgewise subdivision of the tetrahedron (0,0,0), (k,0,0), (k,k,0), (k,k,k) into k³
 /// tetrahedra (Kuhn's cube split restricted to it): each as four lattice points (x₁ ≥ x₂ ≥ x₃),
