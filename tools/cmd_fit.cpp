@@ -117,6 +117,8 @@ void add_fit(CLI::App& root, Commands& commands) {
                                                          {"p999_rel", s.surface_p999 / s.diagonal},
                                                          {"samples_beyond_bound", s.surface_failures}}},
                                             {"within_bound", s.blend_failures == 0 && s.surface_failures == 0},
+                                            {"hole_points", s.hole_points},
+                                            {"face_holes", s.face_holes},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},
