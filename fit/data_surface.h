@@ -71,6 +71,7 @@ public:
 private:
   DataSurface();
   struct Impl;
+  static void from_mesh_boundary(const PolygonMesh& mesh, Impl& m);  // open edges, winding
   std::unique_ptr<Impl> impl_;
 };
 

@@ -18,6 +18,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "core/error.h"
 #include "core/io/io.h"
@@ -638,13 +639,18 @@ private:
                 opt_.normal_neighbours);
     }
     st_.time_normals = seconds_since(t0);
+    // The point indices and the data's surface are independent: built side by side.
     auto t1 = Clock::now();
-    index_ = std::make_unique<PointIndex>(P_);
-    subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
-    log::debug("fit_slim: point indices in {:.2f} s", seconds_since(t1));
-    t1 = Clock::now();
-    data_ = std::make_unique<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
-    log::debug("fit_slim: the data's surface ({}) in {:.2f} s", surface_ ? "mesh" : "tangent discs", seconds_since(t1));
+    tbb::parallel_invoke(
+        [&] {
+          index_ = std::make_unique<PointIndex>(P_);
+          subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
+        },
+        [&] {
+          data_ = std::make_unique<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
+        });
+    log::debug("fit_slim: point indices and the data's surface ({}) in {:.2f} s", surface_ ? "mesh" : "tangent discs",
+               seconds_since(t1));
     t1 = Clock::now();
     probe_height_ = probe_heights(P_, N_, opt_.probe_factor * E_, surface_ ? data_.get() : nullptr);
     log::debug("fit_slim: probe heights in {:.2f} s", seconds_since(t1));

@@ -202,29 +202,26 @@ bool EdgeUses::open(int a, int b) const {
   return hi - lo == 1;
 }
 
-bool mesh_wound_inward(const PolygonMesh& mesh) {
-  std::vector<std::uint64_t> edges;  // undirected edges, one entry per face using it
-  double volume6 = 0;
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    const auto vs = mesh.face(f);
-    const Eigen::Vector3d& p0 = mesh.vertices[vs[0]];
-    for (std::size_t k = 0; k < vs.size(); ++k) {
-      const int a = vs[k], b = vs[(k + 1) % vs.size()];
-      edges.push_back(std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b)));
-      if (k > 0 && k + 1 < vs.size()) volume6 += p0.dot(mesh.vertices[a].cross(mesh.vertices[b]));
-    }
-  }
-  std::sort(edges.begin(), edges.end());
+bool EdgeUses::wound_inward(const PolygonMesh& mesh) const {
   std::size_t distinct = 0, open = 0;  // edges not used by exactly two faces
-  for (std::size_t i = 0; i < edges.size();) {
+  for (std::size_t i = 0; i < edges_.size();) {
     std::size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    while (j < edges_.size() && edges_[j] == edges_[i]) ++j;
     ++distinct;
     open += j - i != 2;
     i = j;
   }
-  return distinct > 0 && open * 200 <= distinct && volume6 < 0;
+  if (distinct == 0 || open * 200 > distinct) return false;
+  double volume6 = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    const Eigen::Vector3d& p0 = mesh.vertices[vs[0]];
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) volume6 += p0.dot(mesh.vertices[vs[k]].cross(mesh.vertices[vs[k + 1]]));
+  }
+  return volume6 < 0;
 }
+
+bool mesh_wound_inward(const PolygonMesh& mesh) { return EdgeUses(mesh).wound_inward(mesh); }
 
 PointCloud points_from_mesh(const PolygonMesh& mesh) {
   std::vector<Eigen::Vector3d> sum(mesh.vertices.size(), Eigen::Vector3d::Zero());
@@ -245,8 +242,9 @@ PointCloud points_from_mesh(const PolygonMesh& mesh) {
   return cloud;
 }
 
-PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_of) {
-  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
+namespace {
+
+PointCloud centroids(const PolygonMesh& mesh, double sign, std::vector<std::uint32_t>* face_of) {
   PointCloud cloud;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto vs = mesh.face(f);
@@ -258,7 +256,7 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
       n += (a - mesh.vertices[vs[0]]).cross(b - mesh.vertices[vs[0]]);
       edge2 = std::max(edge2, (b - a).squaredNorm());
     }
-    if (!n.allFinite() || !(n.norm() > 1e-9 * edge2)) continue;
+    if (is_sliver(n.norm(), edge2)) continue;
     cloud.points.push_back(c / double(vs.size()));
     cloud.normals.push_back(sign * n.normalized());
     if (face_of) face_of->push_back(static_cast<std::uint32_t>(f));
@@ -266,9 +264,16 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
   return cloud;
 }
 
+}  // namespace
+
+PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_of) {
+  return centroids(mesh, mesh_wound_inward(mesh) ? -1.0 : 1.0, face_of);
+}
+
 PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vector<std::uint32_t>* face_of,
                         double min_spacing) {
-  PointCloud cloud = face_centroids(mesh, face_of);
+  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
+  PointCloud cloud = centroids(mesh, sign, face_of);
   const std::size_t F = mesh.face_count();
   if (F == 0) return cloud;
   std::vector<double> longest(F, 0.0);
@@ -281,7 +286,6 @@ PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vecto
   std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(F / 2), sorted.end());
   const double spacing = sorted[F / 2];
   if (!(spacing > 0) || !(spacing > min_spacing)) return cloud;
-  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
   for (std::size_t f = 0; f < F; ++f) {
     if (!(longest[f] > large_factor * spacing)) continue;
     const auto vs = mesh.face(f);
@@ -289,7 +293,7 @@ PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vecto
       const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
       const Eigen::Vector3d n = (b - a).cross(c - a);
       const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-      if (!n.allFinite() || !(n.norm() > 1e-9 * L * L)) continue;
+      if (is_sliver(n.norm(), L * L)) continue;
       const int m = static_cast<int>(std::min(1000.0, std::ceil(L / spacing)));
       for (int i = 0; i <= m; ++i)
         for (int j = 0; i + j <= m; ++j) {

@@ -18,6 +18,7 @@
 /// against the bytes left before anything is reserved, bytes after the declared data are an
 /// error, and every message names the file (`FILE:LINE:COL: …`, binary `FILE: byte N: …`).
 #include <cstdint>
+#include <cmath>
 #include <filesystem>
 #include <utility>
 #include <vector>
@@ -63,10 +64,19 @@ public:
   explicit EdgeUses(const PolygonMesh& mesh);
   /// Whether the edge between vertices a and b is used by exactly one face.
   bool open(int a, int b) const;
+  /// mesh_wound_inward for the mesh these edges came from, without sorting them again.
+  bool wound_inward(const PolygonMesh& mesh) const;
 
 private:
   std::vector<std::pair<int, int>> edges_;  // (min, max) per face edge, sorted
 };
+
+/// A face whose area is at rounding level against its longest edge (twice_area: the norm of its
+/// Newell normal, or of the fan's summed cross products): its normal is noise, and a ray along
+/// one of its edges "hits" it with no defined side. One test for every reader of faces.
+inline bool is_sliver(double twice_area, double longest_edge_squared) {
+  return !(twice_area > 1e-9 * longest_edge_squared) || !std::isfinite(twice_area);
+}
 
 /// The vertices used by some face, each with the unit area-weighted sum of its faces' normals
 /// (Newell's polygon normal), flipped when mesh_wound_inward, so they point outward.
