@@ -647,7 +647,7 @@ private:
           subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
         },
         [&] {
-          data_ = std::make_unique<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
+          data_ = std::make_shared<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_));
         });
     log::debug("fit_slim: point indices and the data's surface ({}) in {:.2f} s", surface_ ? "mesh" : "tangent discs",
                seconds_since(t1));
@@ -1269,6 +1269,7 @@ private:
     }
     st_.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
     st_.candidates = balls_.size();
+    result_.data = data_;
     result_.surface_error_per_patch.assign(chosen_.size(), 0.0);
     for (std::size_t k = 0; k < chosen_.size() && chosen_[k] < patch_errors_.size(); ++k)
       for (const double e : patch_errors_[chosen_[k]]) result_.surface_error_per_patch[k] = std::max(result_.surface_error_per_patch[k], e);
@@ -1326,7 +1327,7 @@ private:
   SlimFitStats& st_ = result_.stats;
   std::unique_ptr<PointIndex> index_;
   std::unique_ptr<Subsamples> subsamples_;
-  std::unique_ptr<DataSurface> data_;
+  std::shared_ptr<DataSurface> data_;
   std::unique_ptr<BallFitter> fitter_;
   std::vector<std::uint32_t> order_;                 // the points in random order
   std::vector<Ball> balls_;                          // evaluated candidates

@@ -19,6 +19,7 @@
 ///   Larger radii cost RMS: about 0.4·E instead of 0.18·E.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "core/mesh_io.h"
@@ -177,9 +178,14 @@ struct SlimFitStats {
   double time_normals = 0, time_candidates = 0, time_cover = 0, time_verify = 0, time_total = 0;
 };
 
+class DataSurface;
+
 struct SlimFitResult {
   Model model;  ///< slims + metadata (E, measured errors, counts, times)
   SlimFitStats stats;
+  /// The data's surface the fit was bounded against (the mesh's triangles, else the points'
+  /// tangent discs; fit/data_surface.h), for measurements after the fit without building it again.
+  std::shared_ptr<const DataSurface> data;
   /// Per model.slims: the largest distance from the data of the patch's surface samples as the
   /// blend shows them (the surface side per patch, world units; 0 when not checked).
   std::vector<double> surface_error_per_patch;

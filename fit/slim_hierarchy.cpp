@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -163,7 +164,10 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
   if (fine.model.slims.empty()) throw InvalidInput("slim hierarchy: the fit has no patches");
   if (!cloud.has_normals()) throw InvalidInput("slim hierarchy: the cloud needs normals");
   const auto t0 = std::chrono::steady_clock::now();
-  const DataSurface data = surface ? DataSurface::from_mesh(*surface) : DataSurface::from_points(cloud.points, cloud.normals);
+  std::optional<DataSurface> built;  // only when the fit did not leave its own
+  const DataSurface& data = fine.data ? *fine.data
+                                      : built.emplace(surface ? DataSurface::from_mesh(*surface)
+                                                              : DataSurface::from_points(cloud.points, cloud.normals));
   std::vector<Eigen::Vector3d> N(cloud.normals.size());
   for (std::size_t i = 0; i < N.size(); ++i) N[i] = cloud.normals[i].normalized();
   const Merger merger(cloud.points, N, data, fit.normal_weight, options.reach);

@@ -36,7 +36,7 @@ struct SlimLevelsStats {
 /// from the data (fit/data_surface.h zero_set_excess, raised until it passes) and its children's
 /// errors, so errors grow towards the roots. fine.model keeps its patches as the drawn leaves;
 /// the merged balls go to slim_hierarchy.others. surface: the mesh the fit used, or null (then
-/// the points' tangent discs). Metadata: `slim_hierarchy_error distance`, `slim_levels`.
+/// the points' tangent discs); the fit's own SlimFitResult::data is used when it is there. Metadata: `slim_hierarchy_error distance`, `slim_levels`.
 /// \throws InvalidInput without patches or without normals in cloud.
 SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud, const PolygonMesh* surface,
                                    const SlimFitOptions& fit, const SlimHierarchyOptions& options = {});

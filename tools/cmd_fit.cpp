@@ -136,10 +136,8 @@ void add_fit(CLI::App& root, Commands& commands) {
                         {
                           // Each patch's measured error (the points side, per patch) for render --colour-by error.
                           const double t0 = report.elapsed();
-                          std::optional<DataSurface> surface;
-                          if (mesh) surface = DataSurface::from_mesh(*mesh);
                           const PatchErrors pe =
-                              slim_patch_errors(r.model, cloud, {.surface = surface ? &*surface : nullptr});
+                              slim_patch_errors(r.model, cloud, {.surface = mesh ? r.data.get() : nullptr});
                           set_measured_errors(r.model, pe);
                           j["patch_errors"] = {
                               {"measured_patches", std::count_if(pe.per_patch.begin(), pe.per_patch.end(),
