@@ -255,6 +255,23 @@ TEST(FitSlimHard, SparseCloudBelowItsSpacing) {
 }
 
 
+// A smooth sheet (z = 0.08 sin 3u cos 2v over the unit square, grid² quads) whose mesh vertices
+// move by uniform noise of ±amplitude·E in z (E = rel × its diagonal) where `where` holds; the
+// cloud is the noisy mesh's vertices with their area-weighted normals, as a scan's would be.
+Shape noisy_sheet(int grid, double rel, double amplitude, std::uint64_t noise_seed, std::uint64_t seed,
+                  const std::function<bool(const Vec&)>& where) {
+  Shape s = make({{[](double u, double v) { return Vec(u, v, 0.08 * std::sin(3 * u) * std::cos(2 * v)); }, 1, grid}}, 10, seed);
+  const double E = rel * s.box.diagonal();
+  std::mt19937_64 rng(noise_seed);
+  std::uniform_real_distribution<double> noise(-amplitude * E, amplitude * E);
+  for (auto& v : s.mesh.vertices)
+    if (where(v)) v.z() += noise(rng);
+  s.cloud = points_from_mesh(s.mesh);
+  s.box = Box3{};
+  for (const auto& v : s.mesh.vertices) s.box.extend(v);
+  return s;
+}
+
 // A scan whose vertices jitter by ±3E about a smooth sheet, its spacing about 50E, fitted at E
 // with its faces: no quadric through more than a few vertices stays within E (the bunny at 1e-4
 // is like this). Without face patches (SlimFitOptions::face_patches) the fit fell apart into
@@ -263,24 +280,8 @@ TEST(FitSlimHard, SparseCloudBelowItsSpacing) {
 // ~7° leave a few E between them, and a vertex mixed with a neighbouring quadric lands up to
 // 1.3E off (see the session note), so the test bounds what the face patches buy.
 TEST(FitSlimHard, NoisyMeshBelowItsNoise) {
-  Shape s = make({{[](double u, double v) { return Vec(u, v, 0.08 * std::sin(3 * u) * std::cos(2 * v)); }, 1, 70}}, 10, 10);
   const double rel = 2e-4;
-  const double E = rel * s.box.diagonal();
-  std::mt19937_64 rng(99);
-  std::uniform_real_distribution<double> noise(-3 * E, 3 * E);
-  for (auto& v : s.mesh.vertices) v.z() += noise(rng);
-  // The cloud is the scan's vertices with area-weighted vertex normals.
-  std::vector<Vec> normals(s.mesh.vertices.size(), Vec::Zero());
-  for (std::size_t f = 0; f < s.mesh.face_count(); ++f) {
-    const auto vs = s.mesh.face(f);
-    const Vec n = (s.mesh.vertices[vs[1]] - s.mesh.vertices[vs[0]]).cross(s.mesh.vertices[vs[2]] - s.mesh.vertices[vs[0]]);
-    for (const int v : vs) normals[v] += n;
-  }
-  s.cloud.points = s.mesh.vertices;
-  s.cloud.normals.clear();
-  for (const auto& n : normals) s.cloud.normals.push_back(n.normalized());
-  s.box = Box3{};
-  for (const auto& v : s.mesh.vertices) s.box.extend(v);
+  const Shape s = noisy_sheet(70, rel, 3.0, 99, 10, [](const Vec&) { return true; });
   const Outcome o = fit_and_measure(s, rel);
   EXPECT_EQ(o.points.misses, 0u);
   EXPECT_LE(o.points.max, 2 * o.E);
@@ -312,16 +313,8 @@ std::size_t spots_outside_every_ball(const Model& model, const PolygonMesh& mesh
 // faces, so they cover every vertex and face sample but not the faces between them (the bunny's
 // base at 1e-3 had 37 such triangles). The fitter finds such spots and covers them.
 TEST(FitSlimHard, NoFaceLeftBetweenCoveredPointsOnANoisyCorner) {
-  Shape s = make({{[](double u, double v) { return Vec(u, v, 0.08 * std::sin(3 * u) * std::cos(2 * v)); }, 1, 60}}, 10, 11);
   const double rel = 1e-3;
-  const double E = rel * s.box.diagonal();
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> noise(-2 * E, 2 * E);
-  for (auto& v : s.mesh.vertices)
-    if (v.x() < 0.3 && v.y() < 0.3) v.z() += noise(rng);
-  s.cloud = points_from_mesh(s.mesh);
-  s.box = Box3{};
-  for (const auto& v : s.mesh.vertices) s.box.extend(v);
+  const Shape s = noisy_sheet(60, rel, 2.0, 7, 11, [](const Vec& v) { return v.x() < 0.3 && v.y() < 0.3; });
   const Outcome off = fit_and_measure(s, rel, {.cover_face_holes = false});
   const Outcome on = fit_and_measure(s, rel);
   const std::size_t before = spots_outside_every_ball(off.fit.model, s.mesh);
