@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/io/file.h"
 #include "core/io/text_reader.h"
 
@@ -39,6 +40,13 @@ Model read_ellipsoids_csv(const std::filesystem::path& path) {
     g.kind = GlyphKind::ellipsoid;
     g.centre = {x[0], x[1], x[2]};
     for (int k = 0; k < 3; ++k) g.axes.col(k) = Eigen::Vector3d(x[3 + 3 * k], x[4 + 3 * k], x[5 + 3 * k]);
+    // Beyond the world limit the model could not be written (core/limits.h): refuse the row here.
+    if (!is_world_point(g.centre))
+      in.fail("ellipsoid {}: centre ({:g}, {:g}, {:g}) {}", row, x[0], x[1], x[2], world_fault(g.centre));
+    for (int k = 0; k < 3; ++k)
+      if (!is_world_point(g.axes.col(k)))
+        in.fail("ellipsoid {}: axis {} ({:g}, {:g}, {:g}) {}", row, k + 1, x[3 + 3 * k], x[4 + 3 * k], x[5 + 3 * k],
+                world_fault(Eigen::Vector3d(g.axes.col(k))));
     if (!(std::abs(g.axes.determinant()) > 0)) in.fail("ellipsoid {}: its axes are singular (no volume)", row);
     if (count == 15) {
       Rgb c;

@@ -113,7 +113,9 @@ Molecule read_molecule(const fs::path& path, const MoleculeReadOptions& o) {
   const bool is_pdb = ext == ".pdb" || ext == ".ent";
   if (!is_pdb && ext != ".cif" && ext != ".mmcif")
     throw InvalidInput(fmt::format("'{}': not a molecule file (.pdb, .ent, .cif, .mmcif, optionally .gz)", path.string()));
-  if (!fs::is_regular_file(path)) throw IoError(fmt::format("cannot open '{}': not a readable file", path.string()));
+  io::read_file_prefix(path, 0);  // missing, a folder or unreadable: the kit's IoError naming it (exit 5)
+  if (!fs::is_regular_file(path))   // a device or a pipe would be read without end (no size to check)
+    throw IoError(fmt::format("{}: not a regular file (a device or a pipe)", path.string()));
   const std::string text = read_text(path);
   std::vector<std::pair<int, int>> conect;
   if (is_pdb) conect = scan_pdb(path, text);

@@ -21,11 +21,10 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
     bool no_water = false;
   };
   auto a = std::make_shared<Args>();
-  auto* molecule = app->add_option("MOLECULE", a->input, "PDB (.pdb, .ent) or mmCIF (.cif, .mmcif), optionally gzipped")
-                       ->check(CLI::ExistingFile);
+  // No CLI::ExistingFile check: a missing input is the readers' IoError (exit 5), as in every command.
+  auto* molecule = app->add_option("MOLECULE", a->input, "PDB (.pdb, .ent) or mmCIF (.cif, .mmcif), optionally gzipped");
   auto* ellipsoids = app->add_option("--ellipsoids", a->ellipsoids,
-                                     "Instead of a molecule: CSV rows cx,cy,cz,a1x,a1y,a1z,a2x,a2y,a2z,a3x,a3y,a3z[,r,g,b]")
-                         ->check(CLI::ExistingFile);
+                                     "Instead of a molecule: CSV rows cx,cy,cz,a1x,a1y,a1z,a2x,a2y,a2z,a3x,a3y,a3z[,r,g,b]");
   molecule->excludes(ellipsoids);
   ellipsoids->excludes(molecule);
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();

@@ -424,7 +424,8 @@ TEST(Cli, AMissingInputIsExitFiveForEveryCommand) {
         "fit " + q(dir / "no.xyz") + " -o " + out, "convert quads " + q(dir / "no.obj") + " -o " + out,
         "convert skin " + q(dir / "no.pdb") + " -o " + out, "convert skin " + q(dir / "no.cin") + " -o " + out,
         "convert volume " + q(dir / "no.nhdr") + " --iso 1 -o " + out,
-        "render " + q(dir / "no.ply") + " -o " + q(dir / "o.png")}) {
+        "render " + q(dir / "no.ply") + " -o " + q(dir / "o.png"), "convert glyphs " + q(dir / "no.pdb") + " -o " + out,
+        "convert glyphs --ellipsoids " + q(dir / "no.csv") + " -o " + out}) {
     const CmdResult r = quadrix_run(args);
     EXPECT_EQ(r.code, 5) << args << ": " << r.out;
     EXPECT_NE(r.out.find("no."), std::string::npos) << args << ": " << r.out;
@@ -518,6 +519,8 @@ TEST(Cli, MalformedCorpusGivesTheManifestsExitCodeAndMessage) {
     else if (kind == "tets") c.args = "convert volume --tets " + f + " --values " + q(root / "files" / "values4.txt") + " --iso 0.5 -o " + out;
     else if (kind == "skin") c.args = "convert skin " + f + " -o " + out;
     else if (kind == "render") c.args = "render --backend cpu " + f + " --size 16x16 -o " + q(dir / "out.png");
+    else if (kind == "glyphs") c.args = "convert glyphs --ellipsoids " + f + " -o " + out;
+    else if (kind == "values") c.args = "convert volume --tets " + q(root / "files" / "tet4.mesh") + " --values " + f + " --iso 0.5 -o " + out;
     else FAIL() << "unknown command kind '" << kind << "' in: " << line;
     cases.push_back(c);
   }

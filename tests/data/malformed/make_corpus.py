@@ -239,6 +239,24 @@ def main():
     put("flat-tet.mesh", medit_mesh().replace(b"0 0 1 0\n", b"1 1 0 0\n"))
     put("no-dimension.mesh", medit_mesh().replace(b"Dimension 3\n", b""))
     put("dimension-2.mesh", medit_mesh().replace(b"Dimension 3", b"Dimension 2"))
+    # Vertex values (convert volume --tets tet4.mesh --values FILE) and ellipsoid rows (convert glyphs
+    # --ellipsoids FILE).
+    put("tet4.mesh", medit_mesh())
+    put("values-word.txt", b"0\n1\nx\n0.2\n")
+    put("values-few.txt", b"0\n1\n0.5\n")
+    put("values-many.txt", b"0\n1\n0.5\n0.2\n7\n")
+    put("values-nan.txt", b"0\n1\nnan\n0.2\n")
+    put("values-empty.txt", b"# nothing\n")
+    ell = b"cx,cy,cz,a1x,a1y,a1z,a2x,a2y,a2z,a3x,a3y,a3z,r,g,b\n0,0,0,1,0,0,0,2,0,0,0,3,255,0,0\n"
+    put("ellipsoid-singular.csv", ell.replace(b"0,0,3,", b"0,0,0,"))
+    put("ellipsoid-columns.csv", ell.replace(b"0,0,3,255,0,0", b"0,0"))
+    put("ellipsoid-16.csv", ell.replace(b"255,0,0", b"255,0,0,1"))
+    put("ellipsoid-colour.csv", ell.replace(b"255,0,0", b"300,0,0"))
+    put("ellipsoid-word.csv", ell.replace(b"\n0,0,0,1,", b"\n0,0,0,one,"))
+    put("ellipsoid-nan.csv", ell.replace(b"\n0,0,0,1,", b"\n0,nan,0,1,"))
+    put("ellipsoid-none.csv", ell.split(b"\n")[0] + b"\n# no rows\n")
+    put("ellipsoid-far.csv", ell.replace(b"\n0,0,0,1,", b"\n1e300,0,0,1,"))
+    put("ellipsoid-axis-huge.csv", ell.replace(b",0,2,0,", b",0,2e300,0,"))
     # Balls.
     put("radius-negative.cin", cin().replace(b"0.7 0.7 0.7 0.5", b"0.7 0.7 0.7 -0.5"))
     put("columns-3.cin", cin().replace(b"0.7 0.7 0.7 0.5", b"0.7 0.7 0.7"))
