@@ -50,8 +50,44 @@ double pdb_number(std::string_view line, std::size_t first, std::size_t width, c
   const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
   if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
     throw FormatError(fmt::format("{}: {} (columns {}-{}) '{}' is not a number", where, name, first + 1,
-                                  first + width, line.substr(first, width)));
+                                  first + width, io::echo(line.substr(first, width))));
   return v;
+}
+
+// PDB text as gemmi 0.5.7's reader can take it without reading past its buffers (found by fuzzing):
+// - a NUL byte is refused: gemmi copies each line as a C string, so a NUL cuts it, and the part it
+//   skips to reach the end of an overlong line then swallows the next line's first bytes;
+// - lines are cut at 120 columns (gemmi reads no further: it skips the rest, but stops skipping at
+//   a byte >= 0x80 and reads what follows as a new record);
+// - SSBOND, LINK and CISPEP records (gemmi keeps them as strings and reads columns 74-78 of any
+//   longer than 73) are padded with blanks to 80 columns, so those reads stay inside the string.
+// Neither change alters what a well-formed file (80-column ASCII records) means.
+std::string gemmi_safe_pdb(const fs::path& path, std::string_view text) {
+  std::string out;
+  out.reserve(text.size() + text.size() / 8);
+  std::size_t pos = 0;
+  int line_no = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    const bool has_newline = end != std::string_view::npos;
+    if (!has_newline) end = text.size();
+    std::string_view line = text.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (const auto nul = line.find('\0'); nul != std::string_view::npos)
+      throw FormatError(io::text_message(path, line_no, nul + 1, "a NUL byte: not a PDB text file"));
+    const bool cr = !line.empty() && line.back() == '\r';
+    if (cr) line.remove_suffix(1);
+    line = line.substr(0, 120);
+    out.append(line);
+    // gemmi compares the first four characters with case folded (bit 5 cleared).
+    std::string head(line.substr(0, 4));
+    for (char& c : head) c = static_cast<char>(c & ~0x20);
+    if ((head == "LINK" || head == "SSBO" || head == "CISP") && line.size() < 80) out.append(80 - line.size(), ' ');
+    if (cr) out.push_back('\r');
+    if (has_newline) out.push_back('\n');
+  }
+  return out;
 }
 
 // PDB text (gunzipped when needed): coordinate columns checked, CONECT pairs by serial.
@@ -116,7 +152,7 @@ Molecule read_molecule(const fs::path& path, const MoleculeReadOptions& o) {
   io::read_file_prefix(path, 0);  // missing, a folder or unreadable: the kit's IoError naming it (exit 5)
   if (!fs::is_regular_file(path))   // a device or a pipe would be read without end (no size to check)
     throw IoError(fmt::format("{}: not a regular file (a device or a pipe)", path.string()));
-  const std::string text = read_text(path);
+  const std::string text = is_pdb ? gemmi_safe_pdb(path, read_text(path)) : read_text(path);
   std::vector<std::pair<int, int>> conect;
   if (is_pdb) conect = scan_pdb(path, text);
   gemmi::Structure st;

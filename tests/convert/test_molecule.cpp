@@ -105,6 +105,27 @@ TEST_F(Molecules, MalformedFilesAreFormatErrors) {
   EXPECT_THROW(read_molecule(write("x.xyz", "1 2 3\n")), InvalidInput);
 }
 
+// Found by fuzzing (gemmi 0.5.7 reads columns 74-78 of any SSBOND/LINK record longer than 73 and
+// runs past a shorter last line; a NUL cut its copy of a line): short records are padded, NUL refused.
+TEST_F(Molecules, ShortLinkRecordsAndNulBytes) {
+  std::string text(kPdb);
+  text.erase(text.find("END\n"));
+  for (const char* end : {"n", "12", "inf"}) {  // the last line, no newline: 74 to 76 columns
+    const std::string link = "LINK" + std::string(69, ' ') + end;
+    const Molecule m = read_molecule(write("link.pdb", text + link));
+    EXPECT_EQ(m.atoms.size(), 6u) << end;
+    EXPECT_EQ(read_molecule(write("link-crlf.pdb", text + link + "\r\nEND\r\n")).atoms.size(), 6u) << end;
+  }
+  std::string nul = text;
+  nul[nul.find("1.458") + 1] = '\0';
+  try {
+    read_molecule(write("nul.pdb", nul));
+    ADD_FAILURE() << "no FormatError";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("nul.pdb:3:35: a NUL byte"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(Molecules, GridBondsEqualAllPairsOn1tii) {
   const fs::path path = kMolecules / "1tii.pdb";
   if (!fs::exists(path)) GTEST_SKIP() << "dataset missing: " << path;

@@ -302,6 +302,8 @@ def main():
     put("coord-1e300.xyz", xyz() + b"1e300 0 0\n")
     put("count-huge.pts", b"\n44444444444444444444\n\r\n3\n3")  # found by fuzzing: a count past long long
     put("record-non-ascii.pdb", b"\xf7")  # found by fuzzing: gemmi's record-name shift of a byte >= 0x80
+    # found by fuzzing: a NUL cut gemmi's copy of a line, the next LINK record was read past its end
+    put("nul-byte.pdb", pdb().replace(b"   1.500", b"   1.\x0000", 1))
     far = slim2t()
     far = far[:12 + 60] + struct.pack("<f", 1e30) + far[12 + 64:]  # ball 1's centre x (60 bytes a ball)
     put("centre-huge.slim2t", far)
