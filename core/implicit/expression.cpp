@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/io/file.h"
 
 namespace quadrix::implicit {
 namespace {
@@ -90,14 +91,14 @@ public:
     params_ = &params;
     const int r = expr();
     skip();
-    if (pos_ < s_.size()) fail(pos_, fmt::format("unexpected '{}'", s_[pos_]));
+    if (pos_ < s_.size()) fail(pos_, fmt::format("unexpected '{}'", io::echo(s_.substr(pos_, 1))));
     // The result must be the last node: re-add it if it was shared.
     if (r != static_cast<int>(nodes.size()) - 1) nodes.push_back(Node{Op::add, r, add_const(0.0), 0, 0});
   }
 
 private:
   [[noreturn]] void fail(std::size_t at, const std::string& what) const {
-    throw InvalidInput(fmt::format("expression '{}', column {}: {}", s_, at + 1, what));
+    throw InvalidInput(fmt::format("expression '{}', column {}: {}", io::echo(s_), at + 1, what));
   }
   void skip() {
     while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
@@ -145,7 +146,15 @@ private:
       else return r;
     }
   }
+  // Every recursion of the grammar passes through unary(): its depth bounds the parser's stack
+  // (found by fuzzing: 2,600 nested '(' overflowed it).
+  static constexpr int kMaxDepth = 256;
   int unary() {
+    struct Level {
+      int& depth;
+      ~Level() { --depth; }
+    } level{++depth_};
+    if (depth_ > kMaxDepth) fail(pos_, fmt::format("nested more than {} levels deep", kMaxDepth));
     if (eat('-')) return add_op(Op::neg, unary());
     if (eat('+')) return unary();
     return power();
@@ -210,7 +219,7 @@ private:
       if (!eat(')')) fail(pos_, "expected ')'");
       return r;
     }
-    fail(pos_, fmt::format("unexpected '{}'", c));
+    fail(pos_, fmt::format("unexpected '{}'", io::echo(std::string_view(&c, 1))));
   }
   int call(const std::string& name, std::size_t at) {
     const auto it = functions().find(name);
@@ -240,6 +249,7 @@ private:
 
   std::string_view s_;
   std::size_t pos_ = 0;
+  int depth_ = 0;  // unary() calls open (kMaxDepth)
   std::vector<Node>* nodes_ = nullptr;
   std::vector<std::string>* params_ = nullptr;
   std::vector<bool> depends_;

@@ -76,6 +76,20 @@ TEST(ImplicitExpression, ErrorsNameTheColumn) {
   EXPECT_NE(parse_error("x + 1 )").find("column 7"), std::string::npos);
 }
 
+// Found by fuzzing: 2,600 nested '(' overflowed the recursive parser's stack. Nesting is bounded
+// (256 levels: parentheses, unary signs, exponents and function arguments alike); the message
+// echoes at most 80 characters of the expression.
+TEST(ImplicitExpression, DeepNestingIsAnErrorNotACrash) {
+  EXPECT_NO_THROW(implicit::Expression::parse(std::string(200, '(') + "x" + std::string(200, ')')));
+  for (const std::string& deep : {std::string(100000, '(') + "x", std::string(100000, '-') + "x",
+                                  [] { std::string e = "x"; for (int i = 0; i < 300; ++i) e += "^1"; return e; }(), std::string(300, '(') + "x" + std::string(300, ')')}) {
+    const std::string m = parse_error(deep);
+    EXPECT_NE(m.find("nested more than 256 levels deep"), std::string::npos) << m.substr(0, 200);
+    EXPECT_LT(m.size(), 300u);
+  }
+  EXPECT_NE(parse_error("x + \x07").find("unexpected '\\x07'"), std::string::npos) << parse_error("x + \x07");
+}
+
 TEST(ImplicitExpression, GradientMatchesFiniteDifferences) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-0.9, 0.9);

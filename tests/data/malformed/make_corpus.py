@@ -301,6 +301,7 @@ def main():
     put("coord-1e300-ascii.stl", quad_stl_ascii().replace(b"vertex 1 1 0", b"vertex 1e300 1 0"))
     put("coord-1e300.xyz", xyz() + b"1e300 0 0\n")
     put("count-huge.pts", b"\n44444444444444444444\n\r\n3\n3")  # found by fuzzing: a count past long long
+    put("implicit-deep.qxm", implicit_qxm(expression=b"(" * 3000 + b"x"))  # found by fuzzing: stack overflow
     put("record-non-ascii.pdb", b"\xf7")  # found by fuzzing: gemmi's record-name shift of a byte >= 0x80
     # found by fuzzing: a NUL cut gemmi's copy of a line, the next LINK record was read past its end
     put("nul-byte.pdb", pdb().replace(b"   1.500", b"   1.\x0000", 1))
