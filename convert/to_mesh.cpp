@@ -635,7 +635,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
     for (std::size_t k = 0; k < shown && key(order[k]) > bound; ++k) {
       const auto& [p, n] = samples[order[k]];
       log::debug("mesh: sample at ({:.6g}, {:.6g}, {:.6g}) normal ({:.3f}, {:.3f}, {:.3f}): {}", p.x(), p.y(), p.z(), n.x(),
-                 n.y(), n.z(), d[order[k]] < 0 ? std::string("no surface along its normal") : fmt::format("{:.3g} from the surface", d[order[k]]));
+                 n.y(), n.z(), d[order[k]] < 0 ? std::string("no surface along any of its lines") : fmt::format("{:.3g} from the surface", d[order[k]]));
     }
   }
   // A miss is at least `reach` away (nothing was hit within it).

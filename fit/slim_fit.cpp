@@ -679,13 +679,12 @@ private:
   // points that are all covered. A fan triangle some one ball holds whole (its three corners:
   // balls are convex) is covered; else it is split in four, down to face_hole_depth levels, and
   // a smallest piece contributes its first corner or centroid that no ball holds.
-  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes() const {
+  // index: the round's index of the patches' centres.
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index) const {
     const auto& slims = result_.model.slims;
     if (!faces_ || slims.empty()) return {};
-    std::vector<Eigen::Vector3d> centres;
     double max_radius = 0;
-    for (const auto& s : slims) centres.push_back(s.centre), max_radius = std::max(max_radius, s.radius);
-    const PointIndex index{std::span<const Eigen::Vector3d>(centres)};
+    for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
     const PolygonMesh& m = *faces_->mesh;
     tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1155,17 +1154,18 @@ private:
       st_.blend_failures = verify_points(scene, centre_index, stale_points, at_fault);
       shrink_.clear();
       st_.surface_failures = opt_.check_surface ? verify_surface(scene, stale_patches, at_fault) : 0;
-      auto holes = can_add_points_ && opt_.cover_face_holes ? face_holes() : decltype(face_holes()){};
+      std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes;
+      if (can_add_points_ && opt_.cover_face_holes) holes = face_holes(centre_index);
       st_.face_holes = holes.size();
-      // Not in the last two rounds: the balls that cover new points need verifying and repairing too.
-      const bool few = holes.size() <= std::max<std::size_t>(64, faces_ ? faces_->mesh->face_count() / 8 : 0);
-      const bool fill = !holes.empty() && few && round + 2 < opt_.repair_rounds;
-      const std::size_t failing = st_.blend_failures + st_.surface_failures + (fill ? holes.size() : 0);
-      if (failing == 0 || round >= opt_.repair_rounds) break;
       // More than one spot per 8 faces: the balls are smaller than the faces nearly everywhere
       // (E far below the data's sampling: bunny at 1e-4 had 88,211 for 69,451 faces). Points
       // there more than doubled the fit's work (51 s instead of 29 s) and left 2,881 points beyond
       // E; they are counted (face_holes) and left.
+      const bool few = holes.size() <= std::max<std::size_t>(64, faces_ ? faces_->mesh->face_count() / 8 : 0);
+      // Not in the last two rounds: the balls that cover new points need verifying and repairing too.
+      const bool fill = !holes.empty() && few && round + 2 < opt_.repair_rounds;
+      const std::size_t failing = st_.blend_failures + st_.surface_failures + (fill ? holes.size() : 0);
+      if (failing == 0 || round >= opt_.repair_rounds) break;
       if (fill) {
         log::debug("fit_slim: round {}: {} spots of the data's faces outside every ball join the points", round + 1, holes.size());
         add_points(holes);
