@@ -140,8 +140,11 @@ struct SlimFitOptions {
   /// between them (bunny at 1e-3: 37 faces). Not where there is more than one spot per 8 faces
   /// (the balls smaller than the faces nearly everywhere, E far below the sampling: bunny at
   /// 1e-4, 0.33 % of its area outside every ball); those spots are only counted (face_holes).
+  /// One spot per face joins per round; rounds that add points do not count against
+  /// repair_rounds, up to face_hole_rounds of them.
   bool cover_face_holes = true;
   int face_hole_depth = 3;
+  int face_hole_rounds = 4;
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
   /// only and gets a clip plane (SlimPatch::clip) between the two sheets.
