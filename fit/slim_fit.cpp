@@ -1123,11 +1123,66 @@ private:
     return c;
   }
 
+  // A verified model: its balls and what verification measured on it.
+  struct Verified {
+    std::vector<std::uint32_t> chosen;
+    std::vector<double> point_error;
+    std::vector<std::vector<double>> patch_errors;  // per chosen ball
+    std::size_t blend_failures = 0, surface_failures = 0, face_holes = 0;
+    int round = -1;  // -1: none
+    double score = 0;  // failures() of that model
+  };
+
+  // How far the verified model is from its contract: the share of points beyond E, plus the share
+  // of surface samples beyond the surface bound, plus the share of the data's area outside every
+  // ball (face_holes: at most one spot per smallest piece of a fan triangle). No count alone: a
+  // fit below its data's noise trades a few points just past E for many fewer surface samples
+  // far off, or fewer holes for more of both.
+  double failures() const {
+    double f = double(st_.blend_failures) / double(std::max<std::size_t>(1, P_.size())) +
+               double(st_.surface_failures) / double(std::max<std::size_t>(1, surface_error_.size()));
+    if (faces_ && st_.face_holes > 0) {
+      std::size_t triangles = 0;
+      for (std::size_t k = 0; k < faces_->mesh->face_count(); ++k)
+        if (faces_->centroid[k] != FaceSet::kNone) triangles += faces_->mesh->face(k).size() - 2;
+      f += double(st_.face_holes) / (double(std::max<std::size_t>(1, triangles)) * double(1u << (2 * opt_.face_hole_depth)));
+    }
+    return f;
+  }
+
+  Verified snapshot(int round) const {
+    Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, round, failures()};
+    v.patch_errors.reserve(chosen_.size());
+    for (const auto b : chosen_) v.patch_errors.push_back(patch_errors_[b]);
+    return v;
+  }
+
+  void restore(Verified&& v) {
+    for (const auto b : chosen_) chosen_flag_[b] = 0;
+    chosen_ = std::move(v.chosen);
+    for (std::size_t k = 0; k < chosen_.size(); ++k) {
+      chosen_flag_[chosen_[k]] = 1;
+      patch_errors_[chosen_[k]] = std::move(v.patch_errors[k]);
+    }
+    point_error_ = std::move(v.point_error);
+    surface_error_.clear();
+    for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
+    st_.blend_failures = v.blend_failures;
+    st_.surface_failures = v.surface_failures;
+    st_.face_holes = v.face_holes;
+    build_model();
+  }
+
   // Rounds of verification (both sides); the patches at fault are removed, their centres come
   // back no larger than shrink_step·R, and the points they covered are covered again.
   void verify_and_repair() {
     std::vector<std::uint32_t> before;  // the chosen balls of the last verified model
     int fill_rounds = 0;  // rounds that added points on face holes
+    // The best model verified since the points last changed. A repair can make things worse where
+    // E is far below the data's sampling (armadillo at 1e-4: 26 points beyond E after the first
+    // round, 3,550 after six more, each changing most balls); the fit then returns the best one,
+    // and stops after three rounds that did not improve on it.
+    Verified best;
     for (int round = 0;; ++round) {
       // Rounds that add points do not count against repair_rounds (up to face_hole_rounds of them).
       const int budget = opt_.repair_rounds + std::min(fill_rounds, std::max(0, opt_.face_hole_rounds));
@@ -1183,7 +1238,23 @@ private:
       // Not in the last two rounds: the balls that cover new points need verifying and repairing too.
       const bool fill = !holes.empty() && few && round + 2 < budget;
       const std::size_t failing = st_.blend_failures + st_.surface_failures + (fill ? holes.size() : 0);
-      if (failing == 0 || round >= budget) break;
+      const double score = failures();
+      st_.round_failures.push_back(score);
+      st_.kept_round = round;
+      const bool improved = best.round < 0 || score < best.score;
+      const bool stalled = !improved && round - best.round >= 3;
+      if (failing == 0 || round >= budget || stalled) {
+        if (!improved) {
+          log::info("fit_slim: the repairs after verification round {} made the fit worse ({} points beyond E and {} surface "
+                    "samples beyond {}E in round {}, against {} and {}); the model of round {} is kept",
+                    best.round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, round + 1,
+                    best.blend_failures, best.surface_failures, best.round + 1);
+          st_.kept_round = best.round;
+          restore(std::move(best));
+        }
+        break;
+      }
+      if (improved) best = snapshot(round);
       if (fill) {
         ++fill_rounds;
         log::debug("fit_slim: round {}: {} spots of the data's faces outside every ball join the points", round + 1, holes.size());
@@ -1194,13 +1265,14 @@ private:
         for (const auto& h : holes)
           if (one.empty() || one.back().first != h.first) one.push_back(h);
         add_points(one);
+        best = Verified{};  // other points: not comparable
       } else if (!few && round == 0) {
         log::info("fit_slim: {} spots of the data's faces lie outside every ball (balls smaller than the faces: E below "
                   "the data's sampling); left as they are", holes.size());
       }
       ++st_.repair_rounds;
-      log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E", round + 1,
-                 st_.blend_failures, st_.surface_failures, opt_.surface_factor);
+      log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E, {} face spots outside every "
+                 "ball (failures {:.3g})", round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, st_.face_holes, score);
       before = chosen_;
       repair(at_fault);
       prune();

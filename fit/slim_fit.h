@@ -174,6 +174,13 @@ struct SlimFitStats {
   std::size_t surface_failures = 0;  ///< of those, farther than surface_factor·E from the data
   double surface_max = 0, surface_p999 = 0;  ///< their distances to the data, world units
   int repair_rounds = 0;
+  /// Per verification round, how far its model was from the contract: the share of points
+  /// beyond E + the share of surface samples beyond surface_factor·E + the share of the data's
+  /// area outside every ball (mesh data). The fit keeps the model of the round with the least
+  /// since the points last changed (kept_round, 0-based): a repair can make things worse where E
+  /// is far below the data's sampling.
+  std::vector<double> round_failures;
+  int kept_round = 0;
   std::size_t hole_points = 0;  ///< points added on faces outside every ball (cover_face_holes)
   std::size_t face_holes = 0;   ///< such spots still outside every ball at the end
   std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries

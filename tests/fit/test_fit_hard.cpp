@@ -330,5 +330,34 @@ TEST(FitSlimHard, NoFaceLeftBetweenCoveredPointsOnANoisyCorner) {
   EXPECT_EQ(on.fit.stats.blend_failures, 0u);
 }
 
+// A coarse polyhedral sphere (16 × 16 quads) fitted at 1e-4: every face far larger than E, bent
+// 11° against its neighbours, the regime where a repair can leave the fit worse than it found it
+// (the armadillo at 1e-4: 26 points beyond E after the first verification, 3,550 after six
+// repairs). The fit keeps the verified model with the fewest failures, its figures with it.
+TEST(FitSlimHard, KeepsTheBestVerifiedModelWhenRepairsMakeItWorse) {
+  const Shape s = make({{[](double u, double v) {
+                           const double th = 0.05 + 3.0 * u, ph = 2 * std::numbers::pi * v;
+                           return Vec(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+                         },
+                         1, 16}},
+                       10, 5);
+  const SlimFitResult r = fit_slim(s.cloud, s.mesh, {.max_error = 1e-4});
+  const auto& st = r.stats;
+  ASSERT_EQ(st.hole_points, 0u);  // the same points in every round: their failures compare
+  ASSERT_GE(st.round_failures.size(), 3u);
+  std::cerr << "  kept round " << st.kept_round << " of " << st.round_failures.size() << ":";
+  for (const double f : st.round_failures) std::cerr << " " << f;
+  std::cerr << "\n";
+  const auto least = std::min_element(st.round_failures.begin(), st.round_failures.end());
+  EXPECT_EQ(st.kept_round, least - st.round_failures.begin());
+  EXPECT_LT(*least, st.round_failures.back()) << "the case no longer has a repair that makes the fit worse";
+  // The figures reported are the kept model's: its failures add up to that round's.
+  const double triangles = double(s.mesh.face_count()), pieces = 64.0;  // face_hole_depth 3
+  const double again = double(st.blend_failures) / double(st.points) +
+                       double(st.surface_failures) / double(st.surface_samples) + double(st.face_holes) / (triangles * pieces);
+  EXPECT_NEAR(again, *least, 1e-9 * (1 + *least));
+  EXPECT_EQ(r.model.slims.size(), st.patches);
+}
+
 }  // namespace
 }  // namespace quadrix
