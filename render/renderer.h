@@ -60,6 +60,10 @@ struct RenderOptions {
   bool tet_occlusion = true;
   /// Debug: glyphs write every fragment of their proxy polygon, flat, without ray casting.
   bool glyph_proxies = false;
+  /// Glyphs drawn so the depth test runs before their fragment shader (occluders, then nearest
+  /// hits, then one ray per pixel: render/passes/glyph_pass.h), where the context has 64-bit
+  /// atomics; false: each proxy fragment writes its hit's depth (no early test on llvmpipe).
+  bool glyph_early_depth = true;
   /// Shadows of the key light (core/lighting.h) from a shadow map of every primitive kind, with
   /// adaptive percentage-closer filtering ([Sigg06] §5: 8 samples, 64 in the penumbra).
   bool shadows = false;

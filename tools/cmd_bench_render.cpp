@@ -56,6 +56,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.cull = cull;
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
   o.tet_early_depth = tet_early_depth;
+  o.glyph_early_depth = tet_early_depth;  // glyphs: occluders and nearest hits first (render/passes/glyph_pass.h)
   o.slim_tight_splats = tight_splats;
   o.slim_offset = static_cast<float>(slim_offset);
   o.statistics = true;
@@ -243,9 +244,15 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           r.set_model(model);
                           rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_offset_of(model)));
                           rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
-                          if (!model.glyphs.empty())
+                          if (!model.glyphs.empty()) {
                             rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
                                                    slim_offset_of(model), true, true, true, true, a->shadow_map));
+                            // Each proxy fragment writing its hit's depth (no early depth test on llvmpipe).
+                            rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
+                                                   slim_offset_of(model), true, false, false));
+                            rows.push_back(measure("quadrics, hit depth, shadows+outlines", r, cam, true, a->frames,
+                                                   slim_offset_of(model), true, true, false, true, a->shadow_map));
+                          }
                           if (!model.tets.empty()) {  // without chunk occlusion; with each fragment writing its hit's depth
                             rows.push_back(measure("quadrics, no occlusion", r, cam, true, a->frames,
                                                    slim_offset_of(model), true, false, true, false));
@@ -345,11 +352,25 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         const Row* no_occ = row_named("quadrics, no occlusion");
                         if (hit_depth) j["ratio_hit_depth_over_early_depth"] = hit_depth->ms_median / rows[0].ms_median;
                         if (no_occ) j["ratio_no_occlusion_over_occlusion"] = no_occ->ms_median / rows[0].ms_median;
+                        // Glyphs against the same glyphs tessellated (issue 13's target: ≤ 0.5), plain and with effects.
+                        const Row* tess = row_named("tessellated glyphs");
+                        const Row* tess_fx = row_named("tessellated, shadows+outlines");
+                        const Row* glyph_fx = row_named("quadrics, shadows+outlines");
+                        const Row* hit_fx = row_named("quadrics, hit depth, shadows+outlines");
+                        if (tess) j["ratio_glyphs_over_tessellated"] = rows[0].ms_median / tess->ms_median;
+                        if (tess_fx && glyph_fx)
+                          j["ratio_glyphs_over_tessellated_shadows_outlines"] = glyph_fx->ms_median / tess_fx->ms_median;
+                        if (tess && hit_depth) j["ratio_glyphs_hit_depth_over_tessellated"] = hit_depth->ms_median / tess->ms_median;
+                        if (tess_fx && hit_fx)
+                          j["ratio_glyphs_hit_depth_over_tessellated_shadows_outlines"] = hit_fx->ms_median / tess_fx->ms_median;
                         std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
                         if (tri) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / tri->ms_median);
                         if (ball) std::printf(", ball/tight splats %.2f", ball->ms_median / rows[0].ms_median);
                         if (no_occ) std::printf(", no occlusion/occlusion %.2f", no_occ->ms_median / rows[0].ms_median);
                         if (hit_depth) std::printf(", hit depth/early depth and occlusion %.2f", hit_depth->ms_median / rows[0].ms_median);
+                        if (tess) std::printf(", glyphs/tessellated %.2f", rows[0].ms_median / tess->ms_median);
+                        if (tess_fx && glyph_fx)
+                          std::printf(", with shadows+outlines %.2f", glyph_fx->ms_median / tess_fx->ms_median);
                         std::printf("\n");
                         std::filesystem::create_directories(a->out);
                         write_file_atomically(std::filesystem::path(a->out) / "bench_render.json",

@@ -57,8 +57,12 @@ bool is_opaque(GLenum type) {
 }
 
 GLuint compile(GLenum stage, std::string_view name, std::string_view source, std::string_view defines) {
-  const std::string full = std::string(shader_source("prelude.glsl")) + "\n" + std::string(defines) + "\n#line 1\n" +
-                           std::string(source);
+  // The defines go right after the prelude's #version line: #extension directives must come
+  // before any code.
+  const std::string_view prelude = shader_source("prelude.glsl");
+  const std::size_t body = prelude.find('\n') + 1;
+  const std::string full = std::string(prelude.substr(0, body)) + std::string(defines) + "\n" +
+                           std::string(prelude.substr(body)) + "\n#line 1\n" + std::string(source);
   const GLuint s = glCreateShader(stage);
   const char* text = full.c_str();
   glShaderSource(s, 1, &text, nullptr);

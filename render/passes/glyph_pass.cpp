@@ -1,9 +1,11 @@
 #include "render/passes/glyph_pass.h"
 
 #include <cmath>
+#include <string>
 #include <tuple>
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -80,12 +82,22 @@ GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) 
   p.inv[0][3] = bits_float(static_cast<std::uint32_t>(primitive_id(PrimitiveKind::glyph, index)));
   p.s0[0] = float(S(0, 0)), p.s0[1] = float(S(1, 1)), p.s0[2] = float(S(2, 2)), p.s0[3] = float(S(0, 1));
   p.s1[0] = float(S(1, 2)), p.s1[1] = float(S(0, 2)), p.s1[2] = float(size);
+  // The shortest semi-axis: the glyph holds the ball of that radius (glyph_occluder.vert).
+  if (g.kind != GlyphKind::cylinder) p.s1[3] = float(Eigen::JacobiSVD<Eigen::Matrix3d>(M).singularValues().minCoeff());
   return p;
 }
 
+std::string with_lib(std::string_view stage) { return std::string(shader_source("glyph_lib.glsl")) + "\n" + std::string(stage); }
+
 }  // namespace
 
-GlyphPass::GlyphPass() : program_("glyph", shader_source("glyph.vert"), shader_source("glyph.frag")) {}
+GlyphPass::GlyphPass()
+    : program_("glyph", with_lib(shader_source("glyph.vert")), with_lib(shader_source("glyph.frag"))) {
+  occluder_ = gl::Program("glyph occluders", with_lib(shader_source("glyph_occluder.vert")), shader_source("glyph_occluder.frag"));
+  nearest_ = gl::Program("glyph nearest hits", with_lib(shader_source("glyph.vert")), with_lib(shader_source("glyph.frag")),
+                         "#define GLYPH_NEAREST 1\n");
+  resolve_ = gl::Program("glyph resolve", shader_source("fullscreen.vert"), with_lib(shader_source("glyph_resolve.frag")));
+}
 
 void GlyphPass::upload(std::span<const Glyph> glyphs) {
   if (glyphs.size() > kMaxPrimitiveIndex + 1)
@@ -107,27 +119,82 @@ void GlyphPass::upload(std::span<const Glyph> glyphs) {
   count_ = data.size();
 }
 
-void GlyphPass::run(const Frame& f) {
+void GlyphPass::draw_proxies(const gl::Program& program, const Frame& f, bool count_statistics, bool rectangles) const {
   const RenderOptions& o = f.options;
-  begin_gbuffer_draw(f);
-  set_camera_uniforms(program_, f.camera);
-  program_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
-  program_.set("u_cull", o.cull ? 1 : 0);
-  program_.set("u_count_stats", o.statistics ? 1 : 0);
-  program_.set("u_proxy", o.glyph_proxies ? 1 : 0);
+  set_camera_uniforms(program, f.camera);
+  program.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+  program.set("u_cull", o.cull ? 1 : 0);
+  program.set("u_count_stats", count_statistics && o.statistics ? 1 : 0);
+  program.set("u_proxy", o.glyph_proxies ? 1 : 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glyphs_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
   glBindVertexArray(f.empty_vao);
   // Octagons around ellipses leave 5.2 % of their area outside; the hull of a cylinder's two cap
   // ellipses gets 12 support lines (NoGlyphPixelLiesOutsideItsProxy prints the measured waste).
   const std::size_t ellipses = count_ - cylinders_;
-  for (const auto& [first, count, sides] : {std::tuple{std::size_t(0), ellipses, 8}, std::tuple{ellipses, cylinders_, 12}}) {
+  // Rectangles (the early-depth path): a quarter of the octagon's triangles, and llvmpipe's cost
+  // per triangle outweighs the fragments they add, most of which fail the early depth test.
+  const int ellipse_sides = rectangles ? 4 : 8, cylinder_sides = rectangles ? 4 : 12;
+  for (const auto& [first, count, sides] :
+       {std::tuple{std::size_t(0), ellipses, ellipse_sides}, std::tuple{ellipses, cylinders_, cylinder_sides}}) {
     if (count == 0) continue;
-    program_.set("u_first", static_cast<int>(first));
-    program_.set("u_sides", sides);
-    program_.use();
+    program.set("u_first", static_cast<int>(first));
+    program.set("u_sides", sides);
+    program.use();
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, sides, static_cast<GLsizei>(count));
   }
+}
+
+void GlyphPass::run(const Frame& f) {
+  begin_gbuffer_draw(f);
+  if (f.options.glyph_early_depth && !f.options.glyph_proxies) {
+    run_early_depth(f);
+    return;
+  }
+  draw_proxies(program_, f, true, false);
+}
+
+void GlyphPass::run_early_depth(const Frame& f) {
+  const std::size_t pixels = static_cast<std::size_t>(f.targets.width) * f.targets.height;
+  if (pixels > nearest_pixels_) {
+    nearest_buffer_ = gl::make_buffer(static_cast<GLsizeiptr>(pixels * 2 * sizeof(GLuint)), nullptr);
+    nearest_pixels_ = pixels;
+  }
+  const GLuint none[2] = {~0u, ~0u};
+  glClearNamedBufferSubData(nearest_buffer_.id(), GL_RG32UI, 0, static_cast<GLsizeiptr>(pixels * 2 * sizeof(GLuint)),
+                            GL_RG_INTEGER, GL_UNSIGNED_INT, none);
+  // (1) Occluders: depth only, spheres and ellipsoids (stored first).
+  for (GLuint i = 0; i < 3; ++i) glColorMaski(i, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  const std::size_t ellipses = count_ - cylinders_;
+  if (ellipses > 0) {
+    set_camera_uniforms(occluder_, f.camera);
+    occluder_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+    occluder_.use();
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glyphs_.id());
+    glBindVertexArray(f.empty_vao);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(ellipses));
+  }
+  // (2) Proxies behind the occluders fail the depth test before the shader; the rest keep the
+  // nearest hit per pixel.
+  glDepthMask(GL_FALSE);
+  glDepthFunc(GL_LEQUAL);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, nearest_buffer_.id());
+  nearest_.set("u_index_pass", 0);
+  draw_proxies(nearest_, f, true, true);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  nearest_.set("u_index_pass", 1);
+  draw_proxies(nearest_, f, false, true);  // the same fragments again: counted once
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  // (3) That glyph's ray per pixel: the G-buffer and the depth (depth-tested as the other passes).
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+  set_gbuffer_colour_writes(f);
+  set_camera_uniforms(resolve_, f.camera);
+  resolve_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+  resolve_.set("u_cull", f.options.cull ? 1 : 0);
+  resolve_.use();
+  glBindVertexArray(f.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
 }
 
 }  // namespace quadrix::render

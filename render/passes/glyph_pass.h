@@ -2,6 +2,14 @@
 /// Glyphs ([Sigg06] §3, DESIGN §6 glyphs): spheres, ellipsoids and capped cylinders, one
 /// instanced polygon each around the exact projected outline (octagons around ellipses,
 /// 12-gons around cylinders), ray-cast in the glyph's parameter space into the G-buffer.
+///
+/// Early-depth path (RenderOptions::glyph_early_depth): a fragment that writes its hit's depth keeps llvmpipe from testing depth before the
+/// shader, so every proxy fragment of every glyph behind the surface would be ray-cast. Instead:
+/// (1) depth-only occluders, a square inside each sphere and ellipsoid at a depth no nearer
+/// than the glyph there (glyph_occluder.vert); (2) the proxies, depth-tested before the shader
+/// against them and writing no depth, keep the nearest hit's depth per pixel (atomic min), then
+/// (drawn again) the index of the glyph hit at that depth; (3) one ray per pixel into that glyph writes the G-buffer and depth (glyph_resolve.frag).
+/// Exact: the occluders' depth bounds the nearest glyph's from behind, so it is never culled.
 #include <span>
 
 #include "core/model.h"
@@ -20,7 +28,13 @@ public:
   void run(const Frame& frame) override;
 
 private:
+  void draw_proxies(const gl::Program& program, const Frame& frame, bool count_statistics, bool rectangles) const;
+  void run_early_depth(const Frame& frame);
+
   gl::Program program_;
+  gl::Program occluder_, nearest_, resolve_;  // the early-depth path
+  gl::Buffer nearest_buffer_;  // per pixel: the nearest hit's window depth bits, its glyph's index
+  std::size_t nearest_pixels_ = 0;
   gl::Buffer glyphs_;      // spheres and ellipsoids first, then cylinders (ids keep the model's order)
   std::size_t count_ = 0;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it

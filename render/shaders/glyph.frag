@@ -1,18 +1,24 @@
 // Glyph pass, fragment stage ([Sigg06] §3, eq. 6–9): the ray is taken into the glyph's
 // parameter space u = M⁻¹(x − C), where the glyph is the unit sphere (sphere, ellipsoid) or the
-// unit cylinder |u_z| ≤ 1 with its two caps; solved there; the eye-space depth read off the
-// ray parameter and the normal carried back as M⁻ᵀ∇(u) (eq. 9). Hits nearest the eye first;
-// with culling, front-facing hits only (as the CPU reference).
+// unit cylinder |u_z| ≤ 1 with its two caps; solved there (glyph_lib.glsl); the eye-space depth
+// read off the ray parameter and the normal carried back as M⁻ᵀ∇(u) (eq. 9). Hits nearest the
+// eye first; with culling, front-facing hits only (as the CPU reference).
+//
+// GLYPH_NEAREST (glyph_pass.cpp, the early-depth path): the depth test runs before this stage
+// against the occluders' depth, and the stage writes nothing but the nearest hit's depth per
+// pixel (atomic min of its bits: window depths are non-negative); drawn again (u_index_pass), the
+// index of the glyph hit at that depth (the smallest, on ties) for glyph_resolve.frag.
 in vec3 v_dir;
 in vec3 v_offset;
 flat in float v_centre_z;
-flat in float v_scale;  // the ray parameter σ below is s / v_scale (huge and tiny glyphs stay in float)
+flat in float v_scale;  // the ray parameter σ is s / v_scale (huge and tiny glyphs stay in float)
 flat in vec3 v_inv0;
 flat in vec3 v_inv1;
 flat in vec3 v_inv2;
 flat in uint v_kind;
 flat in uint v_colour;
 flat in int v_id;
+flat in uint v_index;
 
 layout(std430, binding = 1) buffer Stats {
   uint culled; uint drawn; uint splat_fragments; uint hit_fragments; uint glyph_fragments; uint glyph_hit_fragments;
@@ -20,67 +26,59 @@ layout(std430, binding = 1) buffer Stats {
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
+uniform vec2 u_viewport;
+uniform vec3 u_origin_minus_target;
+uniform float u_target_distance;
 uniform int u_cull;
 uniform int u_count_stats;
 uniform int u_proxy;  // debug: every proxy fragment is written, flat, without ray casting
 
+#ifdef GLYPH_NEAREST
+layout(early_fragment_tests) in;
+layout(std430, binding = 2) buffer Nearest { uint nearest[]; };  // per pixel: window depth bits, glyph index
+uniform int u_index_pass;  // 0: the nearest depth; 1: the glyph at that depth
+#else
 layout(depth_greater) out float gl_FragDepth;
 layout(location = 0) out vec4 out_normal_depth;  // world normal (facing the viewer), eye depth
 layout(location = 1) out vec4 out_albedo;
 layout(location = 2) out int out_id;
-
-float s_best;
-vec3 g_best;  // gradient in parameter space at the best hit
-bool found = false;
-
-void consider(float sigma, vec3 grad_u, vec3 d) {
-  float s = sigma * v_scale;
-  if (s <= v_centre_z || (found && s >= s_best)) return;  // behind the eye, or not nearer
-  if (u_cull != 0 && dot(grad_u, d) >= 0.0) return;     // back-facing
-  s_best = s;
-  g_best = grad_u;
-  found = true;
-}
+#endif
 
 void main() {
   if (u_count_stats != 0) atomicAdd(stats.glyph_fragments, 1u);
+#ifdef GLYPH_NEAREST
+  // Only the ray's direction and the glyph's index come interpolated (llvmpipe sets up every
+  // input of every triangle); the rest is read here.
+  GlyphRay r = glyph_ray(glyphs[v_index], v_dir.xy, u_view_rot, u_origin_minus_target, u_target_distance);
+  GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_cull != 0);
+  if (!h.found) discard;
+  if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  float depth = clamp(window_depth(r.centre_z - h.s, u_proj), 0.0, 1.0);  // as gl_FragDepth is clamped
+  int i = 2 * (p.y * int(u_viewport.x) + p.x);
+  // One program for both draws, so the second computes the very same bits.
+  if (u_index_pass == 0)
+    atomicMin(nearest[i], floatBitsToUint(depth));
+  else if (floatBitsToUint(depth) == nearest[i])
+    atomicMin(nearest[i + 1], v_index);
+#else
   mat3 inv = transpose(mat3(v_inv0, v_inv1, v_inv2));
   vec3 o = inv * v_offset;  // ray in parameter space: u(σ) = o + σ·d
   vec3 d = inv * (v_dir * v_scale);  // per unit σ
+  GlyphHit h;
   if (u_proxy != 0) {
-    s_best = 0.0;
-    g_best = -d;
-    found = true;
-  } else if (v_kind != 2u) {
-    float s0, s1;
-    int n = solve_quadratic(dot(d, d), dot(o, d), dot(o, o) - 1.0, s0, s1);
-    if (n > 0) consider(s0, o + s0 * d, d);
-    if (n > 1) consider(s1, o + s1 * d, d);
+    h.found = true;
+    h.s = 0.0;
+    h.grad = -d;
   } else {
-    float s0, s1;
-    float a = dot(d.xy, d.xy);  // 0: the ray runs along the axis and meets only the caps
-    int n = a > 0.0 ? solve_quadratic(a, dot(o.xy, d.xy), dot(o.xy, o.xy) - 1.0, s0, s1) : 0;
-    vec3 u0 = o + s0 * d, u1 = o + s1 * d;
-    if (n > 0 && abs(u0.z) <= 1.0) consider(s0, vec3(u0.xy, 0.0), d);
-    if (n > 1 && abs(u1.z) <= 1.0) consider(s1, vec3(u1.xy, 0.0), d);
-    if (d.z != 0.0) {
-      for (int i = 0; i < 2; ++i) {
-        float side = i == 0 ? 1.0 : -1.0;
-        float s = (side - o.z) / d.z;
-        vec2 uxy = o.xy + s * d.xy;
-        if (dot(uxy, uxy) <= 1.0) consider(s, vec3(0.0, 0.0, side), d);
-      }
-    }
+    h = cast_glyph(o, d, v_kind, v_scale, v_centre_z, u_cull != 0);
   }
-  if (!found) discard;
+  if (!h.found) discard;
   if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);
-  // [Sigg06] eq. 9: the normal is M⁻ᵀ times the parameter-space gradient (eye axes here).
-  vec3 n = transpose(inv) * g_best;
-  n = normalize(n / max(max(abs(n.x), abs(n.y)), abs(n.z)));  // |n|² would leave float for tiny glyphs
-  if (dot(n, v_dir) > 0.0) n = -n;  // two-sided when culling is off
-  float z = v_centre_z - s_best;    // eye-space z of the hit (the ray's z falls by 1 per unit s)
+  float z = v_centre_z - h.s;  // eye-space z of the hit (the ray's z falls by 1 per unit s)
   gl_FragDepth = window_depth(z, u_proj);
-  out_normal_depth = vec4(transpose(u_view_rot) * n, -z);
+  out_normal_depth = vec4(transpose(u_view_rot) * glyph_normal(inv, h.grad, v_dir), -z);
   out_albedo = vec4(unpack_colour(v_colour), 1.0);
   out_id = v_id;
+#endif
 }

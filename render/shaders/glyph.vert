@@ -14,17 +14,7 @@
 // the ray's point in the plane through the centre (perpendicular to the view axis) interpolate
 // exactly; the fragment stage restarts each ray there, so nothing large cancels.
 
-struct Glyph {
-  vec4 centre_hi;  // xyz: centre (float part), w: kind (0 sphere, 1 ellipsoid, 2 cylinder)
-  vec4 centre_lo;  // xyz: centre − float(centre), w: colour bits
-  vec4 inv0;       // rows of M⁻¹ (world → parameter space); inv0.w: primitive id bits
-  vec4 inv1;
-  vec4 inv2;
-  vec4 s0;         // S / s², S = M Mᵀ (world): xx yy zz xy; cylinder: S of one end disc
-  vec4 s1;         // yz xz, s (the glyph's size, its longest semi-axis), —
-  vec4 axis;       // cylinder: half axis a (caps at C ± a)
-};
-layout(std430, binding = 0) readonly buffer Glyphs { Glyph glyphs[]; };
+// struct Glyph and the Glyphs buffer: glyph_lib.glsl.
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
@@ -45,9 +35,7 @@ flat out vec3 v_inv2;
 flat out uint v_kind;
 flat out uint v_colour;
 flat out int v_id;
-
-// Triangle strip order over a convex polygon's vertices: 0, 1, N−1, 2, N−2, …
-int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 : n - i / 2; }
+flat out uint v_index;  // in the Glyphs buffer
 
 // The projected ellipse (NDC) of x = C + M u (eye space), S = M Mᵀ: centre c and shape S2 =
 // L Lᵀ. From the dual conic D = P Q* Pᵀ normalised by −D₃₃ = C_z² − S_zz; the C Cᵀ terms of
@@ -72,8 +60,7 @@ float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 *
 void main() {
   Glyph g = glyphs[u_first + gl_InstanceID];
   uint kind = uint(g.centre_hi.w);
-  vec3 C = u_view_rot * (u_origin_minus_target + (g.centre_hi.xyz + g.centre_lo.xyz)) +
-           vec3(0.0, 0.0, -u_target_distance);
+  vec3 C = glyph_centre_eye(g, u_view_rot, u_origin_minus_target, u_target_distance);
   mat3 Sw = mat3(g.s0.x, g.s0.w, g.s1.y,
                  g.s0.w, g.s0.y, g.s1.x,
                  g.s1.y, g.s1.x, g.s0.z);
@@ -144,12 +131,12 @@ void main() {
   v_offset = vec3(kk * -C.z - C.xy, 0.0);
   v_centre_z = C.z;
   v_scale = L;
-  mat3 inv_world = transpose(mat3(g.inv0.xyz, g.inv1.xyz, g.inv2.xyz));  // rows → matrix
-  mat3 inv_eye = inv_world * transpose(u_view_rot);
+  mat3 inv_eye = glyph_inverse_eye(g, u_view_rot);
   v_inv0 = vec3(inv_eye[0][0], inv_eye[1][0], inv_eye[2][0]);
   v_inv1 = vec3(inv_eye[0][1], inv_eye[1][1], inv_eye[2][1]);
   v_inv2 = vec3(inv_eye[0][2], inv_eye[1][2], inv_eye[2][2]);
   v_kind = kind;
   v_colour = floatBitsToUint(g.centre_lo.w);
   v_id = floatBitsToInt(g.inv0.w);
+  v_index = uint(u_first + gl_InstanceID);
 }

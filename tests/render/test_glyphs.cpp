@@ -206,6 +206,7 @@ TEST_F(GlGlyphs, StatisticsMeasureTheWaste) {
   const Camera cam = frame_box(bounds(m), {.azimuth_deg = 20, .elevation_deg = 10, .width = 256, .height = 256});
   render::RenderOptions o;
   o.statistics = true;
+  o.glyph_early_depth = false;  // the tight proxies (the early-depth path draws rectangles)
   draw(m, cam, o);
   const auto& st = last_stats_;
   std::printf("glyph fragments %llu hit %llu waste %.2f %%\n", (unsigned long long)st.glyph_proxy_fragments,
@@ -282,4 +283,29 @@ TEST_F(GlGlyphs, MoleculesInEveryStyleMatchTheCpuReference) {
     const Comparison c = run(m, cam, true);
     expect_accurate(c, 4000);
   }
+}
+
+TEST_F(GlGlyphs, EarlyDepthRayCastsOnlyNearTheSurface) {
+  // A spacefill molecule: most atoms lie behind others. The early-depth path (occluders, nearest
+  // hits, one ray per pixel) must draw the same image as one pass writing each hit's depth, and
+  // ray-cast far fewer proxy fragments; both against the CPU reference.
+  const auto path = std::filesystem::path(QUADRIX_DATASETS) / "molecules" / "4lfq.pdb";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
+  const Model m = molecule_glyphs(read_molecule(path), {.style = MoleculeStyle::spacefill}).model;
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 60, .elevation_deg = 10, .width = 320, .height = 320});
+  const ReferenceImage ref = reference(m, cam);
+  std::uint64_t fragments[2] = {};
+  for (const bool early : {true, false}) {
+    SCOPED_TRACE(early);
+    render::RenderOptions o;
+    o.glyph_early_depth = early;
+    o.statistics = true;
+    const Comparison c = testing_gl::compare(ref, draw(m, cam, o));
+    expect_accurate(c, 10000);
+    fragments[early] = last_stats_.glyph_proxy_fragments;
+  }
+  std::printf("proxy fragments ray-cast: %llu early depth, %llu hit depth\n", (unsigned long long)fragments[1],
+              (unsigned long long)fragments[0]);
+  EXPECT_GT(fragments[1], 0u);
+  EXPECT_LT(fragments[1], fragments[0] / 2);
 }

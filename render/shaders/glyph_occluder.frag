@@ -1,0 +1,2 @@
+// Glyph occluders (glyph_occluder.vert): depth only.
+void main() {}
