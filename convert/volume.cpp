@@ -170,7 +170,7 @@ VoxelType parse_voxel_type(std::string_view name) {
   if (t == "float" || t == "float32") return VoxelType::float32;
   if (t == "double" || t == "float64") return VoxelType::float64;
   throw InvalidInput(fmt::format("unknown voxel type '{}' (uint8, int8, uint16, int16, uint32, int32, float, double)",
-                                 name));
+                                 io::echo(name)));
 }
 
 Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
