@@ -28,7 +28,7 @@ test: build
 # through them, limits, math, reference, implicits), run directly (no CLI binary, no GL, no CGAL): the
 # code every command goes through. Deterministic (fixed seeds, no fuzzing); CI runs it after `make
 # test` (.ci/run), in its own build folder: about 1,000 s of CPU cold, 30 s warm.
-SAN_TESTS ?= test_core_math test_core_io test_core_reference test_core_implicit
+SAN_TESTS ?= test_core_math test_core_io test_core_reference test_core_implicit test_malformed_corpus
 test-sanitize: deps
 	cmake -S . -B $(SAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQUADRIX_SANITIZE=ON -DQUADRIX_BENCHMARKS=OFF $(CMAKE_ARGS)
 	cmake --build $(SAN_BUILD) -j$(JOBS) --target $(SAN_TESTS)

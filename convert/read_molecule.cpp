@@ -127,12 +127,12 @@ std::vector<std::pair<int, int>> scan_pdb(const fs::path& path, const std::strin
   return conect;
 }
 
-// The whole text through the I/O kit; a gzip file inflates to at most 4 GiB (the largest PDB
-// entries are a few hundred MB of text), checked as the bytes arrive.
+// The whole text through the I/O kit. A gzip file has no header promising its size: it inflates
+// to at most io::inflate_limit of its compressed size (PDB text compresses 4–5 times; the
+// largest entries are a few hundred MB of text), checked as the bytes arrive.
 std::string read_text(const fs::path& path) {
-  constexpr std::size_t kMaxInflated = std::size_t{4} << 30;
   gemmi::MaybeGzipped input(path.string());
-  return input.is_compressed() ? io::read_gzip(path, kMaxInflated) : io::read_file(path);
+  return input.is_compressed() ? io::read_gzip(path, io::inflate_limit(fs::file_size(path))) : io::read_file(path);
 }
 
 }  // namespace

@@ -170,7 +170,7 @@ VoxelType parse_voxel_type(std::string_view name) {
   if (t == "float" || t == "float32") return VoxelType::float32;
   if (t == "double" || t == "float64") return VoxelType::float64;
   throw InvalidInput(fmt::format("unknown voxel type '{}' (uint8, int8, uint16, int16, uint32, int32, float, double)",
-                                 name));
+                                 io::echo(name)));
 }
 
 Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
@@ -180,7 +180,8 @@ Volume read_raw_volume(const fs::path& path, const RawVolumeLayout& layout) {
   for (const int d : layout.dims) need *= std::max(d, 0);
   need += static_cast<double>(layout.header_bytes);
   const std::size_t bound = need > 1e18 ? io::kNoLimit : static_cast<std::size_t>(need);
-  const std::string bytes = ends_with(path, ".gz") ? io::read_gzip(path, bound) : io::read_file(path, bound);
+  const io::ByteLimit limit{bound, "its --dims, --type and --header-bytes give"};
+  const std::string bytes = ends_with(path, ".gz") ? io::read_gzip(path, limit) : io::read_file(path, limit);
   if (layout.header_bytes > bytes.size())
     throw FormatError(fmt::format("{}: header of {} bytes is longer than the file ({} bytes)", what,
                                   layout.header_bytes, bytes.size()));
@@ -356,10 +357,10 @@ Volume read_nrrd(const fs::path& path) {
                                     io::echo(data_file)));
     try {
       if (gz && line_skip == 0) {
-        data = io::read_gzip(df, bound);
+        data = io::read_gzip(df, {bound, io::kHeaderPromise});
         inflated = true;
       } else {
-        data = io::read_file(df, gz ? gzip_bound(need + skip) : bound);
+        data = io::read_file(df, {gz ? gzip_bound(need + skip) : bound, io::kHeaderPromise});
       }
     } catch (const IoError& e) {  // the header is where the user looks first: name it too
       throw IoError(fmt::format("{}: data file '{}': {}", what, io::echo(data_file), e.what()));
@@ -370,7 +371,8 @@ Volume read_nrrd(const fs::path& path) {
     if (data_start == std::string::npos)
       throw FormatError(fmt::format("{}: no 'data file' field and no attached data after an empty line", what));
     const std::size_t limit = gz ? gzip_bound(need + skip) : bound;
-    data = io::read_file(path, limit == io::kNoLimit ? limit : data_start + limit).substr(data_start);
+    data = io::read_file(path, {limit == io::kNoLimit ? limit : data_start + limit, io::kHeaderPromise})
+               .substr(data_start);
   }
   std::string_view d = data;
   if (!inflated)
@@ -382,7 +384,7 @@ Volume read_nrrd(const fs::path& path) {
     }
   std::string unzipped;
   if (gz && !inflated) {
-    unzipped = io::gunzip(d, data_what, skip + need);
+    unzipped = io::gunzip(d, data_what, {skip + need, io::kHeaderPromise});
     d = unzipped;
   }
   if (byte_skip == -1) {
@@ -457,7 +459,8 @@ Volume read_inr(const fs::path& path) {
   else if (cpu != "decm" && cpu != "alpha" && cpu != "pc")
     throw FormatError(fmt::format("{}: unknown CPU='{}' (decm, alpha, pc, sun, sgi)", what, io::echo(cpu)));
   const std::size_t bound = header + promised_bytes(dims, type, what);
-  const std::string all = gz ? io::read_gzip(path, bound) : io::read_file(path, bound);
+  const std::string all =
+      gz ? io::read_gzip(path, {bound, io::kHeaderPromise}) : io::read_file(path, {bound, io::kHeaderPromise});
   Volume v = decode(std::string_view(all).substr(header), dims, type, big, spacing, what);
   check_volume_extent(v);
   return v;

@@ -1,5 +1,6 @@
 #include "core/io/file.h"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -15,8 +16,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-[[noreturn]] void too_big(const fs::path& path, std::size_t max_bytes, std::string_view how) {
-  throw FormatError(fmt::format("{}: {} more than the {} bytes its header promises", path.string(), how, max_bytes));
+[[noreturn]] void too_big(std::string_view what, const ByteLimit& limit, std::string_view how) {
+  throw FormatError(fmt::format("{}: {} more than the {} bytes {}", what, how, limit.bytes, limit.why));
 }
 
 void check_readable(const fs::path& path) {
@@ -28,13 +29,23 @@ void check_readable(const fs::path& path) {
 
 }  // namespace
 
-std::string read_file(const fs::path& path, std::size_t max_bytes) {
+ByteLimit inflate_limit(std::uint64_t compressed_bytes) {
+  const std::uint64_t ratio_bound = compressed_bytes > kMaxInflated / kMaxInflateRatio
+                                        ? kMaxInflated
+                                        : std::max<std::uint64_t>(compressed_bytes * kMaxInflateRatio, 1 << 20);
+  return {static_cast<std::size_t>(ratio_bound),
+          fmt::format("allowed for {} compressed bytes ({} times their size, at least 1 MiB, at most {} GiB)",
+                      compressed_bytes, kMaxInflateRatio, kMaxInflated >> 30)};
+}
+
+std::string read_file(const fs::path& path, const ByteLimit& limit) {
+  const std::size_t max_bytes = limit.bytes;
   check_readable(path);
   std::error_code ec;
   const bool regular = fs::is_regular_file(path, ec);
   if (regular) {
     const auto size = fs::file_size(path, ec);
-    if (!ec && size > max_bytes) too_big(path, max_bytes, fmt::format("holds {} bytes,", size));
+    if (!ec && size > max_bytes) too_big(path.string(), limit, fmt::format("holds {} bytes,", size));
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
@@ -44,7 +55,7 @@ std::string read_file(const fs::path& path, std::size_t max_bytes) {
   while (in) {
     in.read(buf.data(), buf.size());
     const auto n = static_cast<std::size_t>(in.gcount());
-    if (n > max_bytes - out.size()) too_big(path, max_bytes, "holds");
+    if (n > max_bytes - out.size()) too_big(path.string(), limit, "holds");
     out.append(buf.data(), n);
   }
   if (in.bad()) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
@@ -62,7 +73,8 @@ std::string read_file_prefix(const fs::path& path, std::size_t max_bytes) {
   return out;
 }
 
-std::string read_gzip(const fs::path& path, std::size_t max_bytes, bool is_prefix) {
+std::string read_gzip(const fs::path& path, const ByteLimit& limit, bool is_prefix) {
+  const std::size_t max_bytes = limit.bytes;
   check_readable(path);
   gzFile f = gzopen(path.string().c_str(), "rb");
   if (!f) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
@@ -86,7 +98,7 @@ std::string read_gzip(const fs::path& path, std::size_t max_bytes, bool is_prefi
     if (k > max_bytes - out.size()) {
       gzclose(f);
       if (is_prefix) return out.append(buf.data(), max_bytes - out.size());
-      too_big(path, max_bytes, "decompresses to");
+      too_big(path.string(), limit, "decompresses to");
     }
     out.append(buf.data(), k);
   }
@@ -94,7 +106,8 @@ std::string read_gzip(const fs::path& path, std::size_t max_bytes, bool is_prefi
   return out;
 }
 
-std::string gunzip(std::string_view data, const std::string& what, std::size_t max_bytes) {
+std::string gunzip(std::string_view data, const std::string& what, const ByteLimit& limit) {
+  const std::size_t max_bytes = limit.bytes;
   z_stream z{};
   if (inflateInit2(&z, 15 + 32) != Z_OK) throw FormatError(fmt::format("{}: cannot initialise zlib", what));
   std::string out;
@@ -113,7 +126,7 @@ std::string gunzip(std::string_view data, const std::string& what, std::size_t m
     const std::size_t n = buf.size() - z.avail_out;
     if (n > max_bytes - out.size()) {
       inflateEnd(&z);
-      throw FormatError(fmt::format("{}: decompresses to more than the {} bytes its header promises", what, max_bytes));
+      too_big(what, limit, "decompresses to");
     }
     out.append(buf.data(), n);
     if (rc == Z_OK && z.avail_in == 0 && z.avail_out != 0) {

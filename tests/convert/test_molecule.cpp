@@ -8,11 +8,14 @@
 #include <set>
 #include <string>
 
+#include <zlib.h>
+
 #include "convert/balls.h"
 #include "convert/ellipsoids_csv.h"
 #include "convert/molecule.h"
 #include "convert/molecule_glyphs.h"
 #include "core/error.h"
+#include "core/io/file.h"
 #include "core/model_io.h"
 #include "tests/support.h"
 
@@ -103,6 +106,52 @@ TEST_F(Molecules, MalformedFilesAreFormatErrors) {
   EXPECT_THROW(read_molecule(write("empty.pdb", "HEADER nothing\n")), FormatError);
   EXPECT_THROW(read_molecule(write("bad.cif", "data_x\nloop_\n_atom_site.id\n")), FormatError);
   EXPECT_THROW(read_molecule(write("x.xyz", "1 2 3\n")), InvalidInput);
+}
+
+// A gzip file promises no size: it inflates to at most 32 times its compressed size (at least
+// 1 MiB), checked as it inflates. A PDB file (4-5 times) passes; a bomb (about 1000 times: a
+// 40 MiB body of one repeated REMARK line) stops at its bound, naming the file and the limit.
+TEST_F(Molecules, GzipFileInflatesToABoundFromItsSize) {
+  auto gzip = [&](const std::string& name, const std::string& head, std::size_t pad_bytes) {
+    const fs::path p = dir_ / name;
+    gzFile f = gzopen(p.string().c_str(), "wb9");
+    gzwrite(f, head.data(), static_cast<unsigned>(head.size()));
+    const std::string line = "REMARK 999" + std::string(69, ' ') + "\n";
+    std::string chunk;
+    while (chunk.size() < (1u << 20)) chunk += line;
+    for (std::size_t n = 0; n < pad_bytes; n += chunk.size()) gzwrite(f, chunk.data(), static_cast<unsigned>(chunk.size()));
+    gzclose(f);
+    return p;
+  };
+  std::ifstream in(kMolecules / "4lfq.pdb", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(text.size(), 100000u);
+  EXPECT_EQ(read_molecule(gzip("4lfq.pdb.gz", text, 0)).atoms.size(), read_molecule(kMolecules / "4lfq.pdb").atoms.size());
+
+  const fs::path bomb = gzip("bomb.pdb.gz", kPdb, std::size_t{40} << 20);
+  const auto size = fs::file_size(bomb);
+  ASSERT_GT(size * io::kMaxInflateRatio, std::size_t{1} << 20) << "the ratio, not the 1 MiB floor, is the bound";
+  const std::string limit = std::to_string(size * io::kMaxInflateRatio);
+  try {
+    read_molecule(bomb);
+    ADD_FAILURE() << "a bomb was read whole";
+  } catch (const FormatError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("bomb.pdb.gz: decompresses to more than the " + limit + " bytes allowed for " +
+                     std::to_string(size) + " compressed bytes"),
+              std::string::npos)
+        << m;
+    EXPECT_EQ(m.find("header"), std::string::npos) << m;
+  }
+  const auto r = test_support::run_command(QUADRIX_BINARY, "convert glyphs " + bomb.string() + " -o " +
+                                                               (dir_ / "bomb.qxm").string());
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("bomb.pdb.gz"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir_ / "bomb.qxm"));
+  // The bound itself: the ratio, the floor and the absolute cap.
+  EXPECT_EQ(io::inflate_limit(1000).bytes, std::size_t{1} << 20);
+  EXPECT_EQ(io::inflate_limit(1 << 20).bytes, std::size_t{32} << 20);
+  EXPECT_EQ(io::inflate_limit(std::uint64_t{1} << 40).bytes, io::kMaxInflated);
 }
 
 // Found by fuzzing (gemmi 0.5.7 reads columns 74-78 of any SSBOND/LINK record longer than 73 and

@@ -1,5 +1,5 @@
-// The I/O kit: hardening corpus for every reader, format dispatch, STL and PLY meshes,
-// normals from faces, bounded reads.
+// The I/O kit: hardening corpus for the core readers, format dispatch, STL and PLY meshes,
+// normals from faces, bounded reads (the checked-in corpus: tests/convert/test_malformed_corpus.cpp).
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 
 #include "core/error.h"
 #include "core/io/file.h"
@@ -235,44 +234,6 @@ TEST(IoKit, PlyKindsByContent) {
   write_bytes(dir / "p.ply", test::encode_ply(d, "ascii"));
   EXPECT_EQ(detect_file_kind(dir / "p.ply"), FileKind::points);
   EXPECT_EQ(read_points(dir / "p.ply").points.size(), 1u);
-}
-
-
-// The checked-in malformed corpus (tests/data/malformed, run through the CLI by test_cli) read
-// in-process by the core readers its command goes through, so that `make test-sanitize` (ASan +
-// UBSan) replays it deterministically: every file either loads (the command refuses it later, e.g.
-// too few points to fit) or throws one of core/error.h's errors naming the file, with the manifest's
-// message fragment. A crash, a sanitizer report or any other exception fails.
-TEST(IoKit, CheckedInMalformedCorpusThroughTheCoreReaders) {
-  const std::filesystem::path root = std::filesystem::path(QUADRIX_TEST_DATA) / "malformed";
-  std::ifstream manifest(root / "MANIFEST.tsv");
-  ASSERT_TRUE(manifest) << root / "MANIFEST.tsv";
-  std::size_t read = 0, refused = 0;
-  for (std::string line; std::getline(manifest, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream fields(line);
-    std::string file, kind, code, fragment;
-    std::getline(fields, file, '\t'), std::getline(fields, kind, '\t'), std::getline(fields, code, '\t');
-    std::getline(fields, fragment);
-    std::string reader;
-    if (kind == "info" || kind == "render") reader = "model";
-    else if (kind == "quads") reader = "mesh";
-    else if (kind == "fit") reader = "points";
-    else continue;  // volumes, tetrahedral meshes, balls: convert/ readers, outside the core suites
-    SCOPED_TRACE(file);
-    ++read;
-    try {
-      read_with(reader, root / "files" / file);
-    } catch (const Error& e) {
-      ++refused;
-      const std::string m = e.what();
-      EXPECT_NE(m.find(file), std::string::npos) << "the message names no file: " << m;
-      EXPECT_NE(m.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << m;
-    }
-  }
-  std::printf("malformed corpus: %zu files through the core readers, %zu refused by them\n", read, refused);
-  EXPECT_GE(read, 140u);
-  EXPECT_GE(refused, read * 9 / 10) << refused << " of " << read << " refused by the readers";
 }
 
 }  // namespace

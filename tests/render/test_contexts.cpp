@@ -1,6 +1,6 @@
 // Every GL context kind this machine has (OSMesa; EGL on its device and surfaceless platforms,
 // with and without a pbuffer) draws every primitive kind the GL renderer has (tetrahedron patches,
-// SLIM balls, mesh triangles) as the CPU reference does.
+// SLIM balls, glyphs, mesh triangles) as the CPU reference does.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -119,6 +119,21 @@ TEST_P(GlContexts, SlimBallsMatchTheCpuBlend) {
   EXPECT_GE(c.coverage_agreement, 0.995);
   EXPECT_LE(c.normal_median_deg, 0.5);
   EXPECT_EQ(c.cracks, 0);
+}
+
+TEST_P(GlContexts, GlyphsMatchTheCpuReference) {
+  // Spheres, ellipsoids and capped cylinders, alone and mixed (synth "glyphs": 7 : 2 : 1).
+  for (const char* kind : {"sphere", "ellipsoid", "cylinder", "glyphs"}) {
+    SCOPED_TRACE(kind);
+    const Model m = synth_model(kind, {.count = 60});
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 25, .width = 160, .height = 128});
+    const auto c = run(m, cam, false);
+    EXPECT_GT(c.covered, 1500);
+    EXPECT_GE(c.coverage_agreement, 0.999);
+    EXPECT_LE(c.depth_p99, 1e-5);
+    EXPECT_LE(c.normal_median_deg, 0.1);
+    EXPECT_EQ(c.cracks, 0);
+  }
 }
 
 TEST_P(GlContexts, MeshTrianglesLieOnTheirPlane) {
