@@ -86,17 +86,21 @@ protected:
   std::unique_ptr<render::Renderer> renderer_;
 };
 
+// The tolerances of an exact primitive against the CPU reference (tetrahedra, glyphs).
+void expect_exact(const Result& c, int min_covered) {
+  EXPECT_GT(c.covered, min_covered);
+  EXPECT_GE(c.coverage_agreement, 0.999);
+  EXPECT_LE(c.depth_p99, 1e-5);
+  EXPECT_LE(c.normal_median_deg, 0.1);
+}
+
 TEST_P(GlContexts, TetrahedronPatchesMatchTheCpuReference) {
   for (const char* kind : {"hyperboloid1", "hyperboloid2"})
     for (const bool cull : {false, true}) {
       SCOPED_TRACE(testing::Message() << kind << " cull=" << cull);
       const Model m = synth_model(kind, {.resolution = 8});
       const Camera cam = frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 25, .width = 160, .height = 128});
-      const auto c = run(m, cam, cull);
-      EXPECT_GT(c.covered, 1500);
-      EXPECT_GE(c.coverage_agreement, 0.999);
-      EXPECT_LE(c.depth_p99, 1e-5);
-      EXPECT_LE(c.normal_median_deg, 0.1);
+      expect_exact(run(m, cam, cull), 1500);
     }
 }
 
@@ -104,11 +108,7 @@ TEST_P(GlContexts, VolumeIsoSurfacePatchesMatchTheCpuReference) {
   const Model m = convert_volume(marschner_lobb_volume(13), {.iso = 0.5}).model;
   ASSERT_GT(m.tets.size(), 100u);
   const Camera cam = frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 30, .width = 160, .height = 160});
-  const auto c = run(m, cam, true);
-  EXPECT_GT(c.covered, 3000);
-  EXPECT_GE(c.coverage_agreement, 0.999);
-  EXPECT_LE(c.depth_p99, 1e-5);
-  EXPECT_LE(c.normal_median_deg, 0.1);
+  expect_exact(run(m, cam, true), 3000);
 }
 
 TEST_P(GlContexts, SlimBallsMatchTheCpuBlend) {
@@ -128,10 +128,7 @@ TEST_P(GlContexts, GlyphsMatchTheCpuReference) {
     const Model m = synth_model(kind, {.count = 60});
     const Camera cam = frame_box(bounds(m), {.azimuth_deg = 35, .elevation_deg = 25, .width = 160, .height = 128});
     const auto c = run(m, cam, false);
-    EXPECT_GT(c.covered, 1500);
-    EXPECT_GE(c.coverage_agreement, 0.999);
-    EXPECT_LE(c.depth_p99, 1e-5);
-    EXPECT_LE(c.normal_median_deg, 0.1);
+    expect_exact(c, 1500);
     EXPECT_EQ(c.cracks, 0);
   }
 }
