@@ -658,6 +658,9 @@ private:
     log::debug("fit_slim: probe heights in {:.2f} s", seconds_since(t1));
     if (surface_ && opt_.face_patches && face_of_.size() == n)
       faces_ = std::make_unique<FaceSet>(*surface_, std::move(face_of_), P_);
+    if (faces_)
+      for (std::size_t k = 0; k < faces_->mesh->face_count(); ++k)
+        if (faces_->centroid[k] != FaceSet::kNone) face_triangles_ += faces_->mesh->face(k).size() - 2;
     make_fitter();
     st_.subsample_levels = subsamples_->levels.size();
     order_.resize(n);
@@ -1011,6 +1014,12 @@ private:
     return failing;
   }
 
+  // The chosen patches' surface-sample distances, all in one list (the figures' source).
+  void collect_surface_errors() {
+    surface_error_.clear();
+    for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
+  }
+
   // Surface side: samples of every patch's zero set, each seen along its normal through the
   // blend; the blended point must lie within surface_factor·E of the data. Culprits: the
   // blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
@@ -1070,8 +1079,7 @@ private:
         }
       }
     });
-    surface_error_.clear();
-    for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
+    collect_surface_errors();
     std::size_t failing = 0;
     for (const double e : surface_error_) failing += e > bound;
     return failing;
@@ -1141,17 +1149,13 @@ private:
   double failures() const {
     double f = double(st_.blend_failures) / double(std::max<std::size_t>(1, P_.size())) +
                double(st_.surface_failures) / double(std::max<std::size_t>(1, surface_error_.size()));
-    if (faces_ && st_.face_holes > 0) {
-      std::size_t triangles = 0;
-      for (std::size_t k = 0; k < faces_->mesh->face_count(); ++k)
-        if (faces_->centroid[k] != FaceSet::kNone) triangles += faces_->mesh->face(k).size() - 2;
-      f += double(st_.face_holes) / (double(std::max<std::size_t>(1, triangles)) * double(1u << (2 * opt_.face_hole_depth)));
-    }
+    if (faces_ && st_.face_holes > 0)
+      f += double(st_.face_holes) / (double(std::max<std::size_t>(1, face_triangles_)) * double(1u << (2 * opt_.face_hole_depth)));
     return f;
   }
 
-  Verified snapshot(int round) const {
-    Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, round, failures()};
+  Verified snapshot(int round, double score) const {
+    Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, round, score};
     v.patch_errors.reserve(chosen_.size());
     for (const auto b : chosen_) v.patch_errors.push_back(patch_errors_[b]);
     return v;
@@ -1165,8 +1169,7 @@ private:
       patch_errors_[chosen_[k]] = std::move(v.patch_errors[k]);
     }
     point_error_ = std::move(v.point_error);
-    surface_error_.clear();
-    for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
+    collect_surface_errors();
     st_.blend_failures = v.blend_failures;
     st_.surface_failures = v.surface_failures;
     st_.face_holes = v.face_holes;
@@ -1254,7 +1257,7 @@ private:
         }
         break;
       }
-      if (improved) best = snapshot(round);
+      if (improved) best = snapshot(round, score);
       if (fill) {
         ++fill_rounds;
         log::debug("fit_slim: round {}: {} spots of the data's faces outside every ball join the points", round + 1, holes.size());
@@ -1449,6 +1452,7 @@ private:
   std::vector<std::uint32_t> face_of_;                // per point: its face (face samples), until setup
   std::unique_ptr<FaceSet> faces_;                    // face patches
   bool can_add_points_ = false;                       // owned_ holds the points
+  std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
 };
 
