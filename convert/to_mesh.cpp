@@ -391,7 +391,7 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
           a.we += we;
           a.wde += we * d;
           const double w = slim_weight(r);
-          if (!(w > 0.0) || (s.clip && !s.clip->keeps(u))) continue;
+          if (!(w > 0.0) || !s.clips.keeps(u)) continue;
           a.w += w;
           a.wd += w * d;
         }

@@ -22,6 +22,46 @@ struct ClipPlane {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   double d = 0.0;
   bool keeps(const Eigen::Vector3d& u) const { return n.dot(u) + d >= 0.0; }
+  bool operator==(const ClipPlane&) const = default;
+};
+
+/// Up to four clip planes of one SLIM patch (a sharp feature's cut, an open edge, the side walls
+/// of a mesh face's prism): the patch keeps the points that every plane keeps. Fixed capacity, so
+/// a patch stays one flat record (the GPU's too: render/shaders/slim.vert).
+struct ClipPlanes {
+  static constexpr int kMax = 4;
+  std::array<ClipPlane, kMax> planes{};
+  int count = 0;
+
+  bool empty() const { return count == 0; }
+  int size() const { return count; }
+  const ClipPlane* begin() const { return planes.data(); }
+  const ClipPlane* end() const { return planes.data() + count; }
+  const ClipPlane& operator[](int i) const { return planes[static_cast<std::size_t>(i)]; }
+  /// Adds a plane; false (and nothing added) when all kMax are in use.
+  bool add(const ClipPlane& p) {
+    if (count >= kMax) return false;
+    planes[static_cast<std::size_t>(count++)] = p;
+    return true;
+  }
+  void clear() { count = 0; }
+  bool keeps(const Eigen::Vector3d& u) const {
+    for (int i = 0; i < count; ++i)
+      if (!planes[static_cast<std::size_t>(i)].keeps(u)) return false;
+    return true;
+  }
+  bool operator==(const ClipPlanes& o) const {
+    if (count != o.count) return false;
+    for (int i = 0; i < count; ++i)
+      if (!(planes[static_cast<std::size_t>(i)] == o.planes[static_cast<std::size_t>(i)])) return false;
+    return true;
+  }
+  /// One plane.
+  static ClipPlanes of(const ClipPlane& p) {
+    ClipPlanes c;
+    c.add(p);
+    return c;
+  }
 };
 
 /// One SLIM patch (Ohtake et al. 2005): a ball (centre, support radius R) and a quadric g
@@ -31,7 +71,7 @@ struct SlimPatch {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< world units
   double radius = 1.0;                               ///< support radius R, world units, > 0
   Quadric local;                                     ///< g(u), u = (x − centre)/R
-  std::optional<ClipPlane> clip;                     ///< sharp features: in local u coordinates
+  ClipPlanes clips;  ///< sharp features, open edges, a face's prism: in local u coordinates
   std::optional<Rgb> colour;
   /// Measured error (fit/patch_error.h): the largest distance from the data points this patch
   /// serves (weight > 0 in their probe's blend) to the blended surface, world units, ≥ 0.

@@ -28,7 +28,13 @@ constexpr std::array<const char*, 10> kCoefficientNames = {"k_xx", "k_yy", "k_zz
                                                            "k_zx", "k_x",  "k_y",  "k_z",  "k_1"};
 constexpr std::array<const char*, 4> kSlimNames = {"x", "y", "z", "radius"};
 constexpr std::array<const char*, 2> kHierarchyNames = {"parent", "error"};
-constexpr std::array<const char*, 4> kClipNames = {"clip_nx", "clip_ny", "clip_nz", "clip_d"};
+/// One group per clip plane (ClipPlanes::kMax); the second to fourth are new in revision 4.
+constexpr std::array<std::array<const char*, 4>, ClipPlanes::kMax> kClipNames = {{
+    {"clip_nx", "clip_ny", "clip_nz", "clip_d"},
+    {"clip2_nx", "clip2_ny", "clip2_nz", "clip2_d"},
+    {"clip3_nx", "clip3_ny", "clip3_nz", "clip3_d"},
+    {"clip4_nx", "clip4_ny", "clip4_nz", "clip4_d"},
+}};
 constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
 constexpr std::array<const char*, 12> kCornerColourNames = {"red0",   "green0", "blue0", "red1",   "green1", "blue1",
                                                             "red2",   "green2", "blue2", "red3",   "green3", "blue3"};
@@ -115,7 +121,8 @@ public:
     r.centre = position(s.centre);
     r.radius = round(s.radius);
     r.local = Quadric::from_coefficients(round(s.local.coefficients()));
-    if (s.clip) r.clip = ClipPlane{round(s.clip->n), round(s.clip->d)};
+    r.clips.clear();
+    for (const ClipPlane& p : s.clips) r.clips.add(ClipPlane{round(p.n), round(p.d)});
     return r;
   }
   /// The quadric is relative to the corners' centroid, which moves with the rounded corners:
@@ -163,10 +170,12 @@ public:
     std::string why = scalar_problem(s.radius, r.radius, "radius");
     if (why.empty()) why = moved_problem(s.centre, r.centre, s.radius);
     if (why.empty()) why = coefficients_problem(s.local.coefficients(), r.local.coefficients());
-    if (why.empty() && s.clip) {
-      const Eigen::Vector4d a(s.clip->n.x(), s.clip->n.y(), s.clip->n.z(), s.clip->d);
-      const Eigen::Vector4d b(r.clip->n.x(), r.clip->n.y(), r.clip->n.z(), r.clip->d);
-      if (!((b - a).cwiseAbs().maxCoeff() <= 1e-6 * a.cwiseAbs().maxCoeff()) || r.clip->n == Eigen::Vector3d::Zero())
+    for (int k = 0; why.empty() && k < s.clips.size(); ++k) {
+      const ClipPlane& pa = s.clips[k];
+      const ClipPlane& pb = r.clips[k];
+      const Eigen::Vector4d a(pa.n.x(), pa.n.y(), pa.n.z(), pa.d);
+      const Eigen::Vector4d b(pb.n.x(), pb.n.y(), pb.n.z(), pb.d);
+      if (!((b - a).cwiseAbs().maxCoeff() <= 1e-6 * a.cwiseAbs().maxCoeff()) || pb.n == Eigen::Vector3d::Zero())
         why = "its clip plane does not fit float32";
     }
     return why;
@@ -313,7 +322,8 @@ std::vector<std::string> required(const ply::File& f, const ply::Element& e, std
 
 /// Column layout of a `slim` or `slim_node` request: x y z radius k_* [clip] [colour] [parent error].
 struct SlimColumns {
-  bool clip = false, colour = false, hierarchy = false, measured_error = false;
+  int clips = 0;  ///< clip plane groups (clip_*, clip2_*, …), each 4 columns
+  bool colour = false, hierarchy = false, measured_error = false;
   std::size_t measured_error_col = 0;
   std::size_t parent = 0;  ///< column of `parent` (`error` follows) when hierarchy
 };
@@ -321,13 +331,23 @@ struct SlimColumns {
 SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarchy_required,
                          std::vector<ply::Request>& requests) {
   SlimColumns c;
-  c.clip = optional_group(f, e, kClipNames);
+  for (std::size_t k = 0; k < kClipNames.size(); ++k) {
+    if (!optional_group(f, e, kClipNames[k])) {
+      // The groups come in order: clip3_* without clip2_* names a plane that has no place.
+      for (std::size_t j = k + 1; j < kClipNames.size(); ++j)
+        if (e.find(kClipNames[j][0]) >= 0)
+          throw FormatError(f.message(e.name, -1, kClipNames[j][0], ply::kNoByte,
+                                      fmt::format("clip plane {} without clip plane {}", j + 1, k + 1)));
+      break;
+    }
+    c.clips = static_cast<int>(k) + 1;
+  }
   c.colour = optional_group(f, e, kColourNames);
   auto props =
       required(f, e, names({std::span<const char* const>(kSlimNames), kCoefficientNames}));
   if (hierarchy_required) required(f, e, names({kHierarchyNames}));
   c.hierarchy = optional_group(f, e, kHierarchyNames);
-  if (c.clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+  for (int k = 0; k < c.clips; ++k) props.insert(props.end(), kClipNames[k].begin(), kClipNames[k].end());
   if (c.colour) props.insert(props.end(), kColourNames.begin(), kColourNames.end());
   c.measured_error = e.find(kMeasuredErrorName) >= 0;
   c.measured_error_col = props.size();
@@ -349,12 +369,11 @@ void read_slim_rows(const Rows& r, const SlimColumns& cols, const Eigen::Vector3
     if (!(s.radius > 0)) r.fail(i, 3, fmt::format("value {} must be > 0", s.radius));
     s.local = Quadric::from_coefficients(r.coefficients(i, 4));
     std::size_t c = 14;
-    if (cols.clip) {
+    for (int k = 0; k < cols.clips; ++k, c += 4) {
       ClipPlane p;
       p.n = r.vec3(i, c);
       p.d = r.world(i, c + 3);
-      if (p.n != Eigen::Vector3d::Zero()) s.clip = p;
-      c += 4;
+      if (p.n != Eigen::Vector3d::Zero()) s.clips.add(p);
     }
     if (cols.colour) s.colour = r.colour(i, c);
     if (cols.measured_error) {
@@ -842,7 +861,8 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
   for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i) {
     const SlimPatch& s = slim_ball(model, i);
     check_finite(is_world_point(s.centre) && is_world_value(s.radius) && s.local.is_finite() &&
-                     (!s.clip || (is_world_point(s.clip->n) && is_world_value(s.clip->d))),
+                     std::all_of(s.clips.begin(), s.clips.end(),
+                                 [](const ClipPlane& p) { return is_world_point(p.n) && is_world_value(p.d); }),
                  i < model.slims.size() ? "slim patch" : "slim_node", i, path);
   }
   for (std::size_t i = 0; i < model.tets.size(); ++i) {
@@ -908,9 +928,14 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     append_reals(out, {v.x(), v.y(), v.z()});
   };
 
-  const auto has_clip = [](const SlimPatch& s) { return s.clip.has_value(); };
+  // Clip plane groups written: as many as the patch with the most has (drawn, hierarchy's others).
+  const auto clip_groups = [](std::span<const SlimPatch> ps) {
+    int n = 0;
+    for (const SlimPatch& s : ps) n = std::max(n, s.clips.size());
+    return n;
+  };
   const auto has_colour = [](const SlimPatch& s) { return s.colour.has_value(); };
-  const bool slim_clip = std::any_of(model.slims.begin(), model.slims.end(), has_clip);
+  const int slim_clip = clip_groups(model.slims);
   const bool slim_colour = std::any_of(model.slims.begin(), model.slims.end(), has_colour);
   const auto has_error = [](const SlimPatch& s) { return s.measured_error.has_value(); };
   const bool slim_error = std::any_of(model.slims.begin(), model.slims.end(), has_error);
@@ -919,7 +944,7 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     if (const auto& e = slim_ball(model, i).measured_error; e && !(std::isfinite(*e) && *e >= 0))
       throw InvalidInput(fmt::format("{}: cannot write slim patch {}: measured error {} is not finite and >= 0",
                                      path.string(), i, *e));
-  const bool node_clip = std::any_of(hy.others.begin(), hy.others.end(), has_clip);
+  const int node_clip = clip_groups(hy.others);
   const bool node_colour = std::any_of(hy.others.begin(), hy.others.end(), has_colour);
   const bool tet_colour =
       std::any_of(model.tets.begin(), model.tets.end(), [](const TetPatch& t) { return t.colour.has_value(); });
@@ -941,9 +966,9 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
                                      box.max.y(), box.max.z()));
   const bool all = model.empty();  // an empty model still declares the whole profile
-  const auto slim_element = [&](std::string name, std::size_t count, bool clip, bool colour, bool error) {
+  const auto slim_element = [&](std::string name, std::size_t count, int clips, bool colour, bool error) {
     auto props = names({std::span<const char* const>(kSlimNames), kCoefficientNames});
-    if (clip) props.insert(props.end(), kClipNames.begin(), kClipNames.end());
+    for (int k = 0; k < clips; ++k) props.insert(props.end(), kClipNames[k].begin(), kClipNames[k].end());
     ply::Element e = element(std::move(name), count, props, colour, real);
     if (error) e.properties.push_back({kMeasuredErrorName, ply::Type::float64});
     if (hierarchy) {
@@ -987,9 +1012,10 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     append_position(out, slim_ball(model, i).centre);
     append_reals(out, {s.radius});
     for (double v : s.local.coefficients()) ply::append_le(out, real, v);
-    if (drawn ? slim_clip : node_clip) {
-      const ClipPlane p = s.clip.value_or(ClipPlane{});
-      append_reals(out, {p.n.x(), p.n.y(), p.n.z(), s.clip ? p.d : 0.0});
+    // A patch with fewer planes than the element's groups fills the rest with all-zero rows.
+    for (int k = 0; k < (drawn ? slim_clip : node_clip); ++k) {
+      const ClipPlane p = k < s.clips.size() ? s.clips[k] : ClipPlane{};
+      append_reals(out, {p.n.x(), p.n.y(), p.n.z(), p.d});
     }
     if (drawn ? slim_colour : node_colour) append_colour(out, s.colour);
     if (drawn ? slim_error : node_error) ply::append_le(out, ply::Type::float64, s.measured_error.value_or(-1.0));

@@ -3,10 +3,12 @@
 /// `slim_node`, `tet` and `glyph`, written as binary little-endian PLY; read from binary
 /// little/big-endian or ASCII PLY of the same profile, and from Kanai et al.'s `.slim2t` files.
 ///
-/// Profile, revision 3 (world units unless noted):
+/// Profile, revision 4 (world units unless noted):
 ///   element slim:      x y z radius k_xx k_yy k_zz k_xy k_yz k_zx k_x k_y k_z k_1
-///                      [clip_nx clip_ny clip_nz clip_d] [red green blue] [parent error]
-///                      (coefficients of g(u), u = (x − centre)/radius; clip plane in u)
+///                      [clip_nx clip_ny clip_nz clip_d [clip2_* [clip3_* [clip4_*]]]]
+///                      [red green blue] [measured_error] [parent error]
+///                      (coefficients of g(u), u = (x − centre)/radius; clip planes in u, the
+///                      patch keeps what every one keeps; clip2_* to clip4_* new in revision 4)
 ///   element slim_node: as slim, parent and error required: the hierarchy's balls that are not
 ///                      drawn (Model::slim_hierarchy.others); only with slim's parent/error
 ///   element tet:       x0 y0 z0 x1 y1 z1 x2 y2 z2 x3 y3 z3 k_xx … k_1 [red green blue]
@@ -15,10 +17,10 @@
 ///                      a0x a0y a0z a1x a1y a1z a2x a2y a2z [red green blue]
 ///   parent (int32): ball id of the parent, −1 for a root; ids count the slim rows, then the
 ///   slim_node rows. error: the ball's fitting error, ≥ 0. The links form a forest.
-///   header comments: `comment quadrix-format 3`, `comment quadrix-encoding compact|double`,
+///   header comments: `comment quadrix-format 4`, `comment quadrix-encoding compact|double`,
 ///   `comment quadrix-origin X Y Z` (positions — slim/slim_node x y z, tet corners, glyph
 ///   x y z — are stored relative to it; 0 0 0 when absent), then `comment KEY VALUE` per
-///   metadata entry (producer, units, bbox, max_error, …). Revisions 1 and 2 are still read.
+///   metadata entry (producer, units, bbox, max_error, …). Revisions 1 to 3 are still read.
 ///
 /// Encodings (both read; the types come from the PLY header):
 ///   double:  every coordinate and coefficient float64, origin 0 (lossless).
@@ -45,7 +47,7 @@
 
 namespace quadrix {
 
-inline constexpr int kQxmFormatVersion = 3;
+inline constexpr int kQxmFormatVersion = 4;
 
 /// Reads a .qxm (any PLY encoding of the profile) or, by extension or magic, a .slim2t file.
 /// Validates before it trusts: element counts against the file size before any allocation,

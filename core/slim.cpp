@@ -29,7 +29,7 @@ bool intersect_slim_patch(const SlimPatch& patch, const Ray& ray, double tmin, d
   local.dir *= inv_r;
   if (local.origin.squaredNorm() > 1.0) return false;  // the ray misses the ball
   const auto inside = [&](const Eigen::Vector3d& u) {
-    return u.squaredNorm() <= 1.0 && (!patch.clip || patch.clip->keeps(u));
+    return u.squaredNorm() <= 1.0 && patch.clips.keeps(u);
   };
   Hit h;
   if (!intersect_quadric(patch.local, local, tmin - t0, tmax - t0, /*cull_backfaces=*/true, inside, h)) return false;
@@ -134,7 +134,7 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
         for (int k = 0; k < roots.count; ++k) {
           const Eigen::Vector3d u = line.at(roots.t[k]);
           const double r2 = u.squaredNorm();
-          if (!(r2 < 1.0) || (!coarse && r2 <= kRim2) || (patch.clip && !patch.clip->keeps(u))) continue;
+          if (!(r2 < 1.0) || (!coarse && r2 <= kRim2) || !patch.clips.keeps(u)) continue;
           const Eigen::Vector3d g = patch.local.gradient(u);
           const double gn = g.norm();
           if (!(gn > 0.0)) continue;

@@ -121,7 +121,7 @@ Model synth_model(std::string_view kind, const SynthOptions& o) {
       const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
       const double phi = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
       const Eigen::Vector3d c(r * std::cos(phi), r * std::sin(phi), z);
-      m.slims.push_back({c, R, unit.to_local(c, R), std::nullopt, palette(4), std::nullopt});
+      m.slims.push_back({c, R, unit.to_local(c, R), ClipPlanes{}, palette(4), std::nullopt});
     }
   } else {
     throw InvalidInput(fmt::format("synth: unknown kind '{}' (one of: {})", kind, fmt::join(synth_kinds(), ", ")));

@@ -344,13 +344,15 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     for (int i = 0; i < grid; ++i)
       for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0, 0});
   const double min_reach = bound / 16.0;
-  // A clipped patch reaches farthest along its clip plane: the curve where its zero set meets the
-  // plane is sampled at a spacing of bound/2 (a tilted cut past an open boundary leaves a wedge
-  // thinner than the lattice spacing; bunny-size balls are hundreds of E across).
-  if (patch.clip) {
-    const double nn = patch.clip->n.norm();
-    const Eigen::Vector3d n = patch.clip->n / nn;
-    const double off = patch.clip->d / nn;  // plane: n·u + off = 0
+  // A clipped patch reaches farthest along its clip planes: the curve where its zero set meets a
+  // plane (inside the others) is sampled at a spacing of bound/2 (a tilted cut past an open
+  // boundary leaves a wedge thinner than the lattice spacing; bunny-size balls are hundreds of E
+  // across).
+  for (const ClipPlane& plane : patch.clips) {
+    const double nn = plane.n.norm();
+    if (!(nn > 0)) continue;
+    const Eigen::Vector3d n = plane.n / nn;
+    const double off = plane.d / nn;  // plane: n·u + off = 0
     if (std::abs(off) < 1.0) {
       const double r = std::sqrt(1.0 - off * off);
       const Eigen::Vector3d p0 = -off * n;
@@ -365,7 +367,7 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
           const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
           for (int k = 0; k < roots.count; ++k) {
             const Eigen::Vector3d u = line.at(roots.t[k]);
-            if (!(u.squaredNorm() < 1.0)) continue;
+            if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u + 1e-9 * n)) continue;
             const Eigen::Vector3d x = patch.centre + patch.radius * u;
             const double d = data.distance(x, bound, bound);
             if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
@@ -391,7 +393,7 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     bool split = false;
     for (int k = 0; k < roots.count; ++k) {
       const Eigen::Vector3d u = line.at(roots.t[k]);
-      if (!(u.squaredNorm() < 1.0) || (patch.clip && !patch.clip->keeps(u))) continue;
+      if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) continue;
       const Eigen::Vector3d x = patch.centre + patch.radius * u;
       const Eigen::Vector3d g = patch.local.gradient(u);
       const bool may_split = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach && c.depth < max_depth;

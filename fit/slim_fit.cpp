@@ -53,14 +53,14 @@ struct Ball {
   bool is_bounded = true;    // error ≤ E was reached
   double max_taubin = 0, sum_sq_taubin = 0;  // local units × R = world
   std::size_t count = 0;     // points in the ball
-  std::optional<ClipPlane> clip;  // sharp features: the patch keeps the sheet of its centre
+  ClipPlanes clips;  // sharp features, open boundaries, a face's prism: the patch keeps the sheet of its centre
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
   bool settled = false;      // the surface side (BallFitter::settle) was checked
   std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
   int surface_lattice = 0;   // settle's surface_ok passed on a lattice this fine (lines per side)
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
-    return !clip || (clip->keeps(u) && n.dot(sheet) >= n.dot(other));
+    return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));
   }
 };
 
@@ -128,11 +128,17 @@ struct FaceSet {
   std::vector<std::uint32_t> face_of;   // per point: its face, or kNone (a cloud point)
   std::vector<std::uint32_t> centroid;  // per face: the point at its centroid, or kNone
   std::vector<double> reach;            // per face: largest centroid–vertex distance
-  std::vector<std::optional<Eigen::Vector3d>> open_edge;  // per face: its longest open edge's
-                                                          // inward normal in the face, through that edge
-  std::vector<double> open_offset;      // per face: that edge's offset along the normal from the centroid
+  // A side wall of a face's prism: the plane through one of its edges, perpendicular to the face.
+  struct Side {
+    Eigen::Vector3d inward;  // unit, in the face's plane, towards the centroid
+    double offset = 0;       // the edge's distance from the centroid along -inward
+    double length = 0;       // the edge's length
+    bool open = false;       // the edge is used by this face only (the data's boundary)
+  };
+  std::vector<std::vector<Side>> sides;  // per face: one per edge for a convex face of at most
+                                         // ClipPlanes::kMax edges, else its longest open edge
 
-  FaceSet(const PolygonMesh& m, std::vector<std::uint32_t> of, const std::vector<Eigen::Vector3d>& P)
+  FaceSet(const PolygonMesh& m, std::vector<std::uint32_t> of, const std::vector<Eigen::Vector3d>& P, bool prisms)
       : mesh(&m), face_of(std::move(of)), centroid(m.face_count(), kNone), reach(m.face_count(), 0.0) {
     for (std::size_t i = 0; i < face_of.size(); ++i) {
       const auto f = face_of[i];
@@ -140,28 +146,43 @@ struct FaceSet {
       centroid[f] = static_cast<std::uint32_t>(i);  // face_samples lists the centroids first
       for (const int v : m.face(f)) reach[f] = std::max(reach[f], (m.vertices[v] - P[i]).norm());
     }
-    // Open edges (used by one face): the face's plane must stop there, not run on past the
-    // data's boundary.
+    // The face's plane stops at its edges: at an open edge (used by one face) it must not run on
+    // past the data's boundary, and across an inner edge it would run on into the neighbour's
+    // territory, where the blend mixes it with the neighbour's plane (several E at every edge of
+    // a coarse mesh fitted below its sampling).
     const EdgeUses uses(m);
-    open_edge.resize(m.face_count());
-    open_offset.assign(m.face_count(), 0.0);
+    sides.resize(m.face_count());
     for (std::size_t f = 0; f < m.face_count(); ++f) {
       if (centroid[f] == kNone) continue;
       const auto vs = m.face(f);
       const Eigen::Vector3d& c = P[centroid[f]];
-      double longest = 0;
+      std::vector<Side> all;
+      bool convex = vs.size() <= static_cast<std::size_t>(ClipPlanes::kMax);
       for (std::size_t k = 0; k < vs.size(); ++k) {
         const int a = vs[k], b = vs[(k + 1) % vs.size()];
-        if (!uses.open(a, b)) continue;
         const Eigen::Vector3d e = m.vertices[b] - m.vertices[a];
-        if (!(e.norm() > longest)) continue;
         Eigen::Vector3d in = c - m.vertices[a];
         in -= in.dot(e) / e.squaredNorm() * e;
-        if (!(in.norm() > 0)) continue;
-        longest = e.norm();
-        open_edge[f] = in.normalized();
-        open_offset[f] = in.norm();
+        if (!(in.norm() > 0) || !(e.squaredNorm() > 0)) {
+          convex = false;
+          continue;
+        }
+        all.push_back({in.normalized(), in.norm(), e.norm(), uses.open(a, b)});
       }
+      // Every corner on the inner side of every wall (up to rounding), or the prism would cut
+      // into the face itself.
+      for (const Side& sd : all)
+        for (const int v : vs)
+          if (sd.inward.dot(m.vertices[v] - c) < -sd.offset * (1.0 + 1e-9) - 1e-12 * reach[f]) convex = false;
+      if (convex && prisms) {
+        sides[f] = std::move(all);
+        continue;
+      }
+      // Else only along its longest open edge, as far as one wall of a non-convex face may go.
+      const Side* longest = nullptr;
+      for (const Side& sd : all)
+        if (sd.open && (!longest || sd.length > longest->length)) longest = &sd;
+      if (longest) sides[f] = {*longest};
     }
   }
   double distance(std::uint32_t f, const Eigen::Vector3d& x) const {
@@ -210,16 +231,25 @@ struct BallFitter {
       }
       if (!(best <= 1e-3 * E)) return std::nullopt;
     }
+    auto b = face_patch(f);
+    if (!b || !((P[ci] - P[b->centre]).norm() < b->R)) return std::nullopt;  // it must cover ci
+    return b;
+  }
+
+  // Face f's plane around its centroid, clipped to its prism (SlimFitOptions::face_prisms).
+  std::optional<Ball> face_patch(std::uint32_t f) const {
     const std::uint32_t c = faces->centroid[f];
     const double R = c == FaceSet::kNone ? 0.0 : opt.face_patch_reach * faces->reach[f];
     if (c == FaceSet::kNone || !(R > 0)) return std::nullopt;
-    if (!((P[ci] - P[c]).norm() < R)) return std::nullopt;  // it must cover ci
-    Ball b{c, R, Quadric::plane(N[c], 0.0), true, true, 0, 0, 0, std::nullopt};
-    if (const auto& in = faces->open_edge[f]) {
-      // Clipped along its open edge, a hair outside it so the edge's vertices stay.
-      b.clip = ClipPlane{*in, (faces->open_offset[f] + 1e-3 * E) / R};
-      b.sheet = N[c], b.other = -N[c];
+    Ball b{c, R, Quadric::plane(N[c], 0.0), true, true, 0, 0, 0, ClipPlanes{}};
+    // Clipped to the face's prism: a hair outside an open edge, so the edge's vertices stay;
+    // face_patch_margin·E outside an inner edge, so neighbouring faces' pieces overlap (no crack
+    // where the GPU's rounding puts a ray on neither side) and stay within that of the data.
+    for (const FaceSet::Side& sd : faces->sides[f]) {
+      const double margin = sd.open ? 1e-3 * E : opt.face_patch_margin * E;
+      b.clips.add(ClipPlane{sd.inward, (sd.offset + margin) / R});
     }
+    if (!b.clips.empty()) b.sheet = N[c], b.other = -N[c];
     b.face = f;
     b.settled = true;
     return b;
@@ -229,7 +259,7 @@ struct BallFitter {
   // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
   // open boundary).
   bool surface_ok(const Ball& b) const {
-    return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clip, std::nullopt}, *data,
+    return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clips, std::nullopt, std::nullopt}, *data,
                            opt.local_surface_factor * E, opt.local_surface_grid, opt.local_surface_depth) == 0.0;
   }
 
@@ -240,7 +270,7 @@ struct BallFitter {
     auto b = try_ball(ci, R, s);
     if (!b) return std::nullopt;
     if (surface_ok(*b)) return b;
-    if (b->clip) return std::nullopt;  // try_ball already tried the clipped sheet (--sharp)
+    if (!b->clips.empty()) return std::nullopt;  // try_ball already tried the clipped sheet (--sharp)
     // Both use the check points try_ball left in s.
     if (auto c = try_boundary(*b, s); c && surface_ok(*c)) return c;
     auto c = try_sharp(ci, R, s);
@@ -293,8 +323,8 @@ struct BallFitter {
     double lo = std::numeric_limits<double>::infinity();
     for (const auto& [id, d2] : s.nb) lo = std::min(lo, m.dot((P[id] - c0) / b.R));
     Ball c = b;
-    c.clip = ClipPlane{m, -(lo - 0.5 * E / b.R)};
-    if (!c.clip->keeps(Eigen::Vector3d::Zero())) return std::nullopt;  // must own its centre
+    c.clips = ClipPlanes::of(ClipPlane{m, -(lo - 0.5 * E / b.R)});
+    if (!c.clips.keeps(Eigen::Vector3d::Zero())) return std::nullopt;  // must own its centre
     return c;
   }
 
@@ -379,7 +409,7 @@ struct BallFitter {
       const double err = std::max(e.max_taubin, e.max_probe);
       if (!(e.within || accept_any) || (best && !(err < best_err))) return e.within;
       best_err = err;
-      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, in_ball, std::nullopt};
+      best = Ball{ci, R, *g, is_height, err <= bound, e.max_taubin * R, e.sum_sq_taubin * R * R, in_ball, ClipPlanes{}};
       return e.within && err <= bound;
     };
     if (m >= opt.min_points) {
@@ -426,7 +456,7 @@ struct BallFitter {
     const double len = clip.n.norm();
     clip.n /= len, clip.d /= len;
     Ball probe_ball;
-    probe_ball.clip = clip, probe_ball.sheet = na, probe_ball.other = nb;
+    probe_ball.clips = ClipPlanes::of(clip), probe_ball.sheet = na, probe_ball.other = nb;
     // The patch must own its centre, or covering could never reach that point.
     if (!probe_ball.owns(Eigen::Vector3d::Zero(), N[ci])) return std::nullopt;
     std::vector<Eigen::Vector3d> u, n, fu, fn;
@@ -443,7 +473,7 @@ struct BallFitter {
       if (!g) continue;
       const LocalError e = local_error(*g, u, n, h, bound);
       if (!e.within) continue;
-      Ball b{ci, R, *g, is_height, true, e.max_taubin * R, e.sum_sq_taubin * R * R, u.size(), clip, na, nb};
+      Ball b{ci, R, *g, is_height, true, e.max_taubin * R, e.sum_sq_taubin * R * R, u.size(), ClipPlanes::of(clip), na, nb};
       return b;
     }
     return std::nullopt;
@@ -507,11 +537,11 @@ struct BallFitter {
         // back the same size every round (a sheet's open corner, beside face-hole points).
         index.nearest(P[ci], 2 * opt.min_points, s.nb);
         for (const auto& [j, d2] : s.nb)
-          if (d2 > 0) return Ball{ci, std::min(0.5 * std::sqrt(d2), limit), Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, std::nullopt};
+          if (d2 > 0) return Ball{ci, std::min(0.5 * std::sqrt(d2), limit), Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, ClipPlanes{}};
         R /= 0.7 * 0.7 * 0.7;
         auto any = try_ball(ci, R, s, true);
         // Last resort: the tangent plane at the centre.
-        Ball b = any ? *any : Ball{ci, R, Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, std::nullopt};
+        Ball b = any ? *any : Ball{ci, R, Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, ClipPlanes{}};
         b.is_bounded = false;
         return b;
       }
@@ -657,7 +687,7 @@ private:
     probe_height_ = probe_heights(P_, N_, opt_.probe_factor * E_, surface_ ? data_.get() : nullptr);
     log::debug("fit_slim: probe heights in {:.2f} s", seconds_since(t1));
     if (surface_ && opt_.face_patches && face_of_.size() == n)
-      faces_ = std::make_unique<FaceSet>(*surface_, std::move(face_of_), P_);
+      faces_ = std::make_unique<FaceSet>(*surface_, std::move(face_of_), P_, opt_.face_prisms);
     if (faces_)
       for (std::size_t k = 0; k < faces_->mesh->face_count(); ++k)
         if (faces_->centroid[k] != FaceSet::kNone) face_triangles_ += faces_->mesh->face(k).size() - 2;
@@ -695,6 +725,10 @@ private:
     double max_radius = 0;
     for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
     const PolygonMesh& m = *faces_->mesh;
+    // A ray along the face's normal meets such a zero set within this of the face (twice the
+    // surface bound: the points of a noisy face may lie beyond the bound from a patch within E of
+    // its vertices; a face patch across a crease lies hundreds of E away).
+    const double band = 2.0 * opt_.surface_factor * E_;
     if (!changed) face_covered_.assign(m.face_count(), 0);
     tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -717,8 +751,19 @@ private:
           near.clear();
           for (const auto& [i, d2] : nb)
             if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
+          // Inside the ball and its clip planes, its zero set passing within `band`:
+          // a boundary plane that stops a sheet short of a crease leaves the strip beyond it
+          // uncovered although the ball reaches across, and the prism of a face patch across
+          // the crease holds the strip but its plane is elsewhere. (Ball and planes are convex,
+          // and so is the band about a plane, so a piece whose corners one such patch holds is
+          // held whole, up to a quadric's bending over the piece.)
           const auto holds = [&](std::uint32_t i, const Eigen::Vector3d& x) {
-            return (x - slims[i].centre).squaredNorm() < slims[i].radius * slims[i].radius;
+            const SlimPatch& sp = slims[i];
+            if (!((x - sp.centre).squaredNorm() < sp.radius * sp.radius)) return false;
+            const Eigen::Vector3d u = (x - sp.centre) / sp.radius;
+            if (!sp.clips.keeps(u)) return false;
+            const double g = sp.local.eval(u), gn = sp.local.gradient(u).norm();
+            return std::abs(g) * sp.radius <= band * gn;
           };
           const auto any_holds = [&](const Eigen::Vector3d& x) {
             return std::any_of(near.begin(), near.end(), [&](std::uint32_t i) { return holds(i, x); });
@@ -755,6 +800,31 @@ private:
     all.erase(std::unique(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first == y.first && x.second == y.second; }),
               all.end());
     return all;
+  }
+
+  bool face_prisms() const { return faces_ && opt_.face_patches && opt_.face_prisms; }
+
+  // A face patch (BallFitter::face_patch) for each face that holds a spot, kept through pruning.
+  std::size_t add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
+    const std::size_t first = balls_.size();
+    for (std::size_t k = 0; k < spots.size(); ++k) {
+      if (k > 0 && spots[k].first == spots[k - 1].first) continue;  // sorted by face
+      if (auto b = fitter_->face_patch(spots[k].first)) balls_.push_back(std::move(*b));
+    }
+    covers_.resize(balls_.size());
+    chosen_flag_.resize(balls_.size(), 0);
+    pinned_.resize(balls_.size(), 0);
+    // Not verified yet: the next round traces them whole.
+    patch_excess_.resize(balls_.size(), -1.0);
+    patch_errors_.resize(balls_.size());
+    patch_reach_.resize(balls_.size(), kInf);
+    std::vector<Neighbour> nb;
+    for (std::size_t b = first; b < balls_.size(); ++b) {
+      cover_of(b, nb);
+      pinned_[b] = 1;
+      take(std::uint32_t(b));
+    }
+    return balls_.size() - first;
   }
 
   // The spots join the points, uncovered, on their faces with their faces' normals.
@@ -964,7 +1034,7 @@ private:
   void build_model() {
     auto& slims = result_.model.slims;
     slims.clear();
-    for (auto b : chosen_) slims.push_back(SlimPatch{P_[balls_[b].centre], balls_[b].R, balls_[b].g, balls_[b].clip, std::nullopt});
+    for (auto b : chosen_) slims.push_back(SlimPatch{P_[balls_[b].centre], balls_[b].R, balls_[b].g, balls_[b].clips, std::nullopt, std::nullopt});
     result_.model.metadata["slim_offset"] = fmt::format("{:.6g}", opt_.blend_offset);
   }
 
@@ -1269,6 +1339,13 @@ private:
           if (one.empty() || one.back().first != h.first) one.push_back(h);
         add_points(one);
         best = Verified{};  // other points: not comparable
+      } else if (!few && round + 2 < budget && face_prisms()) {
+        // Too many to join the points: each face with a spot gets its own face patch instead, its
+        // plane clipped to its prism — the data itself, covering the whole face.
+        const std::size_t added = add_face_patches(holes);
+        log::info("fit_slim: round {}: {} spots of the data's faces lie outside every ball (balls smaller than the faces: "
+                  "E below the data's sampling); {} faces get patches of their own", round + 1, holes.size(), added);
+        st_.hole_face_patches += added;
       } else if (!few && round == 0) {
         log::info("fit_slim: {} spots of the data's faces lie outside every ball (balls smaller than the faces: E below "
                   "the data's sampling); left as they are", holes.size());
@@ -1287,7 +1364,7 @@ private:
     std::vector<std::uint32_t> keep;
     for (std::size_t k = 0; k < chosen_.size(); ++k) {
       const auto b = chosen_[k];
-      if (!at_fault[k] || balls_[b].R <= 0) {
+      if (k >= at_fault.size() || !at_fault[k] || balls_[b].R <= 0) {  // new since verified (add_face_patches)
         keep.push_back(b);
         continue;
       }
@@ -1365,7 +1442,7 @@ private:
       in_balls += balls_[b].count;
       st_.height_patches += balls_[b].is_height;
       st_.unbounded_patches += !balls_[b].is_bounded;
-      st_.clipped_patches += balls_[b].clip.has_value();
+      st_.clipped_patches += !balls_[b].clips.empty();
     }
     st_.rms_taubin = in_balls ? std::sqrt(sum_sq_taubin / double(in_balls)) : 0;
     st_.candidates = balls_.size();
@@ -1387,6 +1464,7 @@ private:
     md["normals"] = st_.normals_estimated ? "estimated" : "given";
     md["points"] = std::to_string(st_.points);
     if (st_.hole_points > 0) md["hole_points"] = std::to_string(st_.hole_points);
+    if (st_.hole_face_patches > 0) md["hole_face_patches"] = std::to_string(st_.hole_face_patches);
     if (can_add_points_ && opt_.cover_face_holes) md["face_holes"] = std::to_string(st_.face_holes);
     md["patches"] = std::to_string(st_.patches);
     md["candidates"] = std::to_string(st_.candidates);

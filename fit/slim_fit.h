@@ -129,9 +129,16 @@ struct SlimFitOptions {
   /// through it, so the blend keeps the vertex and joins up between vertices (no holes).
   /// Only where E is below the sampling: the point's nearest sample (vertex or face sample)
   /// farther than face_patch_spacing·E.
+  /// With face_prisms, each face patch is clipped to its face's prism (a wall through every edge,
+  /// perpendicular to the face; ClipPlanes), face_patch_margin·E outside an inner edge and a hair
+  /// outside an open one: its plane, the data itself inside, runs on no farther than that into
+  /// its neighbours' territory, where the blend would mix it with their planes. Without, only
+  /// its longest open edge clips it.
   bool face_patches = true;
   double face_patch_reach = 1.0;
   double face_patch_spacing = 10.0;
+  bool face_prisms = true;
+  double face_patch_margin = 0.5;
   /// Holes between the points (a mesh given, with face samples): each round, every face of the
   /// data's mesh is checked to lie inside the union of the balls (a face no one ball holds is
   /// split in four, down to face_hole_depth levels); a spot of a smallest piece outside every
@@ -141,13 +148,15 @@ struct SlimFitOptions {
   /// (the balls smaller than the faces nearly everywhere, E far below the sampling: bunny at
   /// 1e-4, 0.33 % of its area outside every ball); those spots are only counted (face_holes).
   /// One spot per face joins per round; rounds that add points do not count against
-  /// repair_rounds, up to face_hole_rounds of them.
+  /// repair_rounds, up to face_hole_rounds of them. Where there are more (and face_prisms), each
+  /// face with a spot gets a face patch of its own, kept through pruning: its plane clipped to
+  /// its prism is the data there, so it closes the hole without a fin.
   bool cover_face_holes = true;
   int face_hole_depth = 3;
   int face_hole_rounds = 4;
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
-  /// only and gets a clip plane (SlimPatch::clip) between the two sheets.
+  /// only and gets a clip plane (SlimPatch::clips) between the two sheets.
   bool sharp = false;
   double sharp_angle_deg = 30.0;
   /// Neighbours for normal estimation when the cloud has no normals (fit/normals.h).
@@ -182,6 +191,9 @@ struct SlimFitStats {
   std::vector<double> round_failures;
   int kept_round = 0;
   std::size_t hole_points = 0;  ///< points added on faces outside every ball (cover_face_holes)
+  /// Where such spots were too many to join the points (E far below the sampling): faces that
+  /// got a face patch of their own instead (face_prisms).
+  std::size_t hole_face_patches = 0;
   std::size_t face_holes = 0;   ///< such spots still outside every ball at the end
   std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries
   // Wall-clock seconds per stage.

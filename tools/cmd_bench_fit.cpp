@@ -203,6 +203,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     std::string out = ".";
     bool peers = true;
     bool keep_models = false;
+    bool face_prisms = true;
     int view_resolution = 512;
   };
   auto a = std::make_shared<Args>();
@@ -221,6 +222,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                   "Pixels per side of each of the 8 views that measure the surface side")
       ->check(number({.lo = 16, .hi = 4096}))
       ->capture_default_str();
+  app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "
                 "e.g. for bench render --baseline-mesh");
@@ -283,7 +285,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       progress.update(double(++done) / double(total));
       for (double E : a->errors) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
-        const SlimFitOptions fo{.max_error = E};
+        const SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
         const SlimFitResult fit = d.mesh ? fit_slim(fit_cloud, *d.mesh, fo) : fit_slim(fit_cloud, fo);
         const SlimError se =
             evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = d.mesh ? &data : nullptr});

@@ -47,6 +47,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                 "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
   app->add_flag("!--no-surface-check", a->options.check_surface,
                 "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
+  app->add_flag("!--no-face-prisms", a->options.face_prisms,
+                "Clip a face patch (a mesh face's plane, where E is below the sampling) only at an open edge, "
+                "not to its face's prism (for comparison: its plane then runs on into its neighbours)");
   app->add_option("--repair-rounds", a->options.repair_rounds,
                   "Rounds of verification and repair of the patches at fault")
       ->check(number({.lo = 0, .hi = 100}))
@@ -121,6 +124,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"round_failures", s.round_failures},
                                             {"kept_round", s.kept_round},
                                             {"hole_points", s.hole_points},
+                                            {"hole_face_patches", s.hole_face_patches},
                                             {"face_holes", s.face_holes},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},

@@ -13,15 +13,15 @@
 namespace quadrix::render {
 namespace {
 
-// std430 layout of `Ball` in slim.vert (7 vec4 = 112 bytes).
+// std430 layout of `Ball` in slim.vert (10 vec4 = 160 bytes).
 struct GpuBall {
   float centre_hi[4];
   float centre_lo[4];
   float q0[4], q1[4], q2[4];
-  float clip[4];
   float slab[4];
+  float clip[ClipPlanes::kMax][4];
 };
-static_assert(sizeof(GpuBall) == 112);
+static_assert(sizeof(GpuBall) == 160);
 constexpr std::size_t kBallFloats = sizeof(GpuBall) / sizeof(float);
 constexpr std::size_t kIdFloat = offsetof(GpuBall, q2) / sizeof(float) + 2;  // q2[2]: the primitive id
 
@@ -46,11 +46,13 @@ GpuBall pack(const SlimPatch& b, std::int32_t id, const Eigen::Vector3d& origin)
   for (int i = 0; i < 3; ++i) g.slab[i] = float(slab.axis[i]);
   g.slab[3] = slab.tight ? float(slab.s0) : 1.0f;
   g.q2[3] = slab.tight ? float(slab.s1) : -1.0f;
-  if (b.clip) {
-    const double n = b.clip->n.norm();
-    if (n > 0)
-      for (int i = 0; i < 3; ++i) g.clip[i] = float(b.clip->n[i] / n);
-    if (n > 0) g.clip[3] = float(b.clip->d / n);
+  // Unit normals (so the shader's test is a distance in units of R); unused slots stay zero.
+  for (int k = 0; k < b.clips.size(); ++k) {
+    const ClipPlane& p = b.clips[k];
+    const double n = p.n.norm();
+    if (!(n > 0)) continue;
+    for (int i = 0; i < 3; ++i) g.clip[k][i] = float(p.n[i] / n);
+    g.clip[k][3] = float(p.d / n);
   }
   return g;
 }

@@ -10,7 +10,7 @@ flat in vec3 v_A0;
 flat in vec3 v_A1;
 flat in vec3 v_A2;
 flat in vec4 v_bc;
-flat in vec4 v_clip;
+flat in vec4 v_clip[4];
 flat in uint v_colour;
 flat in int v_id;
 
@@ -51,7 +51,8 @@ void main() {
   vec3 x = o + t * d;  // local units, eye axes
   float r = length(x);
   if (r > 1.0) discard;
-  if (dot(v_clip.xyz, v_clip.xyz) > 0.0 && dot(v_clip.xyz, x) + v_clip.w < 0.0) discard;
+  for (int k = 0; k < 4; ++k)  // an unused plane (n = 0, d = 0) keeps everything
+    if (dot(v_clip[k].xyz, x) + v_clip[k].w < 0.0) discard;
   vec3 p = v_centre_eye + v_radius * x;  // eye space
   if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
   if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj

@@ -19,8 +19,8 @@ struct Ball {
   vec4 q0;         // A00 A11 A22 A01   (g(u), u = (x − c)/R, world axes)
   vec4 q1;         // A12 A02 b0 b1
   vec4 q2;         // b2 c, primitive index bits, slab s1
-  vec4 clip;       // n (local, world axes), d; n = 0: no clip plane
   vec4 slab;       // xyz: unit axis (world axes), w: s0; q2.w: s1; s0 > s1: no tight slab
+  vec4 clip[4];    // n (local, world axes), d; the patch keeps nᵀu + d ≥ 0; n = 0: unused
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
@@ -44,7 +44,7 @@ flat out vec3 v_A0;  // rows of A′ = R A Rᵀ
 flat out vec3 v_A1;
 flat out vec3 v_A2;
 flat out vec4 v_bc;  // b′ = R b, c
-flat out vec4 v_clip;
+flat out vec4 v_clip[4];
 flat out uint v_colour;
 flat out int v_id;
 #ifdef SLIM_OUTLINE
@@ -152,7 +152,7 @@ void main() {
   v_A1 = Ae[1];
   v_A2 = Ae[2];
   v_bc = vec4(be, c);
-  v_clip = vec4(u_view_rot * ball.clip.xyz, ball.clip.w);
+  for (int k = 0; k < 4; ++k) v_clip[k] = vec4(u_view_rot * ball.clip[k].xyz, ball.clip[k].w);
   v_colour = floatBitsToUint(ball.centre_lo.w);
   v_id = floatBitsToInt(ball.q2.z);
 }

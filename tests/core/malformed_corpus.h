@@ -210,21 +210,25 @@ inline PlyDoc qxm_doc(const Model& m, const std::string& real_type = "double") {
     const Rgb v = c.value_or(Rgb{0, 0, 0});
     r.insert(r.end(), {double(v[0]), double(v[1]), double(v[2])});
   };
-  bool clip = false, sc = false, tc = false, gc = false;
-  for (const auto& s : m.slims) clip |= s.clip.has_value(), sc |= s.colour.has_value();
+  int clip = 0;  // clip plane groups: as many as the patch with the most has
+  bool sc = false, tc = false, gc = false;
+  for (const auto& s : m.slims) clip = std::max(clip, s.clips.size()), sc |= s.colour.has_value();
   for (const auto& t : m.tets) tc |= t.colour.has_value();
   for (const auto& g : m.glyphs) gc |= g.colour.has_value();
   if (!m.slims.empty()) {
     PlyElem e{"slim", {}, {}, {}};
     reals(e, {"x", "y", "z", "radius"});
     coeffs(e);
-    if (clip) reals(e, {"clip_nx", "clip_ny", "clip_nz", "clip_d"});
+    for (int k = 0; k < clip; ++k) {
+      const std::string p = k == 0 ? "clip_" : "clip" + std::to_string(k + 1) + "_";
+      reals(e, {p + "nx", p + "ny", p + "nz", p + "d"});
+    }
     if (sc) colour(e);
     for (const auto& s : m.slims) {
       std::vector<double> r = {s.centre.x(), s.centre.y(), s.centre.z(), s.radius};
       for (double v : s.local.coefficients()) r.push_back(v);
-      if (clip) {
-        const ClipPlane p = s.clip.value_or(ClipPlane{});
+      for (int k = 0; k < clip; ++k) {
+        const ClipPlane p = k < s.clips.size() ? s.clips[k] : ClipPlane{};
         r.insert(r.end(), {p.n.x(), p.n.y(), p.n.z(), p.d});
       }
       if (sc) push_colour(r, s.colour);
@@ -284,7 +288,9 @@ inline Model make_sample_model(bool with_optional) {
     s.centre = vec(10);
     s.radius = 0.25 + u();
     s.local = Quadric::from_coefficients(coeffs());
-    if (with_optional && i != 1) s.clip = ClipPlane{vec(1) + Eigen::Vector3d(0.1, 0, 0), 2 * u() - 1};
+    // None on the second patch, three on the third (revision 4's clip2_* and clip3_*).
+    if (with_optional && i != 1)
+      for (int k = 0; k < (i == 2 ? 3 : 1); ++k) s.clips.add(ClipPlane{vec(1) + Eigen::Vector3d(0.1, 0, 0), 2 * u() - 1});
     if (with_optional) s.colour = rgb();
     m.slims.push_back(s);
   }

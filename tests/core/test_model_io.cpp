@@ -53,10 +53,9 @@ void expect_same_primitives(const Model& a, const Model& b) {
     EXPECT_TRUE(same_bits(x.centre, y.centre)) << "slim " << i;
     EXPECT_TRUE(same_bits(x.radius, y.radius)) << "slim " << i;
     EXPECT_TRUE(same_bits(x.local, y.local)) << "slim " << i;
-    ASSERT_EQ(x.clip.has_value(), y.clip.has_value()) << "slim " << i;
-    if (x.clip) {
-      EXPECT_TRUE(same_bits(x.clip->n, y.clip->n) && same_bits(x.clip->d, y.clip->d)) << "slim " << i;
-    }
+    ASSERT_EQ(x.clips.size(), y.clips.size()) << "slim " << i;
+    for (int k = 0; k < x.clips.size(); ++k)
+      EXPECT_TRUE(same_bits(x.clips[k].n, y.clips[k].n) && same_bits(x.clips[k].d, y.clips[k].d)) << "slim " << i;
     EXPECT_EQ(x.colour, y.colour) << "slim " << i;
   }
   for (std::size_t i = 0; i < a.tets.size(); ++i) {
@@ -81,7 +80,8 @@ std::map<std::string, std::string> without_bbox(std::map<std::string, std::strin
 TEST(ModelIo, RoundTripIsBitExactWithOptionalProperties) {
   ScratchDir dir("model-io");
   const Model m = make_sample_model(true);
-  ASSERT_TRUE(m.slims[1].clip == std::nullopt && m.slims[0].clip.has_value());  // mixed clip planes
+  // Mixed clip planes: none, one, several (revision 4's clip2_* to clip4_*).
+  ASSERT_TRUE(m.slims[1].clips.empty() && m.slims[0].clips.size() == 1 && m.slims[2].clips.size() == 3);
   write_model(m, dir / "m.qxm", {.encoding = ModelEncoding::full});
   const Model r = read_model(dir / "m.qxm");
   expect_same_primitives(m, r);
@@ -107,7 +107,7 @@ TEST(ModelIo, HeaderFollowsTheProfile) {
   m.tets.clear();
   write_model(m, dir / "m.qxm");
   const std::string bytes = test::read_bytes(dir / "m.qxm");
-  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 3\ncomment quadrix-encoding "
+  EXPECT_EQ(bytes.rfind("ply\nformat binary_little_endian 1.0\ncomment quadrix-format 4\ncomment quadrix-encoding "
                         "compact\ncomment quadrix-origin ",
                         0),
             0u);
@@ -409,7 +409,7 @@ Model sample_hierarchy() {
     s.local = Quadric::sphere(Eigen::Vector3d::Zero(), 0.5);
     s.colour = Rgb{static_cast<std::uint8_t>(i), 2, 3};
   }
-  m.slims[1].clip = ClipPlane{Eigen::Vector3d(0, 0, 1), 0.25};
+  m.slims[1].clips = ClipPlanes::of(ClipPlane{Eigen::Vector3d(0, 0, 1), 0.25});
   auto& h = m.slim_hierarchy;
   for (int i = 0; i < 3; ++i) {
     SlimPatch& s = h.others.emplace_back();
@@ -451,7 +451,7 @@ TEST(ModelIo, HierarchyRoundTrips) {
   write_model(m, dir / "h.qxm", {.encoding = ModelEncoding::full});
   std::ifstream in(dir / "h.qxm", std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_NE(bytes.find("comment quadrix-format 3\ncomment quadrix-encoding double\n"), std::string::npos);
+  EXPECT_NE(bytes.find("comment quadrix-format 4\ncomment quadrix-encoding double\n"), std::string::npos);
   EXPECT_NE(bytes.find("element slim 4\n"), std::string::npos);
   EXPECT_NE(bytes.find("element slim_node 3\n"), std::string::npos);
   EXPECT_NE(bytes.find("property int parent\nproperty double error\n"), std::string::npos);

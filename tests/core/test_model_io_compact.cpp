@@ -63,8 +63,9 @@ void expect_within_float32(const Model& a, const Model& b, const Eigen::Vector3d
     EXPECT_TRUE(position_ok(x.centre, y.centre)) << "slim " << i;
     EXPECT_LE(rel(x.radius, y.radius), kUlp) << "slim " << i;
     EXPECT_LE(coefficient_error(x.local, y.local), kUlp) << "slim " << i;
-    ASSERT_EQ(x.clip.has_value(), y.clip.has_value()) << "slim " << i;
-    if (x.clip) EXPECT_LE((x.clip->n - y.clip->n).norm() + std::abs(x.clip->d - y.clip->d), 4 * kUlp) << i;
+    ASSERT_EQ(x.clips.size(), y.clips.size()) << "slim " << i;
+    for (int k = 0; k < x.clips.size(); ++k)
+      EXPECT_LE((x.clips[k].n - y.clips[k].n).norm() + std::abs(x.clips[k].d - y.clips[k].d), 4 * kUlp) << i;
     EXPECT_EQ(x.colour, y.colour) << "slim " << i;
   }
   for (std::size_t i = 0; i < a.tets.size(); ++i) {
@@ -181,7 +182,7 @@ TEST(ModelIoCompact, RequiredFieldsTakeAtMost64BytesPerSlimAnd100PerTet) {
   Model tet1 = synth_model("hyperboloid1", {.resolution = 6}), tet2 = tet1;
   tet2.tets.insert(tet2.tets.end(), tet1.tets.begin(), tet1.tets.end());
   for (Model* m : {&slim1, &slim2, &tet1, &tet2}) {  // required fields only
-    for (auto& s : m->slims) s.colour.reset(), s.clip.reset();
+    for (auto& s : m->slims) s.colour.reset(), s.clips.clear();
     for (auto& t : m->tets) t.colour.reset();
   }
   const double slim_compact = bytes_per_patch(slim1, slim2, ModelEncoding::compact);
@@ -315,7 +316,7 @@ TEST(ModelIoCompact, MalformedCompactHeadersAreFormatErrors) {
        "bad 'comment quadrix-encoding zipped' line (compact or double)"},
       {[&] {
          std::string s = good;
-         s.replace(s.find("quadrix-format 3"), 16, "quadrix-format 2");
+         s.replace(s.find("quadrix-format 4"), 16, "quadrix-format 2");
          return s;
        }(),
        "'comment quadrix-origin' needs quadrix-format 3 or later, the file says 2"},

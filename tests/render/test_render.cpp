@@ -275,6 +275,73 @@ TEST_F(GlSlim, SlimSphereMatchesTheCpuBlend) {
   }
 }
 
+TEST_F(GlSlim, EveryClipPlaneSlotCutsAsInTheReference) {
+  // Patches with 0 to 4 clip planes (all ClipPlanes::kMax slots in use somewhere), each plane
+  // cutting through its ball near the centre (most of a patch may go, leaving holes): the GL
+  // image must equal the reference's, and the planes must really cut (the unclipped image
+  // differs), or the test could not fail.
+  Model m = synth_model("slim-sphere", {.count = 400});
+  const Model unclipped = m;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0, 1);
+  std::uniform_real_distribution<double> off(-0.4, 0.1);
+  for (std::size_t i = 0; i < m.slims.size(); ++i)
+    for (std::size_t k = 0; k < i % (ClipPlanes::kMax + 1); ++k)
+      m.slims[i].clips.add(ClipPlane{Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized(), off(rng)});
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 40, .elevation_deg = 25, .width = 200, .height = 200});
+  const Result r = run_slim(m, cam);
+  EXPECT_GT(r.c.covered, 3000);
+  EXPECT_GE(r.c.coverage_agreement, 0.995);
+  EXPECT_LE(r.c.normal_median_deg, 0.5);
+  const ReferenceImage plain = render_reference(ReferenceScene(unclipped), cam);
+  const ReferenceImage cut = render_reference(ReferenceScene(m), cam);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < plain.depth.size(); ++i)
+    differ += plain.coverage[i] != cut.coverage[i] || std::abs(plain.depth[i] - cut.depth[i]) > 1e-4f;
+  EXPECT_GT(differ, 500u) << "the clip planes no longer change the surface";
+}
+
+TEST_F(GlSlim, FacePrismPatchesJoinWithoutCracks) {
+  // A coarse closed polyhedron (a 12 × 8 UV sphere, poles closed) fitted far below its sampling:
+  // face patches clipped to their faces' prisms, neighbours overlapping by half of E. The GL
+  // image must match the reference's and leave no crack along the edges.
+  PolygonMesh mesh;
+  const int nu = 12, nv = 8;
+  mesh.vertices.push_back(Eigen::Vector3d(0, 0, 1));
+  for (int j = 1; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double th = std::numbers::pi * j / nv, ph = 2 * std::numbers::pi * i / nu;
+      mesh.vertices.push_back(Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  mesh.vertices.push_back(Eigen::Vector3d(0, 0, -1));
+  const auto ring = [&](int j, int i) { return 1 + (j - 1) * nu + (i % nu); };
+  const int south = static_cast<int>(mesh.vertices.size()) - 1;
+  for (int i = 0; i < nu; ++i) {
+    mesh.add_face(std::vector<int>{0, ring(1, i), ring(1, i + 1)});
+    mesh.add_face(std::vector<int>{south, ring(nv - 1, i + 1), ring(nv - 1, i)});
+    for (int j = 1; j + 1 < nv; ++j) {
+      mesh.add_face(std::vector<int>{ring(j, i), ring(j + 1, i), ring(j + 1, i + 1)});
+      mesh.add_face(std::vector<int>{ring(j, i), ring(j + 1, i + 1), ring(j, i + 1)});
+    }
+  }
+  PointCloud cloud;
+  cloud.points = mesh.vertices;
+  for (const auto& v : mesh.vertices) cloud.normals.push_back(v.normalized());
+  const SlimFitResult fit = fit_slim(cloud, mesh, {.max_error = 1e-4});
+  std::size_t prisms = 0;
+  for (const auto& p : fit.model.slims) prisms += p.clips.size() == 3;
+  EXPECT_GT(prisms, fit.model.slims.size() / 2) << "the case no longer fits with face patches";
+  for (const double az : {10.0, 75.0}) {
+    SCOPED_TRACE(az);
+    const Camera cam = frame_box(bounds(fit.model), {.azimuth_deg = az, .elevation_deg = 20, .width = 240, .height = 240});
+    const Result r = run_slim(fit.model, cam);
+    EXPECT_GT(r.c.covered, 5000);
+    EXPECT_GE(r.c.coverage_agreement, 0.999);
+    EXPECT_LE(r.c.normal_median_deg, 0.5);
+    EXPECT_EQ(r.cracks, 0);
+  }
+}
+
 TEST_F(GlSlim, BallsStraddlingTheNearPlaneAreNeverClipped) {
   // The eye 0.05 above the unit sphere with a wide field of view: nearby balls reach behind the
   // near plane and get full-viewport splats; the image must still equal the reference.

@@ -53,7 +53,7 @@ Model sphere_hierarchy(int n, double delta1, double delta2) {
     const double R = 3.6 / std::sqrt(static_cast<double>(counts[level]));
     const Quadric q = Quadric::sphere(Vector3d::Zero(), rho[level]);
     for (const Vector3d& c : centres[static_cast<std::size_t>(level)]) {
-      balls.push_back({c, R, q.to_local(c, R), std::nullopt, std::nullopt, std::nullopt});
+      balls.push_back({c, R, q.to_local(c, R), ClipPlanes{}, std::nullopt, std::nullopt});
       error.push_back(std::abs(rho[level] - 1.0));
     }
   }
