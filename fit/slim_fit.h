@@ -125,7 +125,8 @@ struct SlimFitOptions {
   /// With cover_faces: where no quadric through a point's neighbours stays within E (a scan
   /// whose vertices jitter by more than E, fitted below its noise), the point is covered by the
   /// plane of the face it lies on, in a ball of face_patch_reach × the face's largest
-  /// centroid–vertex distance around the face's centroid. Faces sharing a vertex all pass
+  /// centroid–vertex distance (1.1 × that with face_prisms, so no corner sits at r = 1 with
+  /// weight 0) around the face's centroid. Faces sharing a vertex all pass
   /// through it, so the blend keeps the vertex and joins up between vertices (no holes).
   /// Only where E is below the sampling: the point's nearest sample (vertex or face sample)
   /// farther than face_patch_spacing·E.

@@ -135,7 +135,7 @@ private:
     if (auto h = fit_height_quadric(sample, mu_))
       if (const double ph = measure(*h); ph < points) points = ph, g = h;
     if (!g || !std::isfinite(points)) return false;
-    SlimPatch merged{lead.centre, R, *g, ClipPlanes{}, std::nullopt};
+    SlimPatch merged{lead.centre, R, *g, ClipPlanes{}, std::nullopt, std::nullopt};
     // The surface side: the zero set inside the ball within `bound` of the data, bound raised
     // to what is found beyond it (up to 8 times).
     double bound = std::max({points, child_error, 1e-12});

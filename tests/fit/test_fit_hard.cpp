@@ -396,3 +396,4 @@ TEST(FitSlimHard, KeepsTheBestVerifiedModelWhenRepairsMakeItWorse) {
 
 }  // namespace
 }  // namespace quadrix
+
