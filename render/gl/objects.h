@@ -79,6 +79,7 @@ public:
   void set(const char* u, float v) const { glProgramUniform1f(id(), mark(u), v); }
   void set(const char* u, const Eigen::Vector2f& v) const { glProgramUniform2fv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Vector3f& v) const { glProgramUniform3fv(id(), mark(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector3i& v) const { glProgramUniform3iv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Vector4f& v) const { glProgramUniform4fv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Matrix3f& m) const {
     glProgramUniformMatrix3fv(id(), mark(u), 1, GL_FALSE, m.data());

@@ -1,5 +1,7 @@
 #include "render/passes/frame.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "core/error.h"
@@ -27,6 +29,35 @@ CameraUniforms::CameraUniforms(const Camera& camera)
       viewport(float(camera.width), float(camera.height)),
       target_world(camera.target),
       world(camera) {}
+
+FixedOrigin FixedOrigin::of(const Box3& box) {
+  FixedOrigin f;
+  if (box.empty()) return f;
+  f.origin = box.centre();
+  const double extent = (box.max - box.min).cwiseAbs().maxCoeff();
+  // Half the box within 2²⁷ quanta; a point box (one primitive) gets a quantum of its own scale.
+  const double scale = extent > 0 ? extent : std::max(1e-30, f.origin.cwiseAbs().maxCoeff() * 1e-7);
+  f.quantum = std::ldexp(scale, -28);
+  return f;
+}
+
+FixedOrigin::Offset FixedOrigin::offset(const Eigen::Vector3d& d) const {
+  Offset o;
+  constexpr double kMax = 1 << 30;
+  for (int i = 0; i < 3; ++i) {
+    const double n = std::clamp(std::round(d[i] / quantum), -kMax, kMax);  // beyond: the rest holds it
+    o.q[i] = static_cast<int>(n);
+    o.rest[i] = static_cast<float>(d[i] - n * quantum);
+  }
+  return o;
+}
+
+void set_origin_uniforms(const gl::Program& p, const FixedOrigin& origin, const CameraUniforms& c) {
+  const FixedOrigin::Offset o = origin.offset(origin.origin - c.world.target);
+  p.set("u_origin_q", o.q);
+  p.set("u_origin_rest", o.rest);
+  p.set("u_quantum", static_cast<float>(origin.quantum));
+}
 
 void set_camera_uniforms(const gl::Program& p, const CameraUniforms& c) {
   p.set("u_proj", c.proj);

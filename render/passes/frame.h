@@ -35,6 +35,27 @@ struct CameraUniforms {
 /// u_target_distance, u_near, u_viewport) that the program declares.
 void set_camera_uniforms(const gl::Program& program, const CameraUniforms& camera);
 
+/// Positions relative to a pass's common origin, as an integer number of quanta plus a float rest,
+/// so that a position relative to the view target is an exact integer sum in the shader: a hi + lo
+/// float split relies on the shader adding hi to hi first, and llvmpipe's compiler reorders float
+/// sums (`precise` or not), which left SLIM balls far from the common origin but near the target
+/// off by an ulp of that distance (3e-3 of a ball's radius for balls 1e-4 of the scene).
+struct FixedOrigin {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double quantum = 1;  ///< world units; the origin's box spans at most 2²⁸ quanta
+  struct Offset {
+    Eigen::Vector3i q = Eigen::Vector3i::Zero();     ///< quanta, |q| ≤ 2³⁰
+    Eigen::Vector3f rest = Eigen::Vector3f::Zero();  ///< the rest, world units
+  };
+  /// An origin at the box's centre, the quantum fitted to its size.
+  static FixedOrigin of(const Box3& box);
+  /// d (a position − origin, or origin − target) as q·quantum + rest.
+  Offset offset(const Eigen::Vector3d& d) const;
+};
+/// u_origin_q, u_origin_rest (the origin − the view target as FixedOrigin::Offset) and u_quantum:
+/// the shader adds a primitive's offset to them (integers to integers, rests to rests).
+void set_origin_uniforms(const gl::Program& program, const FixedOrigin& origin, const CameraUniforms& camera);
+
 /// The G-buffer (normal + eye depth, albedo, primitive ids, depth) and the shaded output.
 struct FrameTargets {
   int width = 0, height = 0;

@@ -33,7 +33,7 @@ Eigen::Vector3d orthogonal(const Eigen::Vector3d& a) {
 }
 
 // `origin`: the glyphs' origin, which the stored centre is relative to.
-GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) {
+GpuGlyph pack(const Glyph& g, std::size_t index, const FixedOrigin& origin) {
   // M maps the parameter space (unit sphere, or unit cylinder |u_z| ≤ 1) to world offsets.
   Eigen::Matrix3d M;
   Eigen::Vector3d axis = Eigen::Vector3d::Zero();
@@ -69,10 +69,10 @@ GpuGlyph pack(const Glyph& g, std::size_t index, const Eigen::Vector3d& origin) 
     S = (M / size) * (M / size).transpose();
   }
   GpuGlyph p{};
-  const Split cs = split(g.centre - origin);
+  const FixedOrigin::Offset cs = origin.offset(g.centre - origin.origin);
   for (int i = 0; i < 3; ++i) {
-    p.centre_hi[i] = cs.hi[i];
-    p.centre_lo[i] = cs.lo[i];
+    p.centre_hi[i] = bits_float(static_cast<std::uint32_t>(cs.q[i]));
+    p.centre_lo[i] = cs.rest[i];
     for (int j = 0; j < 3; ++j) p.inv[i][j] = float(inv(i, j));
     p.axis[i] = float(axis[i]);
   }
@@ -105,7 +105,7 @@ void GlyphPass::upload(std::span<const Glyph> glyphs) {
         fmt::format("{} glyphs: the GL renderer draws at most 2^{}", glyphs.size(), kPrimitiveIndexBits));
   Box3 box;
   for (const Glyph& g : glyphs) box.extend(g.centre);
-  origin_ = box.empty() ? Eigen::Vector3d::Zero() : box.centre();
+  origin_ = FixedOrigin::of(box);
   std::vector<GpuGlyph> data;
   data.reserve(glyphs.size());
   cylinders_ = 0;
@@ -122,7 +122,7 @@ void GlyphPass::upload(std::span<const Glyph> glyphs) {
 void GlyphPass::draw_proxies(const gl::Program& program, const Frame& f, bool count_statistics, bool rectangles) const {
   const RenderOptions& o = f.options;
   set_camera_uniforms(program, f.camera);
-  program.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+  set_origin_uniforms(program, origin_, f.camera);
   program.set("u_cull", o.cull ? 1 : 0);
   program.set("u_count_stats", count_statistics && o.statistics ? 1 : 0);
   program.set("u_proxy", o.glyph_proxies ? 1 : 0);
@@ -168,7 +168,7 @@ void GlyphPass::run_early_depth(const Frame& f) {
   const std::size_t ellipses = count_ - cylinders_;
   if (ellipses > 0) {
     set_camera_uniforms(occluder_, f.camera);
-    occluder_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+    set_origin_uniforms(occluder_, origin_, f.camera);
     occluder_.use();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glyphs_.id());
     glBindVertexArray(f.empty_vao);
@@ -190,7 +190,7 @@ void GlyphPass::run_early_depth(const Frame& f) {
   glDepthFunc(GL_LESS);
   set_gbuffer_colour_writes(f);
   set_camera_uniforms(resolve_, f.camera);
-  resolve_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.world.target).cast<float>()));
+  set_origin_uniforms(resolve_, origin_, f.camera);
   resolve_.set("u_cull", f.options.cull ? 1 : 0);
   resolve_.use();
   glBindVertexArray(f.empty_vao);

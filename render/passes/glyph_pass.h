@@ -39,7 +39,7 @@ private:
   std::size_t nearest_pixels_ = 0;
   gl::Buffer glyphs_;      // spheres and ellipsoids first, then cylinders (ids keep the model's order)
   std::size_t count_ = 0;
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
+  FixedOrigin origin_;  // the centres are stored relative to it
   std::size_t cylinders_ = 0;
 };
 

@@ -25,13 +25,13 @@ static_assert(sizeof(GpuBall) == 160);
 constexpr std::size_t kBallFloats = sizeof(GpuBall) / sizeof(float);
 constexpr std::size_t kIdFloat = offsetof(GpuBall, q2) / sizeof(float) + 2;  // q2[2]: the primitive id
 
-// `origin`: the model's origin, which the stored centre is relative to.
-GpuBall pack(const SlimPatch& b, std::int32_t id, const Eigen::Vector3d& origin) {
+// `origin`: the model's origin, which the stored centre is relative to (as quanta and a rest).
+GpuBall pack(const SlimPatch& b, std::int32_t id, const FixedOrigin& origin) {
   GpuBall g{};
-  const Split cs = split(b.centre - origin);
+  const FixedOrigin::Offset cs = origin.offset(b.centre - origin.origin);
   for (int i = 0; i < 3; ++i) {
-    g.centre_hi[i] = cs.hi[i];
-    g.centre_lo[i] = cs.lo[i];
+    g.centre_hi[i] = bits_float(static_cast<std::uint32_t>(cs.q[i]));
+    g.centre_lo[i] = cs.rest[i];
   }
   g.centre_hi[3] = static_cast<float>(b.radius);
   const Rgb col = b.colour.value_or(Rgb{200, 200, 200});
@@ -76,7 +76,7 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
                                    kPrimitiveIndexBits));
   Box3 box;
   for (const SlimPatch& p : patches) box.extend(p.centre);
-  origin_ = box.empty() ? Eigen::Vector3d::Zero() : box.centre();
+  origin_ = FixedOrigin::of(box);
   std::vector<GpuBall> data;
   data.reserve(patches.size());
   for (std::size_t i = 0; i < patches.size(); ++i)
@@ -100,7 +100,7 @@ void SlimPass::upload(const Model& model) {
     throw InvalidInput(fmt::format("{} SLIM balls: the GL renderer draws at most 2^{}", n, kPrimitiveIndexBits));
   Box3 box;
   for (std::size_t b = 0; b < n; ++b) box.extend(slim_ball(model, b).centre);
-  origin_ = box.centre();
+  origin_ = FixedOrigin::of(box);
   packed_.resize(n * kBallFloats);
   for (std::size_t b = 0; b < n; ++b) {
     const GpuBall g = pack(slim_ball(model, b), 0, origin_);
@@ -156,7 +156,7 @@ void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
 
 void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stats) const {
   set_camera_uniforms(p, f.camera);
-  p.set("u_origin_minus_target", origin_minus_target(f));
+  set_origin_uniforms(p, origin_, f.camera);
   p.set("u_offset", f.options.slim_offset);
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
@@ -230,7 +230,7 @@ void SlimOutlinePass::run(const Frame& f) {
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_CULL_FACE);
   set_camera_uniforms(program_, f.camera);
-  program_.set("u_origin_minus_target", slim_.origin_minus_target(f));
+  set_origin_uniforms(program_, slim_.origin(), f.camera);
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.set("u_tight", 0);

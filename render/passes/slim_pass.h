@@ -30,10 +30,8 @@ public:
   std::size_t count() const { return count_; }
   /// The packed balls (SSBO, `Ball` in slim.vert).
   GLuint balls() const { return balls_.id(); }
-  /// The balls' origin relative to the view target (double, then float): positions relative to eye.
-  Eigen::Vector3f origin_minus_target(const Frame& frame) const {
-    return (origin_ - frame.camera.world.target).cast<float>();
-  }
+  /// The balls' common origin: their centres are stored relative to it (set_origin_uniforms).
+  const FixedOrigin& origin() const { return origin_; }
   bool needed(const RenderOptions&) const override { return count_ > 0; }
   void run(const Frame& frame) override;
 
@@ -58,7 +56,7 @@ private:
   };
   std::array<Accumulation, 2> acc_;
   Accumulation* current_ = nullptr;  // the one this frame draws with
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // the centres are stored relative to it
+  FixedOrigin origin_;  // the centres are stored relative to it
   // Level of detail: every ball of the hierarchy packed (kBallFloats each), the cut drawn.
   std::optional<SlimLod> lod_;
   std::vector<float> packed_;

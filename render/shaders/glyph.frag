@@ -27,7 +27,6 @@ layout(std430, binding = 1) buffer Stats {
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform vec2 u_viewport;
-uniform vec3 u_origin_minus_target;
 uniform float u_target_distance;
 uniform int u_cull;
 uniform int u_count_stats;
@@ -49,7 +48,7 @@ void main() {
 #ifdef GLYPH_NEAREST
   // Only the ray's direction and the glyph's index come interpolated (llvmpipe sets up every
   // input of every triangle); the rest is read here.
-  GlyphRay r = glyph_ray(glyphs[v_index], v_dir.xy, u_view_rot, u_origin_minus_target, u_target_distance);
+  GlyphRay r = glyph_ray(glyphs[v_index], v_dir.xy, u_view_rot, u_target_distance);
   GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_cull != 0);
   if (!h.found) discard;
   if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);

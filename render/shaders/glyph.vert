@@ -18,7 +18,6 @@
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_origin_minus_target;  // the glyphs' common origin − the view target, from double
 uniform float u_target_distance;
 uniform float u_near;
 uniform vec2 u_viewport;
@@ -60,7 +59,7 @@ float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 *
 void main() {
   Glyph g = glyphs[u_first + gl_InstanceID];
   uint kind = uint(g.centre_hi.w);
-  vec3 C = glyph_centre_eye(g, u_view_rot, u_origin_minus_target, u_target_distance);
+  vec3 C = glyph_centre_eye(g, u_view_rot, u_target_distance);
   mat3 Sw = mat3(g.s0.x, g.s0.w, g.s1.y,
                  g.s0.w, g.s0.y, g.s1.x,
                  g.s1.y, g.s1.x, g.s0.z);

@@ -2,8 +2,9 @@
 // ray cast in the glyph's parameter space (eq. 6–9). Prepended to the glyph programs' stages.
 
 struct Glyph {
-  vec4 centre_hi;  // xyz: centre (float part), w: kind (0 sphere, 1 ellipsoid, 2 cylinder)
-  vec4 centre_lo;  // xyz: centre − float(centre), w: colour bits
+  vec4 centre_hi;  // xyz: int bits, centre − origin in quanta; w: kind (0 sphere, 1 ellipsoid,
+                   // 2 cylinder)
+  vec4 centre_lo;  // xyz: the rest of centre − origin, w: colour bits
   vec4 inv0;       // rows of M⁻¹ (world → parameter space); inv0.w: primitive id bits
   vec4 inv1;
   vec4 inv2;
@@ -13,10 +14,18 @@ struct Glyph {
 };
 layout(std430, binding = 0) readonly buffer Glyphs { Glyph glyphs[]; };
 
-// The centre in eye space; origin_minus_target is the glyphs' common origin − the view target
-// (from double), so the large parts cancel before anything is rounded.
-vec3 glyph_centre_eye(Glyph g, mat3 view_rot, vec3 origin_minus_target, float target_distance) {
-  return view_rot * (origin_minus_target + (g.centre_hi.xyz + g.centre_lo.xyz)) + vec3(0.0, 0.0, -target_distance);
+// The glyphs' common origin − the view target (from double), in quanta and a rest as each centre
+// (render/passes/frame.h FixedOrigin): the integer parts cancel exactly near the target, so a
+// glyph far from the common origin keeps its digits there.
+uniform ivec3 u_origin_q;
+uniform vec3 u_origin_rest;
+uniform float u_quantum;
+
+// The centre in eye space.
+vec3 glyph_centre_eye(Glyph g, mat3 view_rot, float target_distance) {
+  vec3 rel = vec3(u_origin_q + floatBitsToInt(g.centre_hi.xyz)) * u_quantum +
+             (u_origin_rest + g.centre_lo.xyz);
+  return view_rot * rel + vec3(0.0, 0.0, -target_distance);
 }
 
 // M⁻¹ in eye axes: eye-space offsets → parameter space.
@@ -34,9 +43,9 @@ struct GlyphRay {
   uint kind;
 };
 
-GlyphRay glyph_ray(Glyph g, vec2 k, mat3 view_rot, vec3 origin_minus_target, float target_distance) {
+GlyphRay glyph_ray(Glyph g, vec2 k, mat3 view_rot, float target_distance) {
   GlyphRay r;
-  vec3 C = glyph_centre_eye(g, view_rot, origin_minus_target, target_distance);
+  vec3 C = glyph_centre_eye(g, view_rot, target_distance);
   r.centre_z = C.z;
   r.scale = max(abs(C.z), g.s1.z);
   r.dir = vec3(k, -1.0);

@@ -12,7 +12,6 @@
 // radius is under 2 pixels (vertex snapping), or which reach the near plane are not drawn.
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_origin_minus_target;
 uniform float u_target_distance;
 uniform float u_near;
 uniform vec2 u_viewport;
@@ -25,7 +24,7 @@ float ndc_depth(float z) { return (u_proj[2][2] * z + u_proj[3][2]) / -z; }
 void main() {
   gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // nothing drawn unless every test below passes
   Glyph g = glyphs[gl_InstanceID];
-  vec3 C = glyph_centre_eye(g, u_view_rot, u_origin_minus_target, u_target_distance);
+  vec3 C = glyph_centre_eye(g, u_view_rot, u_target_distance);
   float a = g.s1.w;
   if (!(C.z + g.s1.z < -u_near * 1.0001)) return;  // reaches the near plane (or behind the eye)
   vec2 K = vec2(u_proj[0][0], u_proj[1][1]);

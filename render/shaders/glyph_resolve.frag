@@ -6,7 +6,6 @@ layout(std430, binding = 2) readonly buffer Nearest { uint nearest[]; };  // per
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_origin_minus_target;
 uniform float u_target_distance;
 uniform vec2 u_viewport;
 uniform int u_cull;
@@ -22,7 +21,7 @@ void main() {
   if (index == 0xFFFFFFFFu) discard;  // no glyph here
   Glyph g = glyphs[index];
   vec2 k = (2.0 * gl_FragCoord.xy / u_viewport - 1.0) / vec2(u_proj[0][0], u_proj[1][1]);
-  GlyphRay r = glyph_ray(g, k, u_view_rot, u_origin_minus_target, u_target_distance);
+  GlyphRay r = glyph_ray(g, k, u_view_rot, u_target_distance);
   GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_cull != 0);
   if (!h.found) discard;
   float z = r.centre_z - h.s;

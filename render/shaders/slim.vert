@@ -14,8 +14,8 @@
 // nothing large cancels even when the eye is far away.
 
 struct Ball {
-  vec4 centre_hi;  // xyz: centre (float part), w: radius R
-  vec4 centre_lo;  // xyz: centre − float(centre), w: colour bits
+  vec4 centre_hi;  // xyz: int bits, centre − origin in quanta (u_quantum), w: radius R
+  vec4 centre_lo;  // xyz: the rest of centre − origin, w: colour bits
   vec4 q0;         // A00 A11 A22 A01   (g(u), u = (x − c)/R, world axes)
   vec4 q1;         // A12 A02 b0 b1
   vec4 q2;         // b2 c, primitive index bits, slab s1
@@ -27,7 +27,11 @@ layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_f
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform vec3 u_origin_minus_target;  // the balls' common origin − the view target, from double
+// The balls' common origin − the view target (from double), in quanta and a rest as each centre
+// (render/passes/frame.h FixedOrigin): integer sums are exact, whatever the compiler reorders.
+uniform ivec3 u_origin_q;
+uniform vec3 u_origin_rest;
+uniform float u_quantum;
 uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
@@ -54,7 +58,11 @@ flat out int v_culled;  // debug overlay ([Stoll06] Fig. 3): culled balls drawn 
 void main() {
   Ball ball = balls[gl_InstanceID];
   float R = ball.centre_hi.w;
-  vec3 C = u_view_rot * (u_origin_minus_target + (ball.centre_hi.xyz + ball.centre_lo.xyz)) +
+  // Near the target the integer parts cancel exactly, so a ball far from the common origin keeps
+  // its digits there.
+  vec3 rel = vec3(u_origin_q + floatBitsToInt(ball.centre_hi.xyz)) * u_quantum +
+             (u_origin_rest + ball.centre_lo.xyz);
+  vec3 C = u_view_rot * rel +
            vec3(0.0, 0.0, -u_target_distance);
   mat3 A = mat3(ball.q0.x, ball.q0.w, ball.q1.y,
                 ball.q0.w, ball.q0.y, ball.q1.x,
