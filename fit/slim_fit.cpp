@@ -53,7 +53,8 @@ struct Ball {
   bool is_bounded = true;    // error ≤ E was reached
   double max_taubin = 0, sum_sq_taubin = 0;  // local units × R = world
   std::size_t count = 0;     // points in the ball
-  ClipPlanes clips;  // sharp features, open boundaries, a face's prism: the patch keeps the sheet of its centre
+  // Sharp features, open boundaries, a face's prism: the patch keeps the sheet of its centre.
+  ClipPlanes clips;
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
   bool settled = false;      // the surface side (BallFitter::settle) was checked
   std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
