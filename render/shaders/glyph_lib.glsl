@@ -14,18 +14,9 @@ struct Glyph {
 };
 layout(std430, binding = 0) readonly buffer Glyphs { Glyph glyphs[]; };
 
-// The glyphs' common origin − the view target (from double), in quanta and a rest as each centre
-// (render/passes/frame.h FixedOrigin): the integer parts cancel exactly near the target, so a
-// glyph far from the common origin keeps its digits there.
-uniform ivec3 u_origin_q;
-uniform vec3 u_origin_rest;
-uniform float u_quantum;
-
-// The centre in eye space.
+// The centre in eye space (prelude.glsl from_fixed_origin).
 vec3 glyph_centre_eye(Glyph g, mat3 view_rot, float target_distance) {
-  vec3 rel = vec3(u_origin_q + floatBitsToInt(g.centre_hi.xyz)) * u_quantum +
-             (u_origin_rest + g.centre_lo.xyz);
-  return view_rot * rel + vec3(0.0, 0.0, -target_distance);
+  return view_rot * from_fixed_origin(g.centre_hi.xyz, g.centre_lo.xyz) + vec3(0.0, 0.0, -target_distance);
 }
 
 // M⁻¹ in eye axes: eye-space offsets → parameter space.

@@ -2,10 +2,16 @@
 // Shared prelude of every Quadrix shader stage: ray–quadric roots and depth helpers.
 // [Stoll06] eq. 6–7, 14–15; DESIGN §5.
 
-// Positions relative to an origin o, from split (hi + lo) floats: the double-single trick keeps the
-// difference of two large coordinates exact to float precision.
-vec3 camera_relative(vec3 p_hi, vec3 p_lo, vec3 o_hi, vec3 o_lo) {
-  return (p_hi - o_hi) + (p_lo - o_lo);
+// A position relative to the view target, from a pass's fixed-point origin (render/passes/frame.h
+// FixedOrigin): the primitive's offset from the origin as int bits of whole quanta plus a float
+// rest, and the origin − the target the same way (set_origin_uniforms). Integers add exactly, so
+// near the target the large parts cancel whatever the compiler reorders (it does reorder float
+// sums: a hi + lo split kept nothing on llvmpipe).
+uniform ivec3 u_origin_q;
+uniform vec3 u_origin_rest;
+uniform float u_quantum;
+vec3 from_fixed_origin(vec3 quanta_bits, vec3 rest) {
+  return vec3(u_origin_q + floatBitsToInt(quanta_bits)) * u_quantum + (u_origin_rest + rest);
 }
 
 // Real roots of a·λ² + 2b·λ + c = 0, ascending, by the q-form (no cancellation in −b ∓ √D).

@@ -27,11 +27,6 @@ layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_f
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-// The balls' common origin − the view target (from double), in quanta and a rest as each centre
-// (render/passes/frame.h FixedOrigin): integer sums are exact, whatever the compiler reorders.
-uniform ivec3 u_origin_q;
-uniform vec3 u_origin_rest;
-uniform float u_quantum;
 uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
@@ -58,11 +53,7 @@ flat out int v_culled;  // debug overlay ([Stoll06] Fig. 3): culled balls drawn 
 void main() {
   Ball ball = balls[gl_InstanceID];
   float R = ball.centre_hi.w;
-  // Near the target the integer parts cancel exactly, so a ball far from the common origin keeps
-  // its digits there.
-  vec3 rel = vec3(u_origin_q + floatBitsToInt(ball.centre_hi.xyz)) * u_quantum +
-             (u_origin_rest + ball.centre_lo.xyz);
-  vec3 C = u_view_rot * rel +
+  vec3 C = u_view_rot * from_fixed_origin(ball.centre_hi.xyz, ball.centre_lo.xyz) +
            vec3(0.0, 0.0, -u_target_distance);
   mat3 A = mat3(ball.q0.x, ball.q0.w, ball.q1.y,
                 ball.q0.w, ball.q0.y, ball.q1.x,
