@@ -475,30 +475,6 @@ std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceO
   return scene.trace(ray, 0.0, 2.0 * reach, trace);
 }
 
-/// Distance along the line p + s·n (|s| ≤ reach) to the nearest of up to four surfaces it meets
-/// (a glyph buried in another is met behind the one covering it), or −1 when it meets none.
-/// The line is traced both ways: a surface is as near whichever way it faces (where a grid's
-/// labelling reads a patch's sides the other way round, its triangles lie on the surface
-/// reversed; the ray along the triangle's normal sees only the surface's back there).
-double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
-                     const Eigen::Vector3d& n, double reach) {
-  double best = -1.0;
-  for (const double side : {1.0, -1.0}) {
-    const Ray ray{p + side * reach * n, -side * n};
-    double tmin = 0.0;
-    for (int k = 0; k < 4; ++k) {
-      const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
-      if (!hit) break;
-      const double d = std::abs(hit->t - reach);
-      if (best < 0 || d < best) best = d;
-      if (hit->t >= reach) break;  // later hits are farther from p
-      tmin = hit->t + 1e-9 * reach;
-    }
-    if (best == 0.0) break;
-  }
-  return best;
-}
-
 /// Moves each SLIM-made vertex onto the drawn surface along its normal, then drops the triangles
 /// with a vertex whose normal line met no SLIM surface within reach: they span a hole of the
 /// blend (an open scan's SLIM fit), where the grid's closed labelling put a cap the renderer does
@@ -545,15 +521,6 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
 
 MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
                              double reach, double bound) {
-  static const std::vector<Eigen::Vector3d> kLines = [] {
-    std::vector<Eigen::Vector3d> v;
-    for (int x = -1; x <= 1; ++x)
-      for (int y = -1; y <= 1; ++y)
-        for (int z = -1; z <= 1; ++z)
-          if (Eigen::Vector3i c(x, y, z); c.squaredNorm() > 0 && c.dot(Eigen::Vector3i(9, 3, 1)) > 0)  // one per line
-            v.push_back(c.cast<double>().normalized());
-    return v;
-  }();
   const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
   struct Sample {
     Eigen::Vector3d p, n;
@@ -581,16 +548,9 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size()), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const auto& [p, n] = samples[i];
-      d[i] = line_distance(scene, trace, p, n, reach);
-      if (d[i] >= 0 && d[i] <= bound) continue;
       // Along the normal the surface may lie at a slant (a crease of the mesh, a normal the grid
-      // tilted): every hit along any line through p bounds p's distance from above, so the 13
-      // lines through p towards its 26 grid neighbours tighten it (the normal's line stays one).
-      for (const Eigen::Vector3d& dir : kLines) {
-        const double dq = line_distance(scene, trace, p, dir, reach);
-        if (dq >= 0 && (d[i] < 0 || dq < d[i])) d[i] = dq;
-        if (d[i] >= 0 && d[i] <= bound) break;
-      }
+      // tilted): the 13 grid lines through p tighten it.
+      d[i] = nearest_along_lines(scene, trace, p, n, reach, bound);
       if (d[i] >= 0) continue;
       const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
       for (const double eps : {1e-3 * reach, 1e-2 * reach, 0.05 * reach, 0.2 * reach}) {

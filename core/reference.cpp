@@ -322,4 +322,43 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
   return img;
 }
 
+double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& d, double reach) {
+  double best = -1.0;
+  for (const double side : {1.0, -1.0}) {
+    const Ray ray{p + side * reach * d, -side * d};
+    double tmin = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const auto hit = scene.trace(ray, tmin, 2.0 * reach, trace);
+      if (!hit) break;
+      const double dist = std::abs(hit->t - reach);
+      if (best < 0 || dist < best) best = dist;
+      if (hit->t >= reach) break;  // later hits are farther from p
+      tmin = hit->t + 1e-9 * reach;
+    }
+    if (best == 0.0) break;
+  }
+  return best;
+}
+
+double nearest_along_lines(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                           const Eigen::Vector3d& n, double reach, double bound) {
+  static const std::vector<Eigen::Vector3d> kLines = [] {
+    std::vector<Eigen::Vector3d> v;
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z)
+          if (Eigen::Vector3i c(x, y, z); c.squaredNorm() > 0 && c.dot(Eigen::Vector3i(9, 3, 1)) > 0)  // one per line
+            v.push_back(c.cast<double>().normalized());
+    return v;
+  }();
+  double d = line_distance(scene, trace, p, n, reach);
+  for (const Eigen::Vector3d& dir : kLines) {
+    if (d >= 0 && d <= bound) break;
+    const double dq = line_distance(scene, trace, p, dir, reach);
+    if (dq >= 0 && (d < 0 || dq < d)) d = dq;
+  }
+  return d;
+}
+
 }  // namespace quadrix

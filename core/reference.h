@@ -52,6 +52,21 @@ private:
   std::unique_ptr<Impl> impl_;
 };
 
+/// Distance from p to the nearest of up to four surfaces the scene draws along the line p + s·d
+/// (|s| ≤ reach, d unit), or −1 when it meets none. The line is traced both ways: a surface is as
+/// near whichever way it faces. Every hit is a drawn point, so this bounds p's Euclidean distance
+/// to the drawn surface from above.
+double line_distance(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                     const Eigen::Vector3d& d, double reach);
+
+/// line_distance along n, and, while that is beyond `bound` or meets nothing, along the 13 lines
+/// through p towards its 26 grid neighbours (stopping at the first within `bound`): the least,
+/// still an upper bound of the Euclidean distance (−1: no line met a surface). Where the surface
+/// lies at a slant to n (a crease, a folded face whose normal points along the surface) the
+/// normal's line alone can be many times the distance.
+double nearest_along_lines(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,
+                           const Eigen::Vector3d& n, double reach, double bound);
+
 /// Per-pixel buffers, row-major, row 0 at the top.
 struct ReferenceImage {
   int width = 0, height = 0;

@@ -59,7 +59,9 @@ std::optional<Eigen::Vector3d> neighbourhood_normal(const PointIndex& index, std
                                                     std::vector<Neighbour>& scratch);
 
 /// probe_point along n, and along neighbourhood_normal when that exists and the first probe is
-/// beyond E; the better of the two. other: set when the second direction counted.
+/// beyond E; the better of the two. Still beyond E: nearest_along_lines (core/reference.h), which
+/// counts when it finds the surface within E (an upper bound of the Euclidean distance too).
+/// other: set when a direction other than n counted.
 PointProbe measure_point(const ReferenceScene& scene, const TraceOptions& trace, const PointIndex& index,
                          std::span<const Eigen::Vector3d> normals, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
                          double h, double E, std::vector<SlimSample>* blended = nullptr, bool* other = nullptr);

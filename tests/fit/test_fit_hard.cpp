@@ -394,6 +394,63 @@ TEST(FitSlimHard, KeepsTheBestVerifiedModelWhenRepairsMakeItWorse) {
   EXPECT_EQ(r.model.slims.size(), st.patches);
 }
 
+// Folded faces, as decimated meshes have them (dragon_10k and happy_buddha_10k in ../shared: a
+// triangle stood up across its neighbours, its normal along the surface): here fans of six tiny
+// triangles standing on a sphere, their normals tangent to it and cancelling, among sparse
+// samples. Their face samples lie 0.1E above the sphere, but along their own normal, tangent to
+// a surface that curves away, no surface is met, and their neighbourhood disagrees (no
+// neighbourhood_normal). dragon_10k at 1e-2 had 7 such points "10E away", repaired in vain for
+// 10 rounds; the distance along any line through the point bounds it (nearest_along_lines), and
+// the fit keeps its bound.
+TEST(FitSlimHard, FoldedFacesStandingOnTheSurface) {
+  const double rel = 1e-2;  // the cloud's spacing below E: no face patches, which would hold a fold's own plane
+  const std::array<Vec, 3> fans{Vec(0.6, 0.0, 0.8), Vec(0.0, -0.6, 0.8), Vec(-0.48, 0.6, -0.64)};
+  const double E = rel * 2.0 * std::sqrt(3.0);  // the unit sphere's box diagonal
+  const auto sphere = [](double u, double v) {
+    const double th = 0.05 + 3.04 * u, ph = 2 * std::numbers::pi * v;
+    return Vec(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+  };
+  // No cloud points within 4E of a fan: the folds' nearest samples are each other and the
+  // sphere's face samples.
+  Shape s = make({{sphere, 1, 60}}, 20000, 17, [&](const Vec& p) {
+    return std::all_of(fans.begin(), fans.end(), [&](const Vec& q) { return (p - q).norm() > 4 * E; }) ? 1.0 : 0.0;
+  });
+  std::vector<std::pair<Vec, Vec>> folds;  // centroid, normal
+  for (const Vec& q : fans) {
+    const Vec e1 = q.unitOrthogonal(), e2 = q.cross(e1);
+    for (int k = 0; k < 6; ++k) {
+      const double a = k * std::numbers::pi / 3;
+      const Vec u = std::cos(a) * e1 + std::sin(a) * e2;
+      const int base = static_cast<int>(s.mesh.vertices.size());
+      s.mesh.vertices.push_back(q + 0.5 * E * u);
+      s.mesh.vertices.push_back(q + 3.0 * E * u);
+      s.mesh.vertices.push_back(q + 1.75 * E * u + 0.3 * E * q);
+      s.mesh.add_face(std::vector<int>{base, base + 1, base + 2});
+      const Vec* v = &s.mesh.vertices[base];
+      folds.push_back({(v[0] + v[1] + v[2]) / 3.0, (v[1] - v[0]).cross(v[2] - v[0]).normalized()});
+    }
+  }
+  const Outcome o = fit_and_measure(s, rel);
+  expect_two_sided(o);
+  // The case needs more than the point's own normal and its neighbourhood's.
+  const ReferenceScene scene(o.fit.model);
+  TraceOptions trace;
+  trace.slim.offset = slim_offset_of(o.fit.model);
+  PointCloud all = s.cloud;  // the points the fit measures: the cloud and the face samples
+  const PointCloud faces = face_samples(s.mesh);
+  all.points.insert(all.points.end(), faces.points.begin(), faces.points.end());
+  all.normals.insert(all.normals.end(), faces.normals.begin(), faces.normals.end());
+  const PointIndex index{std::span<const Vec>(all.points)};
+  std::vector<Neighbour> scratch;
+  std::size_t beyond_along_normal = 0, no_neighbourhood = 0;
+  for (const auto& [c, n] : folds) {
+    beyond_along_normal += !(probe_point(scene, trace, c, n, 4 * E, E).error <= E);
+    no_neighbourhood += !neighbourhood_normal(index, all.normals, c, n, scratch).has_value();
+  }
+  EXPECT_GT(beyond_along_normal, 0u) << "the folds no longer hide the surface from their normals";
+  EXPECT_GT(no_neighbourhood, 0u) << "every fold's neighbourhood agrees: the case no longer needs the lines";
+}
+
 }  // namespace
 }  // namespace quadrix
 
