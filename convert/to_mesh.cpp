@@ -649,7 +649,7 @@ MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double r
   if (model.empty()) throw InvalidInput("mesh_distance: the model is empty (no primitives)");
   const ReferenceScene scene(model);
   TraceOptions trace;
-  trace.slim.offset = slim_offset_of(model);
+  trace.slim = slim_blend_of(model);
   return mesh_to_surface(scene, trace, mesh, reach, bound);
 }
 
@@ -668,7 +668,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     slim_scene.emplace(slims_only);
   }
   TraceOptions trace;
-  trace.slim.offset = o.slim_offset >= 0 ? o.slim_offset : slim_offset_of(model);
+  trace.slim = slim_blend_of(model, o.slim_offset);
   // SLIM grid: a chord of length h sits about h²κ/8 off a surface of curvature κ; patches bend
   // over their radius R at most, so h = sqrt(8·bound·R)/2 starts near the bound. At most 256 cells
   // along the diagonal at first; refinements halve it.

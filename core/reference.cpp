@@ -203,7 +203,7 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
         if (!intersect_slim_patch(p, ray, tmin, best_t, h)) return;
         const double w = slim_weight((h.point - p.centre).norm() / p.radius);
         samples.push_back({h, w, p.radius, static_cast<int>(r.index)});
-        t_cut = std::min(t_cut, h.t + options.slim.offset * p.radius);
+        t_cut = std::min(t_cut, h.t + options.slim.push(p.radius));
         return;
       }
       case PrimitiveKind::tet:

@@ -113,6 +113,17 @@ double slim_offset_of(const Model& model) {
   return SlimBlendOptions{}.offset;
 }
 
+SlimBlendOptions slim_blend_of(const Model& model, double offset) {
+  SlimBlendOptions b;
+  b.offset = offset >= 0 ? offset : slim_offset_of(model);
+  if (const auto it = model.metadata.find("slim_max_push"); it != model.metadata.end()) {
+    char* end = nullptr;
+    const double v = std::strtod(it->second.c_str(), &end);
+    if (end != it->second.c_str() && v > 0.0) b.max_push = v;
+  }
+  return b;
+}
+
 void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurfaceSample>& out) {
   constexpr int kRimRefine = 3;
   constexpr double kRim2 = 0.8 * 0.8;
@@ -148,7 +159,7 @@ std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples,
                                             std::vector<SlimSample>* used) {
   if (used) used->clear();
   double t_cut = std::numeric_limits<double>::infinity();
-  for (const auto& s : samples) t_cut = std::min(t_cut, s.hit.t + options.offset * s.radius);
+  for (const auto& s : samples) t_cut = std::min(t_cut, s.hit.t + options.push(s.radius));
   SlimBlend b;
   double t_first = std::numeric_limits<double>::infinity();
   for (const auto& s : samples) {

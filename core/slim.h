@@ -1,6 +1,8 @@
 #pragma once
 /// SLIM surfaces (Ohtake, Belyaev, Alexa 2005; [Stoll06] §5.1.1): the per-ray blend of
 /// sphere-bounded quadric patches, as the GPU's three passes compute it (DESIGN §2, §6).
+#include <algorithm>
+#include <limits>
 #include <optional>
 #include <span>
 #include <vector>
@@ -18,14 +20,23 @@ double slim_weight(double r);
 bool intersect_slim_patch(const SlimPatch& patch, const Ray& ray, double tmin, double tmax, Hit& hit);
 
 struct SlimBlendOptions {
-  /// Pass 1 pushes each patch's first hit back by offset·R (R = that patch's radius); pass 2
-  /// blends every patch hit in front of the nearest pushed-back depth.
+  /// Pass 1 pushes each patch's first hit back by min(offset·R, max_push) (R = that patch's
+  /// radius); pass 2 blends every patch hit in front of the nearest pushed-back depth.
   double offset = 0.5;
+  /// World units. Hits of one sheet's patches, each within E of the data, lie about 2E apart;
+  /// a push of half a large ball reaches the next sheet instead (a groove between two faces'
+  /// planes, 10E apart along the ray, blended to 4E off both: dragon_10k at 1e-4).
+  double max_push = std::numeric_limits<double>::infinity();
+  double push(double radius) const { return std::min(offset * radius, max_push); }
 };
 
 /// The blend offset a model's error bound was certified with: its `slim_offset` metadata (written
 /// by the fitter), else SlimBlendOptions{}.offset. Renderers use it unless told otherwise.
 double slim_offset_of(const Model& model);
+
+/// The blend a model was certified with: slim_offset_of and its `slim_max_push` metadata (world
+/// units; none: unbounded). offset ≥ 0 replaces the model's offset (a command's --slim-offset).
+SlimBlendOptions slim_blend_of(const Model& model, double offset = -1);
 
 /// A slab that holds a patch's zero set inside its ball, in local units (ball radius 1): every
 /// u with g(u) = 0 and ‖u‖ ≤ 1 has s0 ≤ axisᵀu ≤ s1. With axis = b/‖b‖ (the gradient's direction

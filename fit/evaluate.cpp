@@ -40,9 +40,9 @@ std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::
   return out;
 }
 
-double blend_reach(std::span<const SlimSample> blended, double offset) {
+double blend_reach(std::span<const SlimSample> blended, const SlimBlendOptions& blend) {
   double reach = std::numeric_limits<double>::infinity();
-  for (const auto& s : blended) reach = std::min(reach, s.hit.t + offset * s.radius);
+  for (const auto& s : blended) reach = std::min(reach, s.hit.t + blend.push(s.radius));
   return reach;
 }
 
@@ -57,7 +57,7 @@ PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, c
   for (int k = 0; k < 5; ++k) {
     const auto hit = scene.trace(ray, from, kInf, trace, &samples);
     if (!hit || hit->kind != PrimitiveKind::slim) break;
-    const double reach = blend_reach(samples, trace.slim.offset);
+    const double reach = blend_reach(samples, trace.slim);
     out.reach = k == 0 ? reach : std::max(out.reach, reach);
     if (const double e = std::abs(hit->t - h); !(e >= out.error)) {
       out.error = e;
@@ -140,7 +140,7 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   // The core's reference ray caster: the same per-ray blend every renderer is tested against.
   const ReferenceScene scene(model);
   TraceOptions trace;
-  trace.slim.offset = slim_offset_of(model);
+  trace.slim = slim_blend_of(model);
   const std::vector<double> heights = probe_heights(cloud.points, normals, h, options.surface);
   // Sheets crossed more than E above a point are passed (probe_point): the fit's E, else h/4.
   double E = 0.25 * h;

@@ -42,8 +42,8 @@ struct PointProbe {
   double reach = std::numeric_limits<double>::infinity();
 };
 /// How far along a ray its blend looked, given the samples it blended: the cut
-/// t_cut = minᵢ(tᵢ + offset·Rᵢ) (core/slim.h) is at most the minimum over those samples.
-double blend_reach(std::span<const SlimSample> blended, double offset);
+/// t_cut = minᵢ(tᵢ + push(Rᵢ)) (core/slim.h) is at most the minimum over those samples.
+double blend_reach(std::span<const SlimSample> blended, const SlimBlendOptions& blend);
 
 /// blended: the SLIM samples of the counted crossing (cleared first). n: unit.
 PointProbe probe_point(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& p,

@@ -38,7 +38,7 @@ PatchErrors slim_patch_errors(const Model& model, const PointCloud& cloud, const
   const double E = E_fit > 0 && E_fit < h ? E_fit : 0.25 * h;
   const ReferenceScene scene(model);
   TraceOptions trace;
-  trace.slim.offset = slim_offset_of(model);
+  trace.slim = slim_blend_of(model);
   const std::vector<double> heights = probe_heights(cloud.points, normals, h, options.surface);
 
   const std::size_t n = model.slims.size();

@@ -8,6 +8,7 @@
 #include <optional>
 #include <span>
 #include <queue>
+#include <mutex>
 #include <random>
 #include <memory>
 #include <thread>
@@ -1041,6 +1042,18 @@ private:
     slims.clear();
     for (auto b : chosen_) slims.push_back(SlimPatch{P_[balls_[b].centre], balls_[b].R, balls_[b].g, balls_[b].clips, std::nullopt, std::nullopt});
     result_.model.metadata["slim_offset"] = fmt::format("{:.6g}", opt_.blend_offset);
+    if (const SlimBlendOptions b = blend(); std::isfinite(b.max_push))
+      result_.model.metadata["slim_max_push"] = fmt::format("{:.9g}", b.max_push);
+    else
+      result_.model.metadata.erase("slim_max_push");
+  }
+
+  // The blend the bound is certified for (written with the model, build_model).
+  SlimBlendOptions blend() const {
+    SlimBlendOptions b;
+    b.offset = opt_.blend_offset;
+    if (opt_.blend_max_push > 0) b.max_push = opt_.blend_max_push * E_;
+    return b;
   }
 
   // Points side: every point's probe against the blended surface (core/reference.h).
@@ -1056,7 +1069,7 @@ private:
     double max_radius = 0;
     for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
     TraceOptions trace;
-    trace.slim.offset = opt_.blend_offset;
+    trace.slim = blend();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
       std::vector<SlimSample> blended;
       std::vector<Neighbour> near;
@@ -1100,11 +1113,12 @@ private:
   // blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
   std::size_t verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
                              std::vector<std::uint8_t>& at_fault) {
+    debug_shown_ = 0;
     const auto& slims = result_.model.slims;
     const double bound = opt_.surface_factor * E_, local = opt_.local_surface_factor * E_;
     const double h = opt_.surface_probe_factor * E_;
     TraceOptions trace;
-    trace.slim.offset = opt_.blend_offset;
+    trace.slim = blend();
     shrink_.assign(slims.size(), opt_.shrink_step);
     patch_excess_.resize(balls_.size(), -1.0);
     patch_errors_.resize(balls_.size());
@@ -1140,12 +1154,25 @@ private:
         for (const auto& z : zero) {
           const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
           if (!hit) continue;
-          reach = std::max(reach, blend_reach(blended, opt_.blend_offset));
+          reach = std::max(reach, blend_reach(blended, trace.slim));
           double d = data_->distance(hit->point, bound);
           if (!(d <= bound)) d = data_->distance(hit->point);
           errors.push_back(d);
           if (d <= bound) continue;
           reach = kInf;
+          if (log::level() <= log::Level::debug) {
+            const std::lock_guard lock(debug_mutex_);
+            if (++debug_shown_ <= 8) {
+              std::string who;
+              for (const auto& sb : blended) {
+                const Ball& bb = balls_[chosen_[static_cast<std::size_t>(sb.index)]];
+                who += fmt::format(" [{}{} R {:.3g}E w {:.2g} t-h {:.3g}E data {:.3g}E]", sb.index, bb.face >= 0 ? " face" : "",
+                                   sb.radius / E_, sb.weight, (sb.hit.t - h) / E_, data_->distance(sb.hit.point) / E_);
+              }
+              log::debug("fit_slim: surface sample of patch {}{} (R {:.3g}E) at ({:.6g}, {:.6g}, {:.6g}): blend {:.3g}E from the data;{}", k,
+                         balls_[chosen_[k]].face >= 0 ? " (face)" : "", slims[k].radius / E_, z.point.x(), z.point.y(), z.point.z(), d / E_, who);
+            }
+          }
           bool blamed = false;
           for (const auto& s : blended)
             if (data_->distance(s.hit.point, local) > local) at_fault[static_cast<std::size_t>(s.index)] = 1, blamed = true;
@@ -1316,7 +1343,9 @@ private:
       const bool few = holes.size() <= std::max<std::size_t>(64, faces_ ? faces_->mesh->face_count() / 8 : 0);
       // Not in the last two rounds: the balls that cover new points need verifying and repairing too.
       const bool fill = !holes.empty() && few && round + 2 < budget;
-      const std::size_t failing = st_.blend_failures + st_.surface_failures + (fill ? holes.size() : 0);
+      // Too many: the faces with spots get face patches of their own (below).
+      const bool face_fill = !holes.empty() && !few && round + 2 < budget && face_prisms();
+      const std::size_t failing = st_.blend_failures + st_.surface_failures + (fill || face_fill ? holes.size() : 0);
       const double score = failures();
       st_.round_failures.push_back(score);
       st_.kept_round = round;
@@ -1348,7 +1377,7 @@ private:
           if (one.empty() || one.back().first != h.first) one.push_back(h);
         add_points(one);
         best = Verified{};  // other points: not comparable
-      } else if (!few && round + 2 < budget && face_prisms()) {
+      } else if (face_fill) {
         // Too many to join the points: each face with a spot gets its own face patch instead, its
         // plane clipped to its prism — the data itself, covering the whole face.
         const std::size_t added = add_face_patches(holes);
@@ -1516,6 +1545,8 @@ private:
   std::shared_ptr<DataSurface> data_;
   std::unique_ptr<BallFitter> fitter_;
   std::vector<std::uint32_t> order_;                 // the points in random order
+  std::mutex debug_mutex_;                           // -vv: the first failing surface samples
+  std::size_t debug_shown_ = 0;
   std::vector<Ball> balls_;                          // evaluated candidates
   std::vector<std::vector<std::uint32_t>> covers_;   // points each candidate covers
   std::vector<Eigen::Vector3d> pilot_centres_;

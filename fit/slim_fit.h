@@ -118,6 +118,10 @@ struct SlimFitOptions {
   /// The SLIM blend offset the bound is certified for (core/slim.h SlimBlendOptions); stored in
   /// the model as `slim_offset`, and renderers use it.
   double blend_offset = 0.5;
+  /// The blend's push-back is at most this × E (stored as `slim_max_push`, world units; ≤ 0: no
+  /// limit). Patches of one sheet hit a ray within about 2E of each other; a push of half a
+  /// large ball (a face patch's) reaches a second sheet and blends it in.
+  double blend_max_push = 4.0;
   /// With a mesh (the fit_slim overload below): its faces' centroids, and a lattice on faces much
   /// larger than their neighbours (core/io/io.h face_samples), join the points, fitted and covered
   /// like them, so the surface has no holes between the vertices.

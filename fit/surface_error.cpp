@@ -103,7 +103,7 @@ SurfaceError measure_surface_error(const Model& model, const DataSurface& data, 
                                    const SurfaceErrorOptions& options) {
   const ReferenceScene scene(model);
   TraceOptions trace;
-  trace.slim.offset = slim_offset_of(model);
+  trace.slim = slim_blend_of(model);
   return measure_surface_error(
       [&](const Ray& ray) -> std::optional<double> {
         if (const auto hit = scene.trace(ray, 0.0, std::numeric_limits<double>::infinity(), trace)) return hit->t;

@@ -2,6 +2,7 @@
 /// The OpenGL renderer: ray-casts every primitive per pixel into a G-buffer and shades it in a
 /// deferred pass ([Stoll06] §5, DESIGN §6). A frame runs only the passes its scene needs.
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "core/image.h"
 #include "core/mesh_io.h"
 #include "core/model.h"
+#include "core/slim.h"
 #include "core/outlines.h"
 #include "render/amp_options.h"
 
@@ -35,8 +37,14 @@ struct RenderOptions {
   /// glFinish after each pass and time the passes on the CPU (llvmpipe's GL_TIME_ELAPSED only
   /// measures command submission). Costs the overlap between passes; for benchmarks.
   bool time_passes = false;
-  /// SLIM pass 1 pushes each first hit back by slim_offset·R along the ray (as the CPU reference).
+  /// SLIM pass 1 pushes each first hit back by min(slim_offset·R, slim_max_push) along the ray
+  /// (world units; as the CPU reference, core/slim.h SlimBlendOptions).
   float slim_offset = 0.5f;
+  float slim_max_push = std::numeric_limits<float>::infinity();
+  void set_slim_blend(const SlimBlendOptions& b) {
+    slim_offset = static_cast<float>(b.offset);
+    slim_max_push = static_cast<float>(b.max_push);
+  }
   /// SLIM accumulation targets: RGBA16F instead of RGBA32F (half the bandwidth; see the benchmark).
   bool slim_half_float = false;
   /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,

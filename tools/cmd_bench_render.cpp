@@ -47,7 +47,7 @@ struct Row {
 };
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
-            double slim_offset = SlimBlendOptions{}.offset, bool tight_splats = true, bool effects = false,
+            const SlimBlendOptions& blend = {}, bool tight_splats = true, bool effects = false,
             bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0) {
   render::RenderOptions o;
   o.shadow_map_size = shadow_map_size;
@@ -58,7 +58,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.tet_early_depth = tet_early_depth;
   o.glyph_early_depth = tet_early_depth;  // glyphs: occluders and nearest hits first (render/passes/glyph_pass.h)
   o.slim_tight_splats = tight_splats;
-  o.slim_offset = static_cast<float>(slim_offset);
+  o.set_slim_blend(blend);
   o.statistics = true;
   const auto st = r.draw(cam, o);
   const auto g = r.read_gbuffer();
@@ -242,31 +242,31 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         {
                           render::Renderer r(*context);
                           r.set_model(model);
-                          rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_offset_of(model)));
-                          rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_offset_of(model)));
+                          rows.push_back(measure("quadrics, culling on", r, cam, true, a->frames, slim_blend_of(model)));
+                          rows.push_back(measure("quadrics, culling off", r, cam, false, a->frames, slim_blend_of(model)));
                           if (!model.glyphs.empty()) {
                             rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, true, true, true, a->shadow_map));
+                                                   slim_blend_of(model), true, true, true, true, a->shadow_map));
                             // Each proxy fragment writing its hit's depth (no early depth test on llvmpipe).
                             rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, false, false));
+                                                   slim_blend_of(model), true, false, false));
                             rows.push_back(measure("quadrics, hit depth, shadows+outlines", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, true, false, true, a->shadow_map));
+                                                   slim_blend_of(model), true, true, false, true, a->shadow_map));
                           }
                           if (!model.tets.empty()) {  // without chunk occlusion; with each fragment writing its hit's depth
                             rows.push_back(measure("quadrics, no occlusion", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, false, true, false));
+                                                   slim_blend_of(model), true, false, true, false));
                             rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
-                                                   slim_offset_of(model), true, false, false, false));
+                                                   slim_blend_of(model), true, false, false, false));
                           }
                           if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
-                                                   slim_offset_of(model), false));
+                                                   slim_blend_of(model), false));
                           // SLIM level of detail: time against image error, each against full detail (row 0).
                           if (!model.slim_hierarchy.empty())
                             for (const double P : a->pixel_errors) {
                               rows.push_back(measure(fmt::format("LOD {:g} px", P), r, cam, true, a->frames,
-                                                     slim_offset_of(model), true, false, true, true, 0, P));
+                                                     slim_blend_of(model), true, false, true, true, 0, P));
                               image_error(rows.back(), rows.front(), bounds(model).diagonal());
                             }
                         }
@@ -278,7 +278,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           r.set_mesh(*mesh);
                           rows.push_back(measure("tessellated glyphs", r, cam, false, a->frames));
                           rows.push_back(measure("tessellated, shadows+outlines", r, cam, false, a->frames,
-                                                 SlimBlendOptions{}.offset, true, true, true, true, a->shadow_map));
+                                                 SlimBlendOptions{}, true, true, true, true, a->shadow_map));
                           mesh.reset();
                         }
                         if (!a->baseline.empty()) mesh = read_mesh(a->baseline);

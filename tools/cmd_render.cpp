@@ -270,11 +270,11 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   Box3 box = bounds(model);
   if (mesh)
     for (const auto& v : mesh->vertices) box.extend(v);
-  const double slim_offset = a.slim_offset >= 0 ? a.slim_offset : slim_offset_of(model);
+  const SlimBlendOptions blend = slim_blend_of(model, a.slim_offset);
   // The view (tools/view_options.h): tight framing on the visible geometry, from a
   // low-resolution CPU pass and the mesh's vertices.
   const VisibleFn visible = [&](const Camera& c) {
-    return visible_points(model, mesh ? &*mesh : nullptr, c, {.cull = !a.no_cull, .slim_offset = slim_offset});
+    return visible_points(model, mesh ? &*mesh : nullptr, c, {.cull = !a.no_cull, .slim = blend});
   };
   const Camera camera = resolve_camera(a.view, box, w, h, a.view.typed("--size"), visible, turntable > 0);
   std::vector<Camera> cameras{camera};
@@ -301,7 +301,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   if (backend == "auto") backend = "gl";
   if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
   j["backend"] = backend;
-  j["slim_offset"] = slim_offset;
+  j["slim_offset"] = blend.offset;
+  if (std::isfinite(blend.max_push)) j["slim_max_push"] = blend.max_push;
   if (backend == "cpu") {
     if (mesh) throw InvalidInput("--mesh needs the GL backend");
     if (a.shading != "phong")
@@ -375,7 +376,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     scene_for(magnified(cameras.front()));
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = !a.no_cull;
-    ro.trace.slim.offset = slim_offset;
+    ro.trace.slim = blend;
     ro.shadows = a.shadows;
     if (cameras.size() == 1) ro.progress = progress.callback();
     const double t1 = report.elapsed();
@@ -408,7 +409,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     if (mesh) renderer.set_mesh(*mesh);
     render::RenderOptions ro;
     ro.cull = !a.no_cull;
-    ro.slim_offset = static_cast<float>(slim_offset);
+    ro.set_slim_blend(blend);
     ro.shading = a.shading == "envmap" ? render::Shading::envmap
                  : a.shading == "npr"  ? render::Shading::npr
                                        : render::Shading::phong;

@@ -218,12 +218,13 @@ void add_view(CLI::App& root, Commands& commands) {
                         st.options.shading = a->shading == "envmap" ? render::Shading::envmap
                                              : a->shading == "npr"  ? render::Shading::npr
                                                                     : render::Shading::phong;
-                        st.options.slim_offset = static_cast<float>(slim_offset_of(model));
+                        const SlimBlendOptions blend = slim_blend_of(model);
+                        st.options.set_slim_blend(blend);
                         st.options.slim_pixel_error = a->pixel_error;
                         // The start view as `render` resolves it (tools/view_options.h).
                         const VisibleFn visible = [&](const Camera& c) {
                           return visible_points(model, mesh ? &*mesh : nullptr, c,
-                                                {.cull = st.options.cull, .slim_offset = st.options.slim_offset});
+                                                {.cull = st.options.cull, .slim = blend});
                         };
                         st.start = st.camera = resolve_camera(a->view, box, w, h, a->view.typed("--size"), visible);
                         st.up = turntable_axis(a->view, st.start);

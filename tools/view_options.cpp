@@ -138,7 +138,7 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
     probe.height = std::max(8, static_cast<int>(std::lround(camera.height * s)));
     ReferenceRenderOptions po;
     po.trace.cull_backfaces = o.cull;
-    po.trace.slim.offset = o.slim_offset;
+    po.trace.slim = o.slim;
     const ReferenceImage img = render_reference(scene, probe, po);
     for (int y = 0; y < img.height; ++y)
       for (int x = 0; x < img.width; ++x)

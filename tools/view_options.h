@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 
+#include "core/slim.h"
 #include "core/camera.h"
 #include "core/mesh_io.h"
 #include "core/model.h"
@@ -42,7 +43,7 @@ void add_view_options(CLI::App& app, ViewArgs& args);
 /// framing: a low-resolution CPU reference pass over the model plus the mesh's vertices.
 struct VisibleOptions {
   bool cull = true;          ///< back-face culling as the render does it
-  double slim_offset = 0.5;  ///< SLIM blend band (relative to the ball radius)
+  SlimBlendOptions slim;     ///< SLIM blend (the model's: core/slim.h slim_blend_of)
   int probe_pixels = 160;    ///< longer side of the probe image
 };
 std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMesh* mesh, const Camera& camera,

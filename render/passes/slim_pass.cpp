@@ -158,6 +158,7 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   set_camera_uniforms(p, f.camera);
   set_origin_uniforms(p, origin_, f.camera);
   p.set("u_offset", f.options.slim_offset);
+  p.set("u_max_push", std::min(f.options.slim_max_push, std::numeric_limits<float>::max()));
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
   p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);

@@ -16,7 +16,8 @@ flat in int v_id;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform float u_offset;  // pass 1 push-back, relative to R
+uniform float u_offset;    // pass 1 push-back, relative to R
+uniform float u_max_push;  // and at most this (eye units)
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;
@@ -57,7 +58,7 @@ void main() {
   if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
   if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
 #if SLIM_PASS == 1
-  float z_push = p.z * (1.0 + u_offset * v_radius / length(p));
+  float z_push = p.z * (1.0 + min(u_offset * v_radius, u_max_push) / length(p));
   gl_FragDepth = window_depth(z_push, u_proj);
 #else
   gl_FragDepth = window_depth(p.z, u_proj);

@@ -451,6 +451,24 @@ TEST(FitSlimHard, FoldedFacesStandingOnTheSurface) {
   EXPECT_GT(no_neighbourhood, 0u) << "every fold's neighbourhood agrees: the case no longer needs the lines";
 }
 
+// A coarse sheet with a flap folded under it 6E below, facing the same way (a decimated mesh's
+// fold, as in dragon_10k), fitted far below its sampling: the face patches are the faces' planes
+// in balls as large as the faces. A ray through the sheet meets the flap 6E on, front-facing; a
+// blend that pushes the first hit back by half such a ball mixes the two sheets (dragon_10k at
+// 1e-4: hits 6-10E apart blended 2-4E off both). The push is bounded by blend_max_push·E.
+TEST(FitSlimHard, FlapUnderASheetIsNotBlendedIn) {
+  const double rel = 1e-4, E = rel * std::sqrt(8.0);  // the sheet's diagonal
+  const Shape s = make({quad(Vec(-1, -1, 0), Vec(2, 0, 0), Vec(0, 2, 0), 1, 3),
+                        quad(Vec(-0.5, -0.5, -6 * E), Vec(1, 0, 0), Vec(0, 1, 0), 1, 2)},
+                       10, 21);
+  const Outcome bounded = fit_and_measure(s, rel);
+  expect_two_sided(bounded);
+  EXPECT_TRUE(bounded.fit.model.metadata.contains("slim_max_push"));
+  const Outcome unbounded = fit_and_measure(s, rel, {.blend_max_push = 0});
+  EXPECT_FALSE(unbounded.fit.model.metadata.contains("slim_max_push"));
+  EXPECT_GT(unbounded.surface.p999, 2 * unbounded.E) << "the case no longer blends the flap into the sheet";
+}
+
 }  // namespace
 }  // namespace quadrix
 

@@ -246,14 +246,17 @@ protected:
     Comparison c;
     int cracks = 0;
   };
-  Result run_slim(const Model& m, const Camera& cam, bool half = false) {
+  Result run_slim(const Model& m, const Camera& cam, bool half = false, const SlimBlendOptions& blend = {}) {
     renderer_->set_model(m);
     render::RenderOptions o;
     o.slim_half_float = half;
+    o.set_slim_blend(blend);
     renderer_->draw(cam, o);
     const auto gl = renderer_->read_gbuffer();
     const ReferenceScene scene(m);
-    const ReferenceImage ref = render_reference(scene, cam);
+    ReferenceRenderOptions ro;
+    ro.trace.slim = blend;
+    const ReferenceImage ref = render_reference(scene, cam, ro);
     Result r{compare(ref, gl), cracks(ref, gl)};
     std::printf("%s: coverage %.5f normal median %.4f deg depth p99 %.3g cracks %d (%d covered)\n",
                 half ? "16-bit" : "32-bit", r.c.coverage_agreement, r.c.normal_median_deg, r.c.depth_p99, r.cracks,
@@ -299,6 +302,40 @@ TEST_F(GlSlim, EveryClipPlaneSlotCutsAsInTheReference) {
   for (std::size_t i = 0; i < plain.depth.size(); ++i)
     differ += plain.coverage[i] != cut.coverage[i] || std::abs(plain.depth[i] - cut.depth[i]) > 1e-4f;
   EXPECT_GT(differ, 500u) << "the clip planes no longer change the surface";
+}
+
+TEST_F(GlSlim, BoundedPushBlendsAsInTheReference) {
+  // Two sheets 0.03 apart (each patch of a sphere copied 3 % inwards), closer than half a ball
+  // (R ≈ 0.2): the unbounded push blends the inner sheet into the outer one; a push of at most
+  // 0.01 blends the outer sheet alone. GL must match the reference either way, and the bound
+  // must change the surface, or the test could not fail.
+  Model m = synth_model("slim-sphere", {.count = 400});
+  const std::size_t n = m.slims.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    SlimPatch inner = m.slims[i];
+    inner.centre *= 0.97;
+    m.slims.push_back(inner);
+  }
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 200, .height = 200});
+  SlimBlendOptions bounded;
+  bounded.max_push = 0.01;
+  for (const SlimBlendOptions& blend : {SlimBlendOptions{}, bounded}) {
+    SCOPED_TRACE(blend.max_push);
+    const Result r = run_slim(m, cam, false, blend);
+    EXPECT_GT(r.c.covered, 5000);
+    EXPECT_GE(r.c.coverage_agreement, 0.995);
+    EXPECT_LE(r.c.normal_median_deg, 0.5);
+    EXPECT_LE(r.c.depth_p99, 1e-4);
+    EXPECT_EQ(r.cracks, 0);
+  }
+  ReferenceRenderOptions a, b;
+  b.trace.slim = bounded;
+  const ReferenceScene scene(m);
+  const ReferenceImage wide = render_reference(scene, cam, a), narrow = render_reference(scene, cam, b);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < wide.depth.size(); ++i)
+    differ += wide.coverage[i] && narrow.coverage[i] && std::abs(wide.depth[i] - narrow.depth[i]) > 2e-3f;
+  EXPECT_GT(differ, 1000u) << "the bounded push no longer changes the blend";
 }
 
 TEST_F(GlSlim, FacePrismPatchesJoinWithoutCracks) {
