@@ -25,6 +25,9 @@ namespace quadrix {
 struct ToMeshOptions {
   double max_error = 0;           ///< world units; ≤ 0: 1e-3 × the model's bounding-box diagonal
   int max_refinements = 4;        ///< resolution doublings tried after the first mesh
+  /// SLIM: rounds of local refinement per grid (longest-edge bisection of the triangles whose
+  /// samples exceed the bound, or nearest the drawn surface's points beyond it); 0: off
+  int local_refinements = 12;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -47,6 +50,7 @@ struct ToMeshResult {
   MeshDistance surface_to_mesh;     ///< pixels of the drawn surface → mesh
   std::size_t open_edges = 0;       ///< edges not shared by exactly two triangles (0: watertight)
   int refinements = 0;              ///< doublings used
+  int local_rounds = 0;             ///< local refinement rounds used on the last grid
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
