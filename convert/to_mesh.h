@@ -11,7 +11,9 @@
 /// centroid (distance along the sample's normal line, both ways, to what the CPU reference ray
 /// caster draws, core/reference.h, and along 13 more lines where that is beyond the bound; an
 /// upper bound of the Euclidean distance: see mesh_distance), and surface → mesh from rendered
-/// views (fit/surface_error.h). The resolution doubles until both are within the bound, or
+/// views (fit/surface_error.h). SLIM meshes are first refined locally (longest-edge bisection
+/// without T-junctions where samples exceed the bound, new vertices moved onto the blend; open
+/// edges never cut). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes); then the smaller mesh is kept.
 #include <cstddef>
