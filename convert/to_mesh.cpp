@@ -783,8 +783,14 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
 /// the faces with a sample beyond the bound (mesh → surface, measured on the new faces only) and,
 /// once there are none, on the faces nearest the drawn surface's points beyond it (surface →
 /// mesh); each midpoint moved onto the blend along its normal (snap_to_surface, kept where its
-/// line meets none). Returns the rounds used.
-int refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
+/// line meets none). Returns the rounds used, and the mesh before them.
+struct LocalRefinement {
+  int rounds = 0;
+  MeshDistance before;  ///< mesh → surface of the SLIM triangles before the first cut
+  PolygonMesh unrefined;
+};
+
+LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
                    const ToMeshOptions& o, double bound, double reach, double snap_reach, std::size_t first_face,
                    Builder& b) {
   std::vector<std::uint8_t> fresh(b.mesh.face_count(), 0);
@@ -795,6 +801,8 @@ int refine_locally(const Model& model, const ReferenceScene& scene, const TraceO
   std::vector<std::uint8_t> stalls(b.mesh.face_count(), 0);
   constexpr int kMaxStalls = 2;
   std::vector<std::uint8_t> resnapped;  // vertices already moved along their normal once
+  LocalRefinement out;
+  if (o.local_refinements > 0) out.unrefined = b.mesh;
   int round = 0;
   for (; round < o.local_refinements && b.mesh.face_count() < o.max_triangles; ++round) {
     // Mesh → surface on the new faces (the others were measured within the bound before).
@@ -815,6 +823,7 @@ int refine_locally(const Model& model, const ReferenceScene& scene, const TraceO
     }
     BeyondSamples part_beyond;
     const MeshDistance md = mesh_to_surface(scene, trace, part, reach, bound, &part_beyond);
+    if (round == 0) out.before = md;
     std::vector<std::uint8_t> marked(b.mesh.face_count(), 0);
     for (std::size_t k = 0; k < of_part.size(); ++k) {
       const std::size_t f = of_part[k];
@@ -882,20 +891,26 @@ int refine_locally(const Model& model, const ReferenceScene& scene, const TraceO
     fresh = std::move(cut.fresh);
     worst = std::move(next_worst);
     stalls = std::move(next_stalls);
-    // A midpoint's reach: half its edge (the parent edge's length, as its halves are a quarter).
+    // A midpoint's reach: half its parent edge (the length of its halves), and no more than twice
+    // its parent face's worst sample (at least 4 bounds), so it cannot jump to another sheet.
     const std::size_t added = b.mesh.vertices.size() - first_vertex;
-    std::vector<double> reach_of(added, 0.0);
+    std::vector<double> edge_of(added, 0.0), cap_of(added, 0.0);
     for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
       const auto t = b.mesh.face(f);
       for (int i = 0; i < 3; ++i) {
         const int v = t[i];
         if (static_cast<std::size_t>(v) < first_vertex) continue;
-        reach_of[v - first_vertex] = std::max(reach_of[v - first_vertex], (b.mesh.vertices[v] - b.mesh.vertices[t[(i + 1) % 3]]).norm());
+        const std::size_t k = v - first_vertex;
+        edge_of[k] = std::max(edge_of[k], (b.mesh.vertices[v] - b.mesh.vertices[t[(i + 1) % 3]]).norm());
+        cap_of[k] = std::max(cap_of[k], std::max(2.0 * worst[f], 4.0 * bound));
       }
     }
+    std::vector<double> reach_of(added);
+    for (std::size_t k = 0; k < added; ++k) reach_of[k] = std::min(edge_of[k], cap_of[k]);
     snap_to_surface(scene, trace, snap_reach, first_vertex, std::vector<std::uint8_t>(added, 0), b, /*drop_unmet=*/false, &reach_of);
   }
-  return round;
+  out.rounds = round;
+  return out;
 }
 
 double median_radius(const Model& m) {
@@ -992,7 +1007,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
     for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
     double reach = 4.0 * bound;
-    int local_rounds = 0;
+    LocalRefinement local;
     if (!model.slims.empty()) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
@@ -1001,14 +1016,26 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, b, on_surface);
       snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
       reach = std::max(reach, 1.5 * h);
-      local_rounds = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
+      local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
     }
     ToMeshResult r;
     r.bound = bound;
     r.refinements = level;
-    r.local_rounds = local_rounds;
+    r.local_rounds = local.rounds;
     r.mesh = std::move(b.mesh);
     r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound);
+    // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
+    // its normals cannot tell apart) is undone.
+    if (local.rounds > 0 && r.mesh_to_surface.beyond > local.before.beyond) {
+      const MeshDistance unrefined = mesh_to_surface(scene, trace, local.unrefined, reach, bound);
+      if (unrefined.beyond < r.mesh_to_surface.beyond) {
+        log::info("mesh: local refinement left {} samples beyond the bound, {} before it: undone", r.mesh_to_surface.beyond,
+                  unrefined.beyond);
+        r.mesh = std::move(local.unrefined);
+        r.mesh_to_surface = unrefined;
+        r.local_rounds = 0;
+      }
+    }
     r.open_edges = count_open_edges(r.mesh);
     // A refinement that leaves more than a quarter of the previous share of samples beyond the
     // bound is not converging there (cracks or gaps of the blend itself, which no resolution
