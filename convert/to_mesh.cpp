@@ -475,12 +475,14 @@ std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceO
   return scene.trace(ray, 0.0, 2.0 * reach, trace);
 }
 
-/// Moves each SLIM-made vertex onto the drawn surface along its normal, then drops the triangles
-/// with a vertex whose normal line met no SLIM surface within reach: they span a hole of the
-/// blend (an open scan's SLIM fit), where the grid's closed labelling put a cap the renderer does
-/// not draw.
+/// Moves each SLIM-made vertex onto the drawn surface along its normal, then (drop_unmet) drops the
+/// triangles with a vertex whose normal line met no SLIM surface within reach: they span a hole of
+/// the blend (an open scan's SLIM fit), where the grid's closed labelling put a cap the renderer
+/// does not draw. Without drop_unmet such a vertex stays where it is. reach_of (optional, per vertex
+/// from first): a shorter reach for that vertex.
 void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, double reach, std::size_t first,
-                     const std::vector<std::uint8_t>& on_surface, Builder& out) {
+                     const std::vector<std::uint8_t>& on_surface, Builder& out, bool drop_unmet = true,
+                     const std::vector<double>* reach_of = nullptr) {
   const std::vector<Eigen::Vector3d> normals = vertex_normals(out.mesh);
   std::vector<std::uint8_t> snapped(out.mesh.vertices.size(), 1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(first, out.mesh.vertices.size()),
@@ -489,13 +491,15 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
                         if (on_surface[v - first]) continue;
                         snapped[v] = 0;
                         if (!(normals[v].norm() > 0)) continue;
-                        const auto hit = along_normal(scene, trace, out.mesh.vertices[v], normals[v], reach);
+                        const double r = reach_of ? std::min(reach, (*reach_of)[v - first]) : reach;
+                        const auto hit = along_normal(scene, trace, out.mesh.vertices[v], normals[v], r);
                         if (!hit || hit->kind != PrimitiveKind::slim) continue;
                         out.mesh.vertices[v] = hit->point;
                         if (out.colours) out.mesh.colours[v] = hit->colour;
                         snapped[v] = 1;
                       }
                     });
+  if (!drop_unmet) return;
   PolygonMesh kept;
   std::vector<int> remap(out.mesh.vertices.size(), -1);
   for (std::size_t v = 0; v < first; ++v) remap[v] = static_cast<int>(v);
@@ -519,16 +523,27 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
   out.mesh = std::move(kept);
 }
 
+/// Where samples lie beyond the bound: per face, its samples' largest distance (its vertices'
+/// included; +inf where one met no surface); per vertex, whether it is beyond.
+struct BeyondSamples {
+  std::vector<double> faces;
+  std::vector<std::uint8_t> vertices;
+};
+
 MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
-                             double reach, double bound) {
+                             double reach, double bound, BeyondSamples* where = nullptr) {
   const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
   struct Sample {
     Eigen::Vector3d p, n;
   };
   std::vector<Sample> samples;
+  std::vector<std::int64_t> owner;  // face index, or −1 − vertex index
   samples.reserve(m.vertices.size() + 4 * m.face_count());
   for (std::size_t v = 0; v < m.vertices.size(); ++v)
-    if (vn[v].norm() > 0) samples.push_back({m.vertices[v], vn[v]});
+    if (vn[v].norm() > 0) {
+      samples.push_back({m.vertices[v], vn[v]});
+      owner.push_back(-1 - static_cast<std::int64_t>(v));
+    }
   for (std::size_t f = 0; f < m.face_count(); ++f) {
     const auto v = m.face(f);
     const Eigen::Vector3d &a = m.vertices[v[0]], &b = m.vertices[v[1]], &c = m.vertices[v[2]];
@@ -539,6 +554,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
     samples.push_back({0.5 * (a + b), n});
     samples.push_back({0.5 * (b + c), n});
     samples.push_back({0.5 * (c + a), n});
+    owner.insert(owner.end(), 4, static_cast<std::int64_t>(f));
   }
   // A sample on a crease or on the surface's boundary (a cylinder's rim, where an open sheet leaves
   // its tetrahedra) may see its normal line graze past the edge; then parallel lines offset by
@@ -564,6 +580,22 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
       }
     }
   });
+  if (where) {
+    where->faces.assign(m.face_count(), 0.0);
+    where->vertices.assign(m.vertices.size(), 0);
+    std::vector<double> at_vertex(m.vertices.size(), 0.0);
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      const double x = d[i] < 0 ? std::numeric_limits<double>::infinity() : d[i];
+      if (owner[i] >= 0) {
+        where->faces[owner[i]] = std::max(where->faces[owner[i]], x);
+      } else {
+        at_vertex[-1 - owner[i]] = x;
+        where->vertices[-1 - owner[i]] = x > bound;
+      }
+    }
+    for (std::size_t f = 0; f < m.face_count(); ++f)
+      for (const int v : m.face(f)) where->faces[f] = std::max(where->faces[f], at_vertex[v]);
+  }
   MeshDistance out;
   out.samples = samples.size();
   double sum2 = 0;
@@ -614,6 +646,231 @@ std::size_t count_open_edges(const PolygonMesh& m) {
     }
   }
   return static_cast<std::size_t>(std::count_if(uses.begin(), uses.end(), [](const auto& e) { return e.second != 2; }));
+}
+
+// ---- local refinement (SLIM) ------------------------------------------------------------------
+
+std::uint64_t edge_key(int a, int b) {
+  const auto [lo, hi] = std::minmax(a, b);
+  return static_cast<std::uint64_t>(lo) << 32 | static_cast<std::uint32_t>(hi);
+}
+
+/// Longest-edge bisection (Rivara) of the marked faces among those from first_face on, closed so
+/// no T-junction remains: a face with an edge to split has its longest edge split too, and every
+/// edge is split at one shared midpoint in both its faces (so a closed mesh stays closed). A face
+/// is bisected at its longest edge, then each half at the other split edge it holds. Returns, per
+/// face of the new mesh, the face it was cut from or is, and whether it is new; the midpoints are
+/// appended as vertices.
+struct Bisected {
+  std::vector<std::size_t> from;
+  std::vector<std::uint8_t> fresh;
+};
+Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<std::uint8_t>& marked) {
+  const PolygonMesh& m = out.mesh;
+  const std::vector<Eigen::Vector3d>* V = &m.vertices;  // moves to the new mesh below
+  const auto longer = [&](int a, int b, int c, int d) {  // edge (a, b) longer than (c, d), ties by key
+    const double l1 = ((*V)[a] - (*V)[b]).squaredNorm(), l2 = ((*V)[c] - (*V)[d]).squaredNorm();
+    return l1 != l2 ? l1 > l2 : edge_key(a, b) > edge_key(c, d);
+  };
+  const auto longest = [&](std::span<const int> t) {
+    int best = 0;
+    for (int i = 1; i < 3; ++i)
+      if (longer(t[i], t[(i + 1) % 3], t[best], t[(best + 1) % 3])) best = i;
+    return edge_key(t[best], t[(best + 1) % 3]);
+  };
+  // Open edges (the blend's own holes) are never split: their count stays as it was.
+  std::unordered_map<std::uint64_t, int> uses;
+  for (std::size_t f = first_face; f < m.face_count(); ++f) {
+    const auto t = m.face(f);
+    for (int i = 0; i < 3; ++i) ++uses[edge_key(t[i], t[(i + 1) % 3])];
+  }
+  std::unordered_map<std::uint64_t, int> midpoint;  // edge → its midpoint vertex (−1 until made)
+  const auto split_longest = [&](std::span<const int> t) {
+    const std::uint64_t e = longest(t);
+    return uses.at(e) == 2 && midpoint.emplace(e, -1).second;
+  };
+  for (std::size_t f = first_face; f < m.face_count(); ++f)
+    if (marked[f]) split_longest(m.face(f));
+  for (bool changed = true; changed;) {  // the closure: a split edge forces its faces' longest ones
+    changed = false;
+    for (std::size_t f = first_face; f < m.face_count(); ++f) {
+      const auto t = m.face(f);
+      bool any = false;
+      for (int i = 0; i < 3 && !any; ++i) any = midpoint.contains(edge_key(t[i], t[(i + 1) % 3]));
+      if (any && split_longest(t)) changed = true;
+    }
+  }
+  for (auto& [key, v] : midpoint) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    v = out.add_vertex(0.5 * ((*V)[a] + (*V)[b]), out.colours ? out.mesh.colours[a] : Rgb{200, 200, 200});
+  }
+  PolygonMesh next;
+  next.vertices = std::move(out.mesh.vertices);
+  next.colours = std::move(out.mesh.colours);
+  V = &next.vertices;
+  Bisected out_faces;
+  const auto split = [&](auto&& self, std::array<int, 3> t, std::size_t from, bool is_new) -> void {
+    int best = -1;
+    for (int i = 0; i < 3; ++i)
+      if (midpoint.contains(edge_key(t[i], t[(i + 1) % 3])) &&
+          (best < 0 || longer(t[i], t[(i + 1) % 3], t[best], t[(best + 1) % 3])))
+        best = i;
+    if (best < 0) {
+      next.add_face(t);
+      out_faces.from.push_back(from);
+      out_faces.fresh.push_back(is_new);
+      return;
+    }
+    const int u = t[best], v = t[(best + 1) % 3], w = t[(best + 2) % 3], mid = midpoint.at(edge_key(u, v));
+    self(self, {u, mid, w}, from, true);
+    self(self, {mid, v, w}, from, true);
+  };
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto t = m.face(f);
+    if (f < first_face) {
+      next.add_face(t);
+      out_faces.from.push_back(f);
+      out_faces.fresh.push_back(0);
+    } else {
+      split(split, {t[0], t[1], t[2]}, f, false);
+    }
+  }
+  out.mesh = std::move(next);
+  return out_faces;
+}
+
+/// Local refinement of the SLIM triangles (faces from first_face on): rounds of bisect_marked on
+/// the faces with a sample beyond the bound (mesh → surface, measured on the new faces only) and,
+/// once there are none, on the faces nearest the drawn surface's points beyond it (surface →
+/// mesh); each midpoint moved onto the blend along its normal (snap_to_surface, kept where its
+/// line meets none). Returns the rounds used, and the mesh before them.
+struct LocalRefinement {
+  int rounds = 0;
+  MeshDistance before;  ///< mesh → surface of the SLIM triangles before the first cut
+  PolygonMesh unrefined;
+};
+
+LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
+                   const ToMeshOptions& o, double bound, double reach, double snap_reach, std::size_t first_face,
+                   Builder& b) {
+  std::vector<std::uint8_t> fresh(b.mesh.face_count(), 0);
+  std::fill(fresh.begin() + static_cast<std::ptrdiff_t>(first_face), fresh.end(), 1);
+  // Per face: its worst sample, and how many generations it has been cut without that dropping
+  // below 3/4 of its parent's (a gap of the blend no mesh follows: cut no further).
+  std::vector<double> worst(b.mesh.face_count(), std::numeric_limits<double>::infinity());
+  std::vector<std::uint8_t> stalls(b.mesh.face_count(), 0);
+  constexpr int kMaxStalls = 2;
+  std::vector<std::uint8_t> resnapped;  // vertices already moved along their normal once
+  LocalRefinement out;
+  if (o.local_refinements > 0) out.unrefined = b.mesh;
+  int round = 0;
+  for (; round < o.local_refinements && b.mesh.face_count() < o.max_triangles; ++round) {
+    // Mesh → surface on the new faces (the others were measured within the bound before).
+    // With the faces around them, so their vertices' normals are the whole mesh's.
+    std::vector<std::uint8_t> touched(b.mesh.vertices.size(), 0);
+    for (std::size_t f = first_face; f < b.mesh.face_count(); ++f)
+      if (fresh[f])
+        for (const int v : b.mesh.face(f)) touched[v] = 1;
+    PolygonMesh part;
+    part.vertices = b.mesh.vertices;
+    std::vector<std::size_t> of_part;
+    for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
+      const auto t = b.mesh.face(f);
+      if (fresh[f] || touched[t[0]] || touched[t[1]] || touched[t[2]]) {
+        part.add_face(t);
+        of_part.push_back(f);
+      }
+    }
+    BeyondSamples part_beyond;
+    const MeshDistance md = mesh_to_surface(scene, trace, part, reach, bound, &part_beyond);
+    if (round == 0) out.before = md;
+    std::vector<std::uint8_t> marked(b.mesh.face_count(), 0);
+    for (std::size_t k = 0; k < of_part.size(); ++k) {
+      const std::size_t f = of_part[k];
+      if (!fresh[f]) continue;
+      const double e = part_beyond.faces[k];
+      if (e > bound && !(e < 0.75 * worst[f])) ++stalls[f];
+      worst[f] = e;
+      marked[f] = e > bound && stalls[f] < kMaxStalls;
+    }
+    resnapped.resize(b.mesh.vertices.size(), 0);
+    // A vertex beyond the bound (a crossing the blend shows along its grid edge but not along its
+    // normal) moves onto the blend along its normal, as a new one does.
+    // Its reach: half its longest edge, so it cannot jump to another sheet of a thin part.
+    std::vector<std::uint8_t> keep(b.mesh.vertices.size(), 1);
+    std::vector<double> half_edge(b.mesh.vertices.size(), 0.0);
+    bool any_vertex = false;
+    for (std::size_t v = 0; v < keep.size(); ++v)
+      if (part_beyond.vertices[v] && !resnapped[v]) keep[v] = 0, resnapped[v] = 1, any_vertex = true;
+    if (any_vertex) {
+      for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
+        const auto t = b.mesh.face(f);
+        for (int i = 0; i < 3; ++i) {
+          const double l = 0.5 * (b.mesh.vertices[t[i]] - b.mesh.vertices[t[(i + 1) % 3]]).norm();
+          half_edge[t[i]] = std::max(half_edge[t[i]], l);
+          half_edge[t[(i + 1) % 3]] = std::max(half_edge[t[(i + 1) % 3]], l);
+        }
+      }
+      snap_to_surface(scene, trace, snap_reach, 0, keep, b, /*drop_unmet=*/false, &half_edge);
+    }
+    std::size_t n_marked = static_cast<std::size_t>(std::count(marked.begin(), marked.end(), 1));
+    if (md.beyond == 0) {
+      // Surface → mesh: the faces whose bounding sphere reaches within a beyond point's distance.
+      const SurfaceError se = measure_surface_error(
+          model, DataSurface::from_mesh(b.mesh), box,
+          {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = 1u << 14});
+      if (se.beyond_points.empty()) break;
+      const auto& V = b.mesh.vertices;
+      for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
+        const auto t = b.mesh.face(f);
+        const Eigen::Vector3d c = (V[t[0]] + V[t[1]] + V[t[2]]) / 3.0;
+        const double rad = std::max({(V[t[0]] - c).norm(), (V[t[1]] - c).norm(), (V[t[2]] - c).norm()});
+        for (const auto& [p, d] : se.beyond_points)
+          if ((p - c).norm() <= d + rad) {
+            marked[f] = 1;
+            ++n_marked;
+            break;
+          }
+      }
+      log::info("mesh: local round {}: {} surface points beyond the bound, {} faces near them", round + 1,
+                se.beyond_points.size(), n_marked);
+      if (n_marked == 0) break;
+    } else {
+      log::info("mesh: local round {}: {} samples beyond the bound (max {:.3g}) on {} faces measured, {} to cut", round + 1,
+                md.beyond, md.max, of_part.size(), n_marked);
+      if (n_marked == 0 && !any_vertex) break;
+    }
+    const std::size_t first_vertex = b.mesh.vertices.size();
+    Bisected cut = bisect_marked(b, first_face, marked);
+    std::vector<double> next_worst(cut.from.size());
+    std::vector<std::uint8_t> next_stalls(cut.from.size());
+    for (std::size_t f = 0; f < cut.from.size(); ++f) {
+      next_worst[f] = worst[cut.from[f]];
+      next_stalls[f] = stalls[cut.from[f]];
+    }
+    fresh = std::move(cut.fresh);
+    worst = std::move(next_worst);
+    stalls = std::move(next_stalls);
+    // A midpoint's reach: half its parent edge (the length of its halves), and no more than twice
+    // its parent face's worst sample (at least 4 bounds), so it cannot jump to another sheet.
+    const std::size_t added = b.mesh.vertices.size() - first_vertex;
+    std::vector<double> edge_of(added, 0.0), cap_of(added, 0.0);
+    for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
+      const auto t = b.mesh.face(f);
+      for (int i = 0; i < 3; ++i) {
+        const int v = t[i];
+        if (static_cast<std::size_t>(v) < first_vertex) continue;
+        const std::size_t k = v - first_vertex;
+        edge_of[k] = std::max(edge_of[k], (b.mesh.vertices[v] - b.mesh.vertices[t[(i + 1) % 3]]).norm());
+        cap_of[k] = std::max(cap_of[k], std::max(2.0 * worst[f], 4.0 * bound));
+      }
+    }
+    std::vector<double> reach_of(added);
+    for (std::size_t k = 0; k < added; ++k) reach_of[k] = std::min(edge_of[k], cap_of[k]);
+    snap_to_surface(scene, trace, snap_reach, first_vertex, std::vector<std::uint8_t>(added, 0), b, /*drop_unmet=*/false, &reach_of);
+  }
+  out.rounds = round;
+  return out;
 }
 
 double median_radius(const Model& m) {
@@ -710,19 +967,35 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
     for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
     double reach = 4.0 * bound;
+    LocalRefinement local;
     if (!model.slims.empty()) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
+      const std::size_t first_face = b.mesh.face_count();
       std::vector<std::uint8_t> on_surface;
       mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, b, on_surface);
       snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
       reach = std::max(reach, 1.5 * h);
+      local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
     }
     ToMeshResult r;
     r.bound = bound;
     r.refinements = level;
+    r.local_rounds = local.rounds;
     r.mesh = std::move(b.mesh);
     r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound);
+    // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
+    // its normals cannot tell apart) is undone.
+    if (local.rounds > 0 && r.mesh_to_surface.beyond > local.before.beyond) {
+      const MeshDistance unrefined = mesh_to_surface(scene, trace, local.unrefined, reach, bound);
+      if (unrefined.beyond < r.mesh_to_surface.beyond) {
+        log::info("mesh: local refinement left {} samples beyond the bound, {} before it: undone", r.mesh_to_surface.beyond,
+                  unrefined.beyond);
+        r.mesh = std::move(local.unrefined);
+        r.mesh_to_surface = unrefined;
+        r.local_rounds = 0;
+      }
+    }
     r.open_edges = count_open_edges(r.mesh);
     // A refinement that leaves more than a quarter of the previous share of samples beyond the
     // bound is not converging there (cracks or gaps of the blend itself, which no resolution

@@ -11,7 +11,9 @@
 /// centroid (distance along the sample's normal line, both ways, to what the CPU reference ray
 /// caster draws, core/reference.h, and along 13 more lines where that is beyond the bound; an
 /// upper bound of the Euclidean distance: see mesh_distance), and surface → mesh from rendered
-/// views (fit/surface_error.h). The resolution doubles until both are within the bound, or
+/// views (fit/surface_error.h). SLIM meshes are first refined locally (longest-edge bisection
+/// without T-junctions where samples exceed the bound, new vertices moved onto the blend; open
+/// edges never cut). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes); then the smaller mesh is kept.
 #include <cstddef>
@@ -25,6 +27,9 @@ namespace quadrix {
 struct ToMeshOptions {
   double max_error = 0;           ///< world units; ≤ 0: 1e-3 × the model's bounding-box diagonal
   int max_refinements = 4;        ///< resolution doublings tried after the first mesh
+  /// SLIM: rounds of local refinement per grid (longest-edge bisection of the triangles whose
+  /// samples exceed the bound, or nearest the drawn surface's points beyond it); 0: off
+  int local_refinements = 12;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -47,6 +52,7 @@ struct ToMeshResult {
   MeshDistance surface_to_mesh;     ///< pixels of the drawn surface → mesh
   std::size_t open_edges = 0;       ///< edges not shared by exactly two triangles (0: watertight)
   int refinements = 0;              ///< doublings used
+  int local_rounds = 0;             ///< local refinement rounds used on the last grid
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };

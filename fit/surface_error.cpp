@@ -54,8 +54,14 @@ SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data
             if (const auto t = data.intersect(ray, 0.0, &front); t && front) data_t[i] = *t;
         }
     });
-    for (const double d : dist)
-      if (d >= 0) all.push_back(d);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (dist[i] < 0) continue;
+      all.push_back(dist[i]);
+      if (o.bound > 0 && dist[i] > o.bound && out.beyond_points.size() < o.keep_beyond_points) {
+        const Ray ray = cam.pixel_ray(double(i % W) + 0.5, double(i / W) + 0.5);
+        if (const auto t = trace(ray)) out.beyond_points.push_back({ray.at(*t), dist[i]});
+      }
+    }
     if (!out.has_holes_measure) continue;
     // Holes: data pixels whose neighbourhood (the band) is all data, left empty by the surface.
     const double pixel_angle = 2.0 * std::tan(cam.fov_y_deg * std::numbers::pi / 360.0) / H;

@@ -27,6 +27,8 @@ struct SurfaceErrorOptions {
   double band_px = 1.0;
   /// Keep where the first this many holes are (the data's points there), e.g. to log them.
   std::size_t keep_hole_points = 0;
+  /// Keep where the first this many pixels beyond bound are (the surface's points there).
+  std::size_t keep_beyond_points = 0;
 };
 
 struct SurfaceError {
@@ -39,6 +41,11 @@ struct SurfaceError {
   double hole_share = 0;           ///< holes / data_pixels
   bool has_holes_measure = false;  ///< data had faces
   std::vector<Eigen::Vector3d> hole_points;  ///< up to keep_hole_points, world units
+  struct Beyond {
+    Eigen::Vector3d point;  ///< on the surface, world units
+    double distance;        ///< to the data, > bound
+  };
+  std::vector<Beyond> beyond_points;  ///< up to keep_beyond_points
 };
 
 /// A ray caster: the distance t along the ray (unit dir) to the first visible surface.

@@ -51,6 +51,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"surface_to_mesh", distance_json(r.surface_to_mesh)},
                          {"open_edges", r.open_edges},
                          {"refinements", r.refinements},
+                         {"local_rounds", r.local_rounds},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
@@ -86,6 +87,12 @@ void add_mesh(CLI::App& root, Commands& commands) {
       ->check(positive())->default_str("");
   app->add_option("--max-refinements", a->options.max_refinements, "Resolution doublings tried to reach the bound")
       ->check(number({.lo = 0, .hi = 8}))
+      ->capture_default_str();
+  app->add_option("--local-refinements", a->options.local_refinements,
+                  "SLIM: rounds of local refinement per grid (longest-edge bisection, without T-junctions, of the "
+                  "triangles whose samples exceed the bound or lie nearest surface points beyond it; new vertices "
+                  "moved onto the drawn surface); 0: uniform doublings only")
+      ->check(number({.lo = 0, .hi = 40}))
       ->capture_default_str();
   app->add_option("--slim-offset", a->options.slim_offset,
                   "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")

@@ -19,6 +19,9 @@ using namespace quadrix;
 
 namespace {
 
+constexpr double kSmallRadius = 0.12;
+constexpr int kSmallBalls = 80;
+
 /// Vertices, edge midpoints and face centroids: the points a mesh's error is judged at.
 std::vector<Eigen::Vector3d> mesh_samples(const PolygonMesh& m) {
   std::vector<Eigen::Vector3d> s = m.vertices;
@@ -52,6 +55,19 @@ PointCloud torus_points(std::size_t n, double R, double r, std::uint64_t seed) {
     c.normals.push_back(nrm);
   }
   return c;
+}
+
+/// SLIM balls on the sphere (centre c, radius r) at n Fibonacci points, each holding the sphere
+/// itself (as synth "slim-sphere" makes the unit one), support 3.6 r/√n.
+void add_slim_sphere(Model& m, const Eigen::Vector3d& c, double r, int n) {
+  const double R = 3.6 * r / std::sqrt(static_cast<double>(n));
+  const Quadric sphere = Quadric::sphere(c, r);
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n, rr = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = i * std::numbers::pi * (3.0 - std::sqrt(5.0));
+    const Eigen::Vector3d x = c + r * Eigen::Vector3d(rr * std::cos(phi), rr * std::sin(phi), z);
+    m.slims.push_back({x, R, sphere.to_local(x, R), ClipPlanes{}, std::nullopt, std::nullopt});
+  }
 }
 
 }  // namespace
@@ -264,6 +280,37 @@ TEST(ToMesh, FittedTorusClosedAndWithinItsBoundOfTheDrawnBlendAwayFromItsCracks)
   std::cout << "torus: " << r.mesh.face_count() << " triangles; mesher: max " << r.max_error() << ", beyond "
             << r.mesh_to_surface.beyond << " of " << r.mesh_to_surface.samples << "; here p99 " << p99(mesh_side) << " / "
             << p99(surface_side) << ", bound " << r.bound << "\n";
+}
+
+// A large smooth sphere and a small one: the first grid, sized for the large sphere's patches,
+// is too coarse only on the small one. Local refinement (bisecting the triangles there) reaches
+// the bound both ways with fewer triangles than uniform doubling, and no open edges; without it,
+// the first grid misses the bound.
+TEST(ToMesh, LocalRefinementWhereOnlyOneSmallPartNeedsIt) {
+  Model m;
+  add_slim_sphere(m, Eigen::Vector3d::Zero(), 1.0, 200);
+  add_slim_sphere(m, Eigen::Vector3d(1.6, 0, 0), kSmallRadius, kSmallBalls);
+  const ToMeshResult local = mesh_model(m, {.max_refinements = 0, .progress = {}});
+  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .local_refinements = 0, .progress = {}});
+  const ToMeshResult uniform = mesh_model(m, {.local_refinements = 0, .progress = {}});
+  std::cout << "two spheres, bound " << local.bound << ": first grid " << first.mesh.face_count() << " triangles, max "
+            << first.mesh_to_surface.max << " / " << first.surface_to_mesh.max << "; local (" << local.local_rounds
+            << " rounds) " << local.mesh.face_count() << ", max " << local.mesh_to_surface.max << " / "
+            << local.surface_to_mesh.max << ", open " << local.open_edges << "; uniform (" << uniform.refinements
+            << " doublings) " << uniform.mesh.face_count() << ", max " << uniform.mesh_to_surface.max << " / "
+            << uniform.surface_to_mesh.max << "\n";
+  EXPECT_FALSE(first.within) << "the first grid alone should miss the bound: the case needs refinement";
+  ASSERT_TRUE(local.within) << "max " << local.mesh_to_surface.max << " / " << local.surface_to_mesh.max << ", misses "
+                            << local.mesh_to_surface.misses;
+  EXPECT_LE(local.mesh_to_surface.max, local.bound);
+  EXPECT_LE(local.surface_to_mesh.max, local.bound);
+  EXPECT_GT(local.local_rounds, 0);
+  EXPECT_EQ(local.open_edges, 0u);
+  EXPECT_EQ(first.open_edges, 0u);
+  EXPECT_GT(signed_volume(local.mesh), 0.0);
+  EXPECT_GT(uniform.refinements, 0);
+  EXPECT_LT(local.mesh.face_count() * 2, uniform.mesh.face_count()) << "local refinement should need far fewer triangles";
+  EXPECT_LT(local.mesh.face_count(), first.mesh.face_count() * 5 / 4) << "refinement should stay local";
 }
 
 TEST(ToMesh, EmptyModelRefused) { EXPECT_THROW(mesh_model(Model{}), InvalidInput); }
