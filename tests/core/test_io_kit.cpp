@@ -82,7 +82,9 @@ TEST(IoKit, FilePrefixTakesWhatTheFileHoldsNotTheBound) {
   EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 9), "NRRD0004\n");
   EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 0), "");
   EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 70000), text.substr(0, 70000));  // across the 64 KiB chunks
-  if (std::filesystem::exists("/dev/zero")) EXPECT_EQ(io::read_file_prefix("/dev/zero", 100000), std::string(100000, '\0'));
+  if (std::filesystem::exists("/dev/zero")) {
+    EXPECT_EQ(io::read_file_prefix("/dev/zero", 100000), std::string(100000, '\0'));
+  }
 }
 
 TEST(IoKit, GzipBombStopsAtTheBound) {
