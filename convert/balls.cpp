@@ -86,7 +86,11 @@ std::vector<Ball> read_columns(const fs::path& path, const BallReadOptions& o, b
     b.centre = {v[0], v[1], v[2]};
     b.radius = (weights ? std::sqrt(v[3]) : v[3]) * o.radius_scale;
     if (!is_world_point(b.centre)) in.fail("ball centre ({:g}, {:g}, {:g}) {}", v[0], v[1], v[2], world_fault(b.centre));
-    if (!is_world_value(b.radius)) in.fail("ball radius {:g} ({} {:g}) {}", b.radius, size, v[3], world_fault(b.radius));
+    if (!is_world_value(b.radius)) {  // where the radius came from, when it is not the value read
+      const std::string scale = o.radius_scale == 1 ? "" : fmt::format(" times the radius scale {:g}", o.radius_scale);
+      const std::string from = b.radius == v[3] ? "" : fmt::format(" (from {} {:g}{})", size, v[3], scale);
+      in.fail("ball radius {:g}{} {}", b.radius, from, world_fault(b.radius));
+    }
     balls.push_back(b);
     lines.push_back(static_cast<int>(in.line_number()));
   }

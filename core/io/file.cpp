@@ -66,10 +66,13 @@ std::string read_file_prefix(const fs::path& path, std::size_t max_bytes) {
   check_readable(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(fmt::format("{}: cannot open: {}", path.string(), std::strerror(errno)));
-  std::string out(max_bytes, '\0');
-  in.read(out.data(), static_cast<std::streamsize>(max_bytes));
+  std::string out;  // grows with what the file holds, not with max_bytes (a 1 MiB header bound)
+  std::array<char, 1 << 16> buf{};
+  while (in && out.size() < max_bytes) {
+    in.read(buf.data(), static_cast<std::streamsize>(std::min(buf.size(), max_bytes - out.size())));
+    out.append(buf.data(), static_cast<std::size_t>(in.gcount()));
+  }
   if (in.bad()) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
-  out.resize(static_cast<std::size_t>(in.gcount()));
   return out;
 }
 

@@ -69,6 +69,24 @@ TEST(IoKit, DevZeroIsBounded) {
   EXPECT_THROW(io::read_file("/dev/zero", 1 << 20), FormatError);
 }
 
+// A prefix holds what the file has, up to the bound, and takes memory for that only: a header
+// sniffed with a 1 MiB bound must not cost 1 MiB, and an unbounded prefix is the whole file.
+TEST(IoKit, FilePrefixTakesWhatTheFileHoldsNotTheBound) {
+  ScratchDir dir("io-kit");
+  const std::string text = "NRRD0004\ntype: float\n" + std::string(200000, 'x');
+  write_bytes(dir / "h.nhdr", text);
+  const std::string small = io::read_file_prefix(dir / "h.nhdr", 1 << 20);
+  EXPECT_EQ(small, text);
+  EXPECT_LT(small.capacity(), std::size_t{1} << 19) << "the prefix holds memory for the bound, not the file";
+  EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", io::kNoLimit), text);
+  EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 9), "NRRD0004\n");
+  EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 0), "");
+  EXPECT_EQ(io::read_file_prefix(dir / "h.nhdr", 70000), text.substr(0, 70000));  // across the 64 KiB chunks
+  if (std::filesystem::exists("/dev/zero")) {
+    EXPECT_EQ(io::read_file_prefix("/dev/zero", 100000), std::string(100000, '\0'));
+  }
+}
+
 TEST(IoKit, GzipBombStopsAtTheBound) {
   ScratchDir dir("io-kit");
   const auto p = dir / "bomb.gz";

@@ -305,6 +305,10 @@ def main():
     put("record-non-ascii.pdb", b"\xf7")  # found by fuzzing: gemmi's record-name shift of a byte >= 0x80
     # found by fuzzing: a NUL cut gemmi's copy of a line, the next LINK record was read past its end
     put("nul-byte.pdb", pdb().replace(b"   1.500", b"   1.\x0000", 1))
+    # a gzipped molecule promises no size: it may inflate to 32 times its compressed size, at least 1 MiB
+    remarks = b"".join(b"REMARK 999 %-69s\n" % (b"padding %d" % (i % 10)) for i in range(26000))  # 2 MiB
+    put("bomb.pdb.gz", gzip.compress(remarks + pdb(), 9, mtime=0))
+    put("bomb.cif.gz", gzip.compress(b"data_bomb\n" + remarks.replace(b"REMARK 999", b"#         ") + b"#\n", 9, mtime=0))
     far = slim2t()
     far = far[:12 + 60] + struct.pack("<f", 1e30) + far[12 + 64:]  # ball 1's centre x (60 bytes a ball)
     put("centre-huge.slim2t", far)
