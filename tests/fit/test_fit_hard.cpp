@@ -451,6 +451,20 @@ TEST(FitSlimHard, FoldedFacesStandingOnTheSurface) {
   EXPECT_GT(no_neighbourhood, 0u) << "every fold's neighbourhood agrees: the case no longer needs the lines";
 }
 
+// A V-groove of two coarse walls (3 × 3 quads each) fitted far below its sampling: every point
+// lies on its face's plane, so points and surface pass in the first round, while most of the
+// faces lie outside every ball. Those faces get face patches of their own before the fit ends
+// (it used to stop on the passing sides: 5.8 % of the data's pixels left empty).
+TEST(FitSlimHard, CoarseGrooveGetsItsFacePatchesBeforeTheFitEnds) {
+  const double th = 50.0 * std::numbers::pi / 180.0;  // each wall 50° above the groove's floor line
+  const Vec x(2, 0, 0), a(0, std::cos(th), std::sin(th)), b(0, -std::cos(th), std::sin(th));
+  const Shape s = make({quad(Vec(0, 0, 0), x, a, 1, 3), quad(Vec(0, 0, 0), b, x, 1, 3)}, 10, 21);
+  const Outcome o = fit_and_measure(s, 1e-4);
+  expect_two_sided(o);
+  EXPECT_GT(o.fit.stats.hole_face_patches, 0u);
+  EXPECT_EQ(o.fit.stats.face_holes, 0u);
+}
+
 // A coarse sheet with a flap folded under it 6E below, facing the same way (a decimated mesh's
 // fold, as in dragon_10k), fitted far below its sampling: the face patches are the faces' planes
 // in balls as large as the faces. A ray through the sheet meets the flap 6E on, front-facing; a
