@@ -22,8 +22,10 @@ struct GpuTet {
 };
 static_assert(sizeof(GpuTet) == 144);
 
-// `origin`: the chunk's origin, which the stored centre is relative to.
-GpuTet pack(const TetPatch& t, std::int32_t id, const Eigen::Vector3d& origin) {
+// `origin`: the model's origin, which the stored centre is relative to (as quanta and a rest, so
+// the shader's sum with the origin − target cancels exactly: a float hi + lo relative to a chunk
+// holding a large and a tiny part rounded the tiny one's centre at the large one's scale).
+GpuTet pack(const TetPatch& t, std::int32_t id, const FixedOrigin& origin) {
   const Eigen::Vector3d c = t.centroid();
   std::array<Eigen::Vector3d, 4> p = t.corners;
   if ((p[1] - p[0]).cross(p[2] - p[0]).dot(p[3] - p[0]) < 0) std::swap(p[1], p[2]);
@@ -32,10 +34,10 @@ GpuTet pack(const TetPatch& t, std::int32_t id, const Eigen::Vector3d& origin) {
   // Relative to the centroid already; scaled by s so local coordinates are O(1).
   const Quadric local = t.quadric.to_local(Eigen::Vector3d::Zero(), s).normalized();
   GpuTet g{};
-  const Split cs = split(c - origin);
+  const FixedOrigin::Offset cs = origin.offset(c - origin.origin);
   for (int i = 0; i < 3; ++i) {
-    g.centre_hi[i] = cs.hi[i];
-    g.centre_lo[i] = cs.lo[i];
+    g.centre_hi[i] = bits_float(static_cast<std::uint32_t>(cs.q[i]));
+    g.centre_lo[i] = cs.rest[i];
   }
   g.centre_hi[3] = static_cast<float>(s);
   const Rgb col = t.colour.value_or(Rgb{200, 200, 200});
@@ -68,6 +70,9 @@ void TetPass::upload(std::span<const TetPatch> tets, bool tessellation) {
   boxes.reserve(tets.size());
   for (const TetPatch& t : tets) boxes.push_back(bounds(t));
   chunks_ = make_chunks(boxes, {.chunk_size = kChunkSize});
+  Box3 all;
+  for (const Box3& b : boxes) all.extend(b);
+  origin_ = FixedOrigin::of(all);
   selection_ = {};
   drawn_last_.assign(chunks_.size(), 0);
   has_history_ = false;
@@ -77,12 +82,8 @@ void TetPass::upload(std::span<const TetPatch> tets, bool tessellation) {
   for (std::size_t c = 0; c < chunks_.size(); ++c)
     for (std::uint32_t s = chunks_.first[c]; s < chunks_.first[c] + chunks_.count[c]; ++s) {
       const std::uint32_t i = chunks_.order[s];
-      data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i), chunks_.boxes[c].centre()));
+      data.push_back(pack(tets[i], primitive_id(PrimitiveKind::tet, i), origin_));
     }
-  chunk_offsets_ = chunks_.size() ? gl::make_buffer(static_cast<GLsizeiptr>(chunks_.size() * 4 * sizeof(float)), nullptr,
-                                                    GL_DYNAMIC_STORAGE_BIT)
-                                  : gl::Buffer{};
-  offsets_.assign(4 * chunks_.size(), 0.0f);
   tets_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuTet)), data.data());
   count_ = data.size();
   // Faces with outward counter-clockwise order for a positively oriented tetrahedron (pack()
@@ -124,15 +125,7 @@ void TetPass::run(const Frame& f) {
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);
   set_camera_uniforms(program, f.camera);
-  // Each chunk's origin relative to the view target, in double, then float.
-  for (std::size_t c = 0; c < chunks_.size(); ++c) {
-    const Eigen::Vector3d d = chunks_.boxes[c].centre() - f.camera.world.target;
-    for (int k = 0; k < 3; ++k) offsets_[4 * c + k] = static_cast<float>(d[k]);
-  }
-  if (!offsets_.empty())
-    glNamedBufferSubData(chunk_offsets_.id(), 0, static_cast<GLsizeiptr>(offsets_.size() * sizeof(float)), offsets_.data());
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, chunk_offsets_.id());
-  program.set("u_chunk_size", static_cast<int>(kChunkSize));
+  set_origin_uniforms(program, origin_, f.camera);
   program.set("u_cull", o.cull ? 1 : 0);
   program.set("u_count_stats", o.statistics ? 1 : 0);
   program.set("u_clip_eps", o.clip_eps);

@@ -50,8 +50,7 @@ private:
   bool has_history_ = false;
   bool tessellation_ = false;
   std::vector<float> depth_pixels_;
-  gl::Buffer chunk_offsets_;        // per chunk: origin − view target (vec4), rewritten each frame
-  std::vector<float> offsets_;
+  FixedOrigin origin_;              // the stored centres are relative to it (quanta and a rest)
   gl::Buffer tets_;
   gl::Buffer indices_;     // 12 per tetrahedron: its 4 faces over vertices 4·t + corner
   gl::VertexArray vao_;    // holds indices_ as its element buffer

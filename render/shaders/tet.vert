@@ -5,7 +5,7 @@
 // size s, so float keeps its precision (DESIGN §5).
 
 struct Tet {
-  vec4 centre_hi;   // xyz: centroid − its chunk's origin (float part), w: scale s
+  vec4 centre_hi;   // xyz: int bits, centroid − the model's origin in quanta (u_quantum), w: scale s
   vec4 centre_lo;   // xyz: the rest of that difference, w: colour bits
   vec4 corner[4];   // local corners (p − c)/s; w: primitive index bits
   vec4 q0;          // A00 A11 A22 A01
@@ -14,13 +14,10 @@ struct Tet {
 };
 layout(std430, binding = 0) readonly buffer Tets { Tet tets[]; };
 layout(std430, binding = 2) readonly buffer TetCornerColours { uvec4 corner_colours[]; };
-// Per chunk: its origin − the view target, from double on the CPU each frame (relative to eye).
-layout(std430, binding = 3) readonly buffer ChunkOffsets { vec4 chunk_offset[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
-uniform int u_chunk_size;          // tetrahedra per chunk (GPU slots in chunk order)
 uniform vec3 u_target_minus_eye;   // (target − eye), from double
 uniform float u_target_distance;   // ‖target − eye‖: the target is at (0, 0, −distance) in eye space
 uniform int u_cull;        // per-quadric and per-fragment backface culling
@@ -60,8 +57,9 @@ void main() {
   float s = t.centre_hi.w;
   // Positions relative to the view target, then to the eye: a far eye puts only the view-axis
   // component far away, so screen positions keep float precision (DESIGN §5). No large float
-  // coordinate appears: the chunk's offset from the target was taken in double.
-  vec3 centre_from_target = chunk_offset[tet / u_chunk_size].xyz + (t.centre_hi.xyz + t.centre_lo.xyz);
+  // coordinate appears: the origin's offset from the target was taken in double, and its whole
+  // quanta meet the centre's in integers (prelude.glsl from_fixed_origin).
+  vec3 centre_from_target = from_fixed_origin(t.centre_hi.xyz, t.centre_lo.xyz);
   vec3 rel_centre = centre_from_target + u_target_minus_eye;
 
   // Per-quadric backface culling, [Stoll06] eq. 19 rewritten about each corner so no large

@@ -225,11 +225,6 @@ class TinyFarGrazing : public GlTest, public ::testing::WithParamInterface<std::
 // (|n·d| < 0.1), and the goals hold on those pixels by themselves, not only in a p99 over all.
 TEST_P(TinyFarGrazing, MatchTheCpuReferenceWhereRaysGraze) {
   const std::string kind = GetParam();
-  if (kind == "plane-tets")  // measured: fails at the world origin too, and at 25° above the plane
-    GTEST_SKIP() << "known failure, not fixed: flat tetrahedron patches 1e-4 of their scene have depth p99 2.9e-4 "
-                    "(3° above their plane) and 1.2e-4 (25°), 0.2-0.3 % of their pixels mismatched, even at the world "
-                    "origin, when the scene's large copy is drawn too (alone: 1.1e-6, none mismatched); the tet pass's "
-                    "per-chunk hi + lo float offsets, which the SLIM and glyph passes replaced by FixedOrigin";
   const Model unit = flat_unit(kind);
   ASSERT_FALSE(unit.empty());
   for (const double k : {1e4, 1e6}) {
@@ -238,7 +233,7 @@ TEST_P(TinyFarGrazing, MatchTheCpuReferenceWhereRaysGraze) {
     print(kind, k, t);
     ASSERT_GT(t.scene, 0.5);
     const EveryPixel& e = t.gl;
-    EXPECT_GT(e.foreground, 3000);
+    EXPECT_GT(e.foreground, 1500);  // the tetrahedron grid covers 1,929 px, the others about 3,100
     EXPECT_GT(e.grazing, e.foreground / 2) << "the view does not graze";
     EXPECT_LE(e.mismatched, 0.001 * e.foreground);
     EXPECT_LE(e.grazing_depth_p99, 1e-5 + t.truth.grazing_depth_p99);
