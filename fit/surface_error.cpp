@@ -79,8 +79,11 @@ SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data
           }
         if (!interior) continue;
         ++out.data_pixels;
-        if (dist[i] < 0 && ++out.holes <= o.keep_hole_points)
-          out.hole_points.push_back(cam.pixel_ray(x + 0.5, y + 0.5).at(data_t[i]));
+        if (dist[i] < 0 && ++out.holes <= o.keep_hole_points) {
+          const Ray ray = cam.pixel_ray(x + 0.5, y + 0.5);
+          out.hole_points.push_back(ray.at(data_t[i]));
+          out.hole_dirs.push_back(ray.dir);
+        }
       }
   }
   out.pixels = all.size();

@@ -41,6 +41,7 @@ struct SurfaceError {
   double hole_share = 0;           ///< holes / data_pixels
   bool has_holes_measure = false;  ///< data had faces
   std::vector<Eigen::Vector3d> hole_points;  ///< up to keep_hole_points, world units
+  std::vector<Eigen::Vector3d> hole_dirs;    ///< the view ray's direction at each of hole_points
   struct Beyond {
     Eigen::Vector3d point;  ///< on the surface, world units
     double distance;        ///< to the data, > bound

@@ -204,6 +204,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     bool peers = true;
     bool keep_models = false;
     bool face_prisms = true;
+    bool view_holes = true;
     int view_resolution = 512;
   };
   auto a = std::make_shared<Args>();
@@ -223,6 +224,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->check(number({.lo = 16, .hi = 4096}))
       ->capture_default_str();
   app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
+  app->add_flag("!--no-view-holes", a->view_holes, "Fit as `fit --no-view-holes` does (for comparison)");
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "
                 "e.g. for bench render --baseline-mesh");
@@ -285,7 +287,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       progress.update(double(++done) / double(total));
       for (double E : a->errors) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
-        const SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
+        SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
+        if (!a->view_holes) fo.view_hole_rays = 0;
         const SlimFitResult fit = d.mesh ? fit_slim(fit_cloud, *d.mesh, fo) : fit_slim(fit_cloud, fo);
         const SlimError se =
             evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = d.mesh ? &data : nullptr});
@@ -295,10 +298,13 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                  fit.stats.time_total, se.count_above(Eabs)};
         log::info("bench fit: {}: surface side of SLIM at E = {:g}", d.name, E);
         const SurfaceError slim_surface = measure_surface_error(
-            fit.model, data, data_box, {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs, .keep_hole_points = 8});
-        for (const auto& h : slim_surface.hole_points)
-          log::debug("bench fit: {} at E = {:g}: hole of the SLIM surface where the data is at ({:.6g}, {:.6g}, {:.6g})", d.name, E,
-                     h.x(), h.y(), h.z());
+            fit.model, data, data_box,
+            {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs, .keep_hole_points = log::level() <= log::Level::debug ? 100000u : 0u});
+        for (std::size_t k = 0; k < slim_surface.hole_points.size(); ++k) {
+          const Eigen::Vector3d &h = slim_surface.hole_points[k], &v = slim_surface.hole_dirs[k];
+          log::debug("bench fit: {} at E = {:g}: hole of the SLIM surface where the data is at ({:.9g}, {:.9g}, {:.9g}), seen along "
+                     "({:.6f}, {:.6f}, {:.6f})", d.name, E, h.x(), h.y(), h.z(), v.x(), v.y(), v.z());
+        }
         set_surface(slim, slim_surface, d.diagonal);
         rows.push_back(slim);
         nlohmann::json run = {{"max_error", E},

@@ -50,6 +50,10 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_flag("!--no-face-prisms", a->options.face_prisms,
                 "Clip a face patch (a mesh face's plane, where E is below the sampling) only at an open edge, "
                 "not to its face's prism (for comparison: its plane then runs on into its neighbours)");
+  app->add_flag_callback(
+      "--no-view-holes", [a] { a->options.view_hole_rays = 0; },
+      "Skip the check for faces seen through from some view although the balls cover them (a patch met edge-on, a hit "
+      "just outside its ball; for comparison)");
   app->add_option("--repair-rounds", a->options.repair_rounds,
                   "Rounds of verification and repair of the patches at fault")
       ->check(number({.lo = 0, .hi = 100}))
@@ -126,6 +130,8 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"hole_points", s.hole_points},
                                             {"hole_face_patches", s.hole_face_patches},
                                             {"face_holes", s.face_holes},
+                                            {"view_face_patches", s.view_face_patches},
+                                            {"view_holes", s.view_holes},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},
