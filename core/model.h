@@ -76,6 +76,10 @@ struct SlimPatch {
   /// Measured error (fit/patch_error.h): the largest distance from the data points this patch
   /// serves (weight > 0 in their probe's blend) to the blended surface, world units, ≥ 0.
   std::optional<double> measured_error;
+  /// The blend's push bound for this ball, world units (core/slim.h SlimBlendOptions::push): a
+  /// coarser level of a hierarchy, fitted at a larger bound, blends with its own; none: the
+  /// model's (`slim_max_push`).
+  std::optional<double> max_push = std::nullopt;
   /// The patch's quadric in world coordinates.
   Quadric world() const { return local.from_local(centre, radius); }
 };

@@ -39,6 +39,7 @@ constexpr std::array<const char*, 3> kColourNames = {"red", "green", "blue"};
 constexpr std::array<const char*, 12> kCornerColourNames = {"red0",   "green0", "blue0", "red1",   "green1", "blue1",
                                                             "red2",   "green2", "blue2", "red3",   "green3", "blue3"};
 constexpr const char* kMeasuredErrorName = "measured_error";
+constexpr const char* kMaxPushName = "max_push";
 constexpr std::array<const char*, 12> kCornerNames = {"x0", "y0", "z0", "x1", "y1", "z1",
                                                       "x2", "y2", "z2", "x3", "y3", "z3"};
 constexpr std::array<const char*, 6> kBoundsNames = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
@@ -323,8 +324,8 @@ std::vector<std::string> required(const ply::File& f, const ply::Element& e, std
 /// Column layout of a `slim` or `slim_node` request: x y z radius k_* [clip] [colour] [parent error].
 struct SlimColumns {
   int clips = 0;  ///< clip plane groups (clip_*, clip2_*, …), each 4 columns
-  bool colour = false, hierarchy = false, measured_error = false;
-  std::size_t measured_error_col = 0;
+  bool colour = false, hierarchy = false, measured_error = false, max_push = false;
+  std::size_t measured_error_col = 0, max_push_col = 0;
   std::size_t parent = 0;  ///< column of `parent` (`error` follows) when hierarchy
 };
 
@@ -352,6 +353,9 @@ SlimColumns slim_request(const ply::File& f, const ply::Element& e, bool hierarc
   c.measured_error = e.find(kMeasuredErrorName) >= 0;
   c.measured_error_col = props.size();
   if (c.measured_error) props.emplace_back(kMeasuredErrorName);
+  c.max_push = e.find(kMaxPushName) >= 0;
+  c.max_push_col = props.size();
+  if (c.max_push) props.emplace_back(kMaxPushName);
   c.parent = props.size();
   if (c.hierarchy) props.insert(props.end(), kHierarchyNames.begin(), kHierarchyNames.end());
   requests.push_back({e.name, std::move(props), {}});
@@ -381,6 +385,12 @@ void read_slim_rows(const Rows& r, const SlimColumns& cols, const Eigen::Vector3
       const double e = r.finite(i, cols.measured_error_col);
       if (e < 0 && e != -1.0) r.fail(i, cols.measured_error_col, fmt::format("measured error {} is negative (−1: none)", e));
       if (e >= 0) s.measured_error = e;
+    }
+    if (cols.max_push) {
+      // −1: the model's push bound; else > 0, world units.
+      const double v = r.finite(i, cols.max_push_col);
+      if (!(v > 0) && v != -1.0) r.fail(i, cols.max_push_col, fmt::format("max push {} is not > 0 (−1: none)", v));
+      if (v > 0) s.max_push = v;
     }
     if (cols.hierarchy) {
       const std::size_t self = hierarchy.parent.size();
@@ -940,6 +950,13 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
   const auto has_error = [](const SlimPatch& s) { return s.measured_error.has_value(); };
   const bool slim_error = std::any_of(model.slims.begin(), model.slims.end(), has_error);
   const bool node_error = std::any_of(hy.others.begin(), hy.others.end(), has_error);
+  const auto has_push = [](const SlimPatch& s) { return s.max_push.has_value(); };
+  const bool slim_push = std::any_of(model.slims.begin(), model.slims.end(), has_push);
+  const bool node_push = std::any_of(hy.others.begin(), hy.others.end(), has_push);
+  for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i)
+    if (const auto& v = slim_ball(model, i).max_push; v && !(std::isfinite(*v) && *v > 0))
+      throw InvalidInput(fmt::format("{}: cannot write slim patch {}: max push {} is not finite and > 0",
+                                     path.string(), i, *v));
   for (std::size_t i = 0; i < model.slims.size() + hy.others.size(); ++i)
     if (const auto& e = slim_ball(model, i).measured_error; e && !(std::isfinite(*e) && *e >= 0))
       throw InvalidInput(fmt::format("{}: cannot write slim patch {}: measured error {} is not finite and >= 0",
@@ -966,11 +983,12 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     h.comments.push_back(fmt::format("bbox {} {} {} {} {} {}", box.min.x(), box.min.y(), box.min.z(), box.max.x(),
                                      box.max.y(), box.max.z()));
   const bool all = model.empty();  // an empty model still declares the whole profile
-  const auto slim_element = [&](std::string name, std::size_t count, int clips, bool colour, bool error) {
+  const auto slim_element = [&](std::string name, std::size_t count, int clips, bool colour, bool error, bool push) {
     auto props = names({std::span<const char* const>(kSlimNames), kCoefficientNames});
     for (int k = 0; k < clips; ++k) props.insert(props.end(), kClipNames[k].begin(), kClipNames[k].end());
     ply::Element e = element(std::move(name), count, props, colour, real);
     if (error) e.properties.push_back({kMeasuredErrorName, ply::Type::float64});
+    if (push) e.properties.push_back({kMaxPushName, ply::Type::float64});
     if (hierarchy) {
       e.properties.push_back({"parent", ply::Type::int32});
       e.properties.push_back({"error", real});
@@ -978,9 +996,9 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     return e;
   };
   if (all || hierarchy || !model.slims.empty())
-    h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour, slim_error));
+    h.elements.push_back(slim_element("slim", model.slims.size(), slim_clip, slim_colour, slim_error, slim_push));
   if (hierarchy && !hy.others.empty())
-    h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour, node_error));
+    h.elements.push_back(slim_element("slim_node", hy.others.size(), node_clip, node_colour, node_error, node_push));
   if (all || !model.tets.empty()) {
     h.elements.push_back(element("tet", model.tets.size() - result.dropped_tets,
                                  names({kCornerNames, kCoefficientNames}), tet_colour, real));
@@ -1019,6 +1037,7 @@ WriteModelResult write_model(const Model& model, const std::filesystem::path& pa
     }
     if (drawn ? slim_colour : node_colour) append_colour(out, s.colour);
     if (drawn ? slim_error : node_error) ply::append_le(out, ply::Type::float64, s.measured_error.value_or(-1.0));
+    if (drawn ? slim_push : node_push) ply::append_le(out, ply::Type::float64, s.max_push.value_or(-1.0));
     if (hierarchy) {
       ply::append_le(out, ply::Type::int32, hy.parent[i]);
       ply::append_le(out, real, hy.error[i]);

@@ -190,7 +190,7 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
   double best_t = tmax;  // nearest opaque (tet, glyph) hit so far
   Hit best;
   Ref best_ref{PrimitiveKind::none, 0};
-  double t_cut = kInf;  // SLIM pass-1 depth: min(tᵢ + offset·Rᵢ)
+  double t_cut = kInf;  // SLIM pass-1 depth: min(tᵢ + pushᵢ)
   // Small inline buffer: most rays meet a handful of patches.
   std::vector<SlimSample> samples;
   const auto bound = [&] { return std::min(best_t, t_cut); };
@@ -202,8 +202,9 @@ std::optional<SurfaceHit> ReferenceScene::trace(const Ray& ray, double tmin, dou
         const SlimPatch& p = m.slims[r.index];
         if (!intersect_slim_patch(p, ray, tmin, best_t, h)) return;
         const double w = slim_weight((h.point - p.centre).norm() / p.radius);
-        samples.push_back({h, w, p.radius, static_cast<int>(r.index)});
-        t_cut = std::min(t_cut, h.t + options.slim.push(p.radius));
+        const double own = p.max_push.value_or(-1.0);
+        samples.push_back({h, w, p.radius, static_cast<int>(r.index), own});
+        t_cut = std::min(t_cut, h.t + options.slim.push(p.radius, own));
         return;
       }
       case PrimitiveKind::tet:

@@ -159,7 +159,7 @@ std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples,
                                             std::vector<SlimSample>* used) {
   if (used) used->clear();
   double t_cut = std::numeric_limits<double>::infinity();
-  for (const auto& s : samples) t_cut = std::min(t_cut, s.hit.t + options.push(s.radius));
+  for (const auto& s : samples) t_cut = std::min(t_cut, s.hit.t + options.push(s.radius, s.max_push));
   SlimBlend b;
   double t_first = std::numeric_limits<double>::infinity();
   for (const auto& s : samples) {

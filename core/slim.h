@@ -27,7 +27,8 @@ struct SlimBlendOptions {
   /// a push of half a large ball reaches the next sheet instead (a groove between two faces'
   /// planes, 10E apart along the ray, blended to 4E off both: dragon_10k at 1e-4).
   double max_push = std::numeric_limits<double>::infinity();
-  double push(double radius) const { return std::min(offset * radius, max_push); }
+  /// own: the ball's own bound (SlimPatch::max_push), ≤ 0 for none (then max_push).
+  double push(double radius, double own = -1) const { return std::min(offset * radius, own > 0 ? own : max_push); }
 };
 
 /// The blend offset a model's error bound was certified with: its `slim_offset` metadata (written
@@ -72,6 +73,7 @@ struct SlimSample {
   double weight = 0;
   double radius = 0;
   int index = -1;
+  double max_push = -1;  ///< the patch's own push bound (SlimPatch::max_push), ≤ 0: none
 };
 
 /// The blended surface point along one ray.
@@ -85,7 +87,7 @@ struct SlimBlend {
 };
 
 /// Blends the samples of one ray (any order) the way the three GPU passes do:
-/// t_cut = minᵢ(tᵢ + offset·Rᵢ); blend all samples with tᵢ ≤ t_cut and weight > 0.
+/// t_cut = minᵢ(tᵢ + pushᵢ) (SlimBlendOptions::push of each sample's radius and own bound); blend all samples with tᵢ ≤ t_cut and weight > 0.
 /// Returns nothing when no sample has positive weight. With `used`, the samples blended are
 /// stored there (cleared first).
 std::optional<SlimBlend> blend_slim_samples(std::span<const SlimSample> samples, const SlimBlendOptions& options,

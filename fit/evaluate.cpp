@@ -42,7 +42,7 @@ std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::
 
 double blend_reach(std::span<const SlimSample> blended, const SlimBlendOptions& blend) {
   double reach = std::numeric_limits<double>::infinity();
-  for (const auto& s : blended) reach = std::min(reach, s.hit.t + blend.push(s.radius));
+  for (const auto& s : blended) reach = std::min(reach, s.hit.t + blend.push(s.radius, s.max_push));
   return reach;
 }
 

@@ -18,6 +18,7 @@
 #include "fit/local_fit.h"
 #include "fit/patch_error.h"
 #include "fit/point_index.h"
+#include "fit/slim_fit.h"
 
 namespace quadrix {
 namespace {
@@ -156,6 +157,93 @@ private:
   double mu_, reach_;
 };
 
+// Sample points of a ball's zero set (its centre when the lattice finds none).
+std::vector<Eigen::Vector3d> zero_set_points(const SlimPatch& ball) {
+  thread_local std::vector<SlimSurfaceSample> samples;
+  samples.clear();
+  sample_slim_patch(ball, 2, samples);
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(std::max<std::size_t>(samples.size(), 1));
+  for (const auto& s : samples) out.push_back(s.point);
+  if (out.empty()) out.push_back(ball.centre);
+  return out;
+}
+
+// How well a coarse ball holds a finer ball's zero set: the samples inside it, ties broken by
+// their SLIM weight there (the weight sum over n + 1 stays below one sample).
+double hold_score(const std::vector<Eigen::Vector3d>& points, const SlimPatch& coarse) {
+  double inside = 0, weight = 0;
+  for (const auto& p : points) {
+    const double r = (p - coarse.centre).norm() / coarse.radius;
+    if (r < 1) inside += 1, weight += slim_weight(r);
+  }
+  return inside + weight / double(points.size() + 1);
+}
+
+// Links the balls of one level (fine) to those of the next coarser fitted level: each fine ball's
+// parent is the coarse ball that holds most of its zero set. A coarse ball that no fine ball chose
+// takes the fine ball it holds best whose parent keeps another child; the coarse balls still
+// without a child are dropped. Returns the parent per fine ball, indices into the coarse balls
+// kept (coarse is compacted in place, with its errors).
+std::vector<std::int32_t> link_by_holding(const std::vector<SlimPatch>& fine, std::vector<SlimPatch>& coarse,
+                                          std::vector<double>& coarse_error, std::size_t& dropped) {
+  std::vector<Eigen::Vector3d> cc, fc;
+  double coarse_max = 0, fine_max = 0;
+  for (const auto& b : coarse) cc.push_back(b.centre), coarse_max = std::max(coarse_max, b.radius);
+  for (const auto& b : fine) fc.push_back(b.centre), fine_max = std::max(fine_max, b.radius);
+  const PointIndex coarse_index{std::span<const Eigen::Vector3d>(cc)};
+  std::vector<std::int32_t> parent(fine.size(), -1);
+  std::vector<double> best(fine.size(), 0.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fine.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Neighbour> near;
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      const auto points = zero_set_points(fine[f]);
+      coarse_index.radius(fine[f].centre, fine[f].radius + coarse_max, near);
+      double top = -1;
+      std::int32_t pick = -1;
+      for (const auto& [c, d2] : near) {
+        if (std::sqrt(d2) >= fine[f].radius + coarse[c].radius) continue;
+        const double s = hold_score(points, coarse[c]);
+        if (s > top || (s == top && std::int32_t(c) < pick)) top = s, pick = std::int32_t(c);
+      }
+      if (pick < 0) {  // no coarse ball overlaps it: the nearest centre
+        coarse_index.nearest(fine[f].centre, 1, near);
+        pick = std::int32_t(near[0].first), top = 0;
+      }
+      parent[f] = pick, best[f] = top;
+    }
+  });
+  std::vector<std::size_t> children(coarse.size(), 0);
+  for (const auto p : parent) ++children[std::size_t(p)];
+  const PointIndex fine_index{std::span<const Eigen::Vector3d>(fc)};
+  std::vector<Neighbour> near;
+  for (std::size_t c = 0; c < coarse.size(); ++c) {
+    if (children[c] > 0) continue;
+    fine_index.radius(coarse[c].centre, coarse[c].radius + fine_max, near);
+    double top = 0;
+    std::int32_t pick = -1;
+    for (const auto& [f, d2] : near) {
+      if (children[std::size_t(parent[f])] < 2 || std::sqrt(d2) >= fine[f].radius + coarse[c].radius) continue;
+      if (const double s = hold_score(zero_set_points(fine[f]), coarse[c]); s > top) top = s, pick = std::int32_t(f);
+    }
+    if (pick < 0) continue;
+    --children[std::size_t(parent[std::size_t(pick)])];
+    parent[std::size_t(pick)] = std::int32_t(c), ++children[c];
+  }
+  std::vector<std::int32_t> index(coarse.size(), -1);
+  std::size_t kept = 0;
+  for (std::size_t c = 0; c < coarse.size(); ++c)
+    if (children[c] > 0) {
+      index[c] = std::int32_t(kept);
+      coarse[kept] = std::move(coarse[c]), coarse_error[kept] = coarse_error[c], ++kept;
+    }
+  dropped = coarse.size() - kept;
+  coarse.resize(kept);
+  coarse_error.resize(kept);
+  for (auto& p : parent) p = index[std::size_t(p)];
+  return parent;
+}
+
 }  // namespace
 
 SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud, const PolygonMesh* surface,
@@ -168,21 +256,48 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
   const DataSurface& data = fine.data ? *fine.data
                                       : built.emplace(surface ? DataSurface::from_mesh(*surface)
                                                               : DataSurface::from_points(cloud.points, cloud.normals));
-  std::vector<Eigen::Vector3d> N(cloud.normals.size());
-  for (std::size_t i = 0; i < N.size(); ++i) N[i] = cloud.normals[i].normalized();
-  const Merger merger(cloud.points, N, data, fit.normal_weight, options.reach);
-
   std::vector<std::vector<SlimPatch>> balls{fine.model.slims};
   std::vector<std::vector<double>> errors{fit_errors(fine, cloud, surface ? &data : nullptr)};
   std::vector<std::vector<std::int32_t>> parents;  // parents[l][k]: parent in level l + 1 of ball k of level l
-  for (int k = 1; k <= options.levels; ++k) {
-    Level next = merger.merge(balls.back(), errors.back());
-    if (next.balls.size() >= balls.back().size()) break;  // nothing merged any more
-    log::info("slim hierarchy: level {}: {} balls", k, next.balls.size());
-    parents.push_back(std::move(next.child_parent));
-    balls.push_back(std::move(next.balls));
-    errors.push_back(std::move(next.error));
-    if (balls.back().size() <= 1) break;
+  SlimLevelsStats st;
+  st.bound.push_back(fine.stats.max_error_abs);
+  st.fit_seconds.push_back(fine.stats.time_total);
+  st.dropped.push_back(0);
+  if (options.rule == SlimLevelRule::fits) {
+    if (!(options.level_factor > 1)) throw InvalidInput(fmt::format("slim hierarchy: level factor {}; more than 1", options.level_factor));
+    for (int k = 1; k <= options.levels; ++k) {
+      SlimFitOptions o = fit;
+      o.max_error = fit.max_error * std::pow(options.level_factor, k);
+      SlimFitResult level = surface ? fit_slim(cloud, *surface, o) : fit_slim(cloud, o);
+      if (level.model.slims.empty() || level.model.slims.size() >= balls.back().size()) break;  // no coarser
+      std::vector<double> error = fit_errors(level, cloud, surface ? level.data.get() : nullptr);
+      if (const double push = slim_blend_of(level.model).max_push; options.level_push && std::isfinite(push))
+        for (auto& b : level.model.slims) b.max_push = push;
+      std::size_t dropped = 0;
+      parents.push_back(link_by_holding(balls.back(), level.model.slims, error, dropped));
+      log::info("slim hierarchy: level {} at E = {:.3g}: {} balls ({} dropped), {:.2f} s", k, level.stats.max_error_abs,
+                level.model.slims.size(), dropped, level.stats.time_total);
+      st.bound.push_back(level.stats.max_error_abs);
+      st.fit_seconds.push_back(level.stats.time_total);
+      st.dropped.push_back(dropped);
+      balls.push_back(std::move(level.model.slims));
+      errors.push_back(std::move(error));
+      if (balls.back().size() <= 1) break;
+    }
+  } else {
+    std::vector<Eigen::Vector3d> N(cloud.normals.size());
+    for (std::size_t i = 0; i < N.size(); ++i) N[i] = cloud.normals[i].normalized();
+    const Merger merger(cloud.points, N, data, fit.normal_weight, options.reach);
+    for (int k = 1; k <= options.levels; ++k) {
+      Level next = merger.merge(balls.back(), errors.back());
+      if (next.balls.size() >= balls.back().size()) break;  // nothing merged any more
+      log::info("slim hierarchy: level {}: {} balls", k, next.balls.size());
+      parents.push_back(std::move(next.child_parent));
+      balls.push_back(std::move(next.balls));
+      errors.push_back(std::move(next.error));
+      st.bound.push_back(0), st.fit_seconds.push_back(0), st.dropped.push_back(0);
+      if (balls.back().size() <= 1) break;
+    }
   }
   // Ids: the fit's patches first (Model::slims), then each coarser level in turn (others).
   const std::size_t L = balls.size();
@@ -200,7 +315,6 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
       h.parent[id] = std::int32_t(pid);
       h.error[pid] = std::max(h.error[pid], h.error[id]);  // children come before parents
     }
-  SlimLevelsStats st;
   for (std::size_t l = 0; l < L; ++l) {
     st.patches.push_back(balls[l].size());
     double m = 0;
@@ -212,6 +326,7 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
   fine.model.slim_hierarchy = std::move(h);
   fine.model.metadata["slim_hierarchy_error"] = "distance";
   fine.model.metadata["slim_levels"] = std::to_string(L);
+  fine.model.metadata["slim_level_rule"] = options.rule == SlimLevelRule::fits ? "fits" : "merge";
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return st;
 }

@@ -196,7 +196,7 @@ void image_error(Row& row, const Row& full, double diagonal) {
 void add_bench_render(CLI::App& bench, Commands& commands) {
   auto* app = bench.add_subcommand("render", "GL frame time: culling on/off, SLIM tight vs ball splats, quads vs flat triangles");
   struct Args {
-    std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline;
+    std::string input, out = "out/bench", context = "auto", size = "1024x1024", baseline, baseline_model;
     int frames = 10;
     int shadow_map = 0;
     double azimuth = 30, elevation = 20;
@@ -207,6 +207,9 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
   app->add_option("--out", a->out, "Folder for bench_render.json and bench_render.csv");
   app->add_option("--baseline-mesh", a->baseline,
                   "A triangle mesh drawn as the baseline row (e.g. a decimated mesh of the same error)");
+  app->add_option("--baseline-model", a->baseline_model,
+                  "A .qxm drawn as the row 'baseline model' with the same camera (e.g. a coarser fit of the same "
+                  "data), its image error against full detail, and each LOD row's frame time over it");
   app->add_option("--context", a->context, "GL context")->check(CLI::IsMember(render::context_names()));
   app->add_option("--size", a->size, "Image size WxH");
   app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(number({.lo = 1, .hi = 1000}));
@@ -269,6 +272,13 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                      slim_blend_of(model), true, false, true, true, 0, P));
                               image_error(rows.back(), rows.front(), bounds(model).diagonal());
                             }
+                        }
+                        if (!a->baseline_model.empty()) {
+                          const Model other = read_model(a->baseline_model);
+                          render::Renderer r(*context);
+                          r.set_model(other);
+                          rows.push_back(measure("baseline model", r, cam, true, a->frames, slim_blend_of(other)));
+                          image_error(rows.back(), rows.front(), bounds(model).diagonal());
                         }
                         std::size_t triangles = 0;
                         if (!model.glyphs.empty() && !mesh && a->baseline.empty()) {
@@ -363,6 +373,13 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         if (tess && hit_depth) j["ratio_glyphs_hit_depth_over_tessellated"] = hit_depth->ms_median / tess->ms_median;
                         if (tess_fx && hit_fx)
                           j["ratio_glyphs_hit_depth_over_tessellated_shadows_outlines"] = hit_fx->ms_median / tess_fx->ms_median;
+                        if (const Row* base = row_named("baseline model"))
+                          for (const auto& r : rows)
+                            if (r.name.starts_with("LOD ")) {
+                              j["ratio_lod_over_baseline_model"][r.name] = r.ms_median / base->ms_median;
+                              std::printf("%s / baseline model: %.2f (min %.2f)\n", r.name.c_str(), r.ms_median / base->ms_median,
+                                          r.ms_min / base->ms_min);
+                            }
                         std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
                         if (tri) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / tri->ms_median);
                         if (ball) std::printf(", ball/tight splats %.2f", ball->ms_median / rows[0].ms_median);

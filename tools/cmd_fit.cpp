@@ -29,6 +29,8 @@ void add_fit(CLI::App& root, Commands& commands) {
     double holdout = 0;
     bool allow_exceed = false;
     int lod_levels = 0;
+    SlimHierarchyOptions lod;
+    std::string lod_rule = "fits";
     SlimFitOptions options;
   };
   auto a = std::make_shared<Args>();
@@ -65,9 +67,19 @@ void add_fit(CLI::App& root, Commands& commands) {
                   "Smallest angle in degrees between the two normal clusters of a sharp patch")
       ->check(number({.lo = 1, .hi = 179}));
   app->add_option("--lod-levels", a->lod_levels,
-                  "Coarser levels of detail above the fit, each merging the balls of the one below into larger ones "
-                  "with their measured error (render --pixel-error draws a cut); 0: none")
+                  "Coarser levels of detail above the fit, each with its balls' measured error (render --pixel-error "
+                  "draws a cut); 0: none")
       ->check(number({.lo = 0, .hi = 16}))
+      ->capture_default_str();
+  app->add_option("--lod-rule", a->lod_rule,
+                  "How a coarser level is made: fits (its own fit at E x --lod-factor^k, linked to the finer level "
+                  "by which coarse ball holds each finer one) or merge (the finer balls merged into larger ones)")
+      ->check(CLI::IsMember({"fits", "merge"}))
+      ->capture_default_str();
+  app->add_flag("!--lod-shared-push", a->lod.level_push,
+                "--lod-rule fits: coarser levels blend with the fit's push bound instead of their own (for comparison)");
+  app->add_option("--lod-factor", a->lod.level_factor, "--lod-rule fits: level k's bound is E x this^k")
+      ->check(number({.lo = 1.1, .hi = 100}))
       ->capture_default_str();
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         // A mesh's faces give the normals and the surface the fit is bounded against.
@@ -160,12 +172,20 @@ void add_fit(CLI::App& root, Commands& commands) {
                               {"seconds", report.elapsed() - t0}};
                         }
                         if (a->lod_levels > 0) {
-                          const SlimLevelsStats hs = add_slim_hierarchy(
-                              r, cloud, mesh ? &*mesh : nullptr, o, {.levels = a->lod_levels});
+                          SlimHierarchyOptions lod = a->lod;
+                          lod.levels = a->lod_levels;
+                          lod.rule = a->lod_rule == "merge" ? SlimLevelRule::merge : SlimLevelRule::fits;
+                          const SlimLevelsStats hs = add_slim_hierarchy(r, cloud, mesh ? &*mesh : nullptr, o, lod);
                           j["hierarchy"] = {{"levels", hs.patches.size()},
+                                            {"rule", lod.rule == SlimLevelRule::fits ? "fits" : "merge"},
                                             {"patches", hs.patches},
                                             {"max_error_abs", hs.max_error},
+                                            {"dropped", hs.dropped},
                                             {"seconds", hs.seconds}};
+                          if (lod.rule == SlimLevelRule::fits) {
+                            j["hierarchy"]["bound_abs"] = hs.bound;
+                            j["hierarchy"]["fit_seconds"] = hs.fit_seconds;
+                          }
                         }
                         write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;

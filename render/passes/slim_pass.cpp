@@ -13,15 +13,16 @@
 namespace quadrix::render {
 namespace {
 
-// std430 layout of `Ball` in slim.vert (10 vec4 = 160 bytes).
+// std430 layout of `Ball` in slim.vert (11 vec4 = 176 bytes).
 struct GpuBall {
   float centre_hi[4];
   float centre_lo[4];
   float q0[4], q1[4], q2[4];
   float slab[4];
   float clip[ClipPlanes::kMax][4];
+  float extra[4];  // [0]: the ball's own push bound (SlimPatch::max_push), −1: none
 };
-static_assert(sizeof(GpuBall) == 160);
+static_assert(sizeof(GpuBall) == 176);
 constexpr std::size_t kBallFloats = sizeof(GpuBall) / sizeof(float);
 constexpr std::size_t kIdFloat = offsetof(GpuBall, q2) / sizeof(float) + 2;  // q2[2]: the primitive id
 
@@ -54,6 +55,7 @@ GpuBall pack(const SlimPatch& b, std::int32_t id, const FixedOrigin& origin) {
     for (int i = 0; i < 3; ++i) g.clip[k][i] = float(p.n[i] / n);
     g.clip[k][3] = float(p.d / n);
   }
+  g.extra[0] = b.max_push ? float(*b.max_push) : -1.0f;
   return g;
 }
 

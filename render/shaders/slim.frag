@@ -6,6 +6,7 @@ in vec3 v_dir;
 in vec3 v_offset;
 flat in vec3 v_centre_eye;
 flat in float v_radius;
+flat in float v_max_push;  // the ball's own push bound (eye units), ≤ 0: u_max_push
 flat in vec3 v_A0;
 flat in vec3 v_A1;
 flat in vec3 v_A2;
@@ -17,7 +18,7 @@ flat in int v_id;
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform float u_offset;    // pass 1 push-back, relative to R
-uniform float u_max_push;  // and at most this (eye units)
+uniform float u_max_push;  // and at most this (eye units), unless the ball has its own
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;
@@ -58,7 +59,7 @@ void main() {
   if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
   if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
 #if SLIM_PASS == 1
-  float z_push = p.z * (1.0 + min(u_offset * v_radius, u_max_push) / length(p));
+  float z_push = p.z * (1.0 + min(u_offset * v_radius, v_max_push > 0.0 ? v_max_push : u_max_push) / length(p));
   gl_FragDepth = window_depth(z_push, u_proj);
 #else
   gl_FragDepth = window_depth(p.z, u_proj);

@@ -21,6 +21,7 @@ struct Ball {
   vec4 q2;         // b2 c, primitive index bits, slab s1
   vec4 slab;       // xyz: unit axis (world axes), w: s0; q2.w: s1; s0 > s1: no tight slab
   vec4 clip[4];    // n (local, world axes), d; the patch keeps nᵀu + d ≥ 0; n = 0: unused
+  vec4 extra;      // x: the ball's own blend push bound (world units), ≤ 0: the model's; yzw unused
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
 layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
@@ -39,6 +40,7 @@ out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
 flat out vec3 v_centre_eye;
 flat out float v_radius;
+flat out float v_max_push;
 flat out vec3 v_A0;  // rows of A′ = R A Rᵀ
 flat out vec3 v_A1;
 flat out vec3 v_A2;
@@ -147,6 +149,7 @@ void main() {
   v_offset = vec3(k * -C.z - C.xy, 0.0) / R;
   v_centre_eye = C;
   v_radius = R;
+  v_max_push = ball.extra.x;
   v_A0 = Ae[0];  // columns of a symmetric matrix are its rows
   v_A1 = Ae[1];
   v_A2 = Ae[2];

@@ -444,6 +444,31 @@ TEST(SlimHierarchy, CutByError) {
   EXPECT_EQ(select_slim_cut(m, 0.5), (std::vector<std::int32_t>{0, 1, 2, 3}));  // no hierarchy: all drawn
 }
 
+// A ball's own blend push bound (fit --lod-levels writes it on the coarser levels): the optional
+// max_push column round-trips on the balls that have one, the others read none; a bound ≤ 0 is
+// refused on write.
+TEST(ModelIo, PerBallPushBoundRoundTrips) {
+  ScratchDir dir("qxm_push");
+  Model m = sample_hierarchy();
+  for (auto& b : m.slim_hierarchy.others) b.max_push = 0.25;
+  m.slim_hierarchy.others[1].max_push.reset();
+  for (const auto encoding : {ModelEncoding::full, ModelEncoding::compact}) {
+    write_model(m, dir / "p.qxm", {.encoding = encoding});
+    const Model r = read_model(dir / "p.qxm");
+    for (std::size_t i = 0; i < m.slims.size(); ++i) EXPECT_FALSE(r.slims[i].max_push.has_value()) << i;
+    ASSERT_EQ(r.slim_hierarchy.others.size(), m.slim_hierarchy.others.size());
+    for (std::size_t i = 0; i < m.slim_hierarchy.others.size(); ++i)
+      EXPECT_EQ(r.slim_hierarchy.others[i].max_push, m.slim_hierarchy.others[i].max_push) << i;
+  }
+  std::ifstream in(dir / "p.qxm", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t node = bytes.find("element slim_node"), push = bytes.find("property double max_push");
+  EXPECT_NE(push, std::string::npos);
+  EXPECT_GT(push, node);  // only the element whose balls have one
+  m.slim_hierarchy.others[0].max_push = 0.0;
+  EXPECT_THROW(write_model(m, dir / "bad.qxm"), InvalidInput);
+}
+
 TEST(ModelIo, HierarchyRoundTrips) {
   ScratchDir dir("qxm2");
   Model m = sample_hierarchy();

@@ -268,15 +268,15 @@ TEST(FitSlim, SharpCreasesOfFandisk) {
   EXPECT_LE(ec.max, sharp.stats.max_error_abs * (1 + 1e-9));
 }
 
-// Levels of detail (fit/slim_hierarchy.h): merged balls linked above the fit, the fit's patches
-// the leaves, errors (distances) growing towards the roots, and a cut by error drawing fewer
-// balls within about that error.
+// Levels of detail (fit/slim_hierarchy.h), the merge rule: merged balls linked above the fit, the
+// fit's patches the leaves, errors (distances) growing towards the roots, and a cut by error
+// drawing fewer balls within about that error.
 TEST(FitSlimHierarchy, CoarserLevelsLinkedAboveTheFit) {
   const PointCloud c = torus(8000, 1.0, 0.35, 21);
   const SlimFitOptions o{.max_error = 1e-3};
   SlimFitResult r = fit_slim(c, o);
   const std::size_t leaves = r.model.slims.size();
-  const SlimLevelsStats st = add_slim_hierarchy(r, c, nullptr, o, {.levels = 2});
+  const SlimLevelsStats st = add_slim_hierarchy(r, c, nullptr, o, {.levels = 2, .rule = SlimLevelRule::merge});
   EXPECT_EQ(validate_slim_hierarchy(r.model), "");
   ASSERT_EQ(st.patches.size(), 3u);
   EXPECT_EQ(r.model.slims.size(), leaves);
@@ -339,6 +339,78 @@ TEST(FitSlimHierarchy, CoarserLevelsLinkedAboveTheFit) {
   }
   EXPECT_GT(fine, 0u);
   EXPECT_LT(fine, mixed.size());
+  EXPECT_EQ(em.misses, 0u);
+  EXPECT_LE(em.max, 1.5 * mid);
+}
+
+// The fits rule (the default): each coarser level is its own fit at E·4^k, every level within its
+// own two-sided bound (points E_k, surface 2E_k, as measured), each coarser ball a parent of at
+// least one finer ball and carrying its fit's push bound; a cut of the coarsest level alone and
+// a mixed cut keep every point covered, within about their error.
+TEST(FitSlimHierarchy, IndependentFitsPerLevelEachWithinItsOwnBound) {
+  const PointCloud c = torus(8000, 1.0, 0.35, 21);
+  const SlimFitOptions o{.max_error = 1e-3};
+  SlimFitResult r = fit_slim(c, o);
+  const std::size_t leaves = r.model.slims.size();
+  const double E = r.stats.max_error_abs;
+  const SlimLevelsStats st = add_slim_hierarchy(r, c, nullptr, o, {.levels = 2});
+  EXPECT_EQ(validate_slim_hierarchy(r.model), "");
+  EXPECT_EQ(r.model.metadata.at("slim_level_rule"), "fits");
+  ASSERT_EQ(st.patches.size(), 3u);
+  const auto& h = r.model.slim_hierarchy;
+  std::vector<std::size_t> first{0, leaves, leaves + st.patches[1]};
+  std::vector<std::size_t> children(h.size(), 0);
+  for (const auto p : h.parent)
+    if (p >= 0) ++children[std::size_t(p)];
+  for (std::size_t l = 0; l < 3; ++l) {
+    EXPECT_NEAR(st.bound[l], E * std::pow(4.0, double(l)), 1e-9 * E) << "level " << l;
+    if (l > 0) {
+      EXPECT_LT(st.patches[l], st.patches[l - 1]) << "level " << l;
+    }
+    // Each level within its own bound; errors already raised to the children's, whose bounds are smaller.
+    EXPECT_LE(st.max_error[l], 2 * st.bound[l] * (1 + 1e-9)) << "level " << l;
+    EXPECT_GT(st.max_error[l], l > 0 ? 2 * st.bound[l - 1] : 0.0) << "level " << l << ": not coarser";
+    for (std::size_t k = first[l]; k < first[l] + st.patches[l]; ++k) {
+      const SlimPatch& b = slim_ball(r.model, k);
+      EXPECT_EQ(h.parent[k] >= 0, l < 2) << "ball " << k;
+      if (l > 0) {
+        EXPECT_GT(children[k], 0u) << "ball " << k;  // else a leaf drawn at full detail
+        ASSERT_TRUE(b.max_push.has_value()) << "ball " << k;
+        EXPECT_NEAR(*b.max_push, o.blend_max_push * st.bound[l], 1e-8 * *b.max_push) << "ball " << k;  // 9 digits in the metadata
+      } else {
+        EXPECT_FALSE(b.max_push.has_value()) << "ball " << k;
+      }
+      if (h.parent[k] >= 0) {
+        EXPECT_GE(h.error[std::size_t(h.parent[k])], h.error[k]) << "ball " << k;
+      }
+    }
+  }
+  const auto cut_at = [&](double threshold, std::size_t& fine) {
+    const std::vector<std::int32_t> cut = select_slim_cut(r.model, threshold);
+    Model m;
+    fine = 0;
+    for (const auto id : cut) m.slims.push_back(slim_ball(r.model, std::size_t(id))), fine += std::size_t(id) < leaves;
+    m.metadata = r.model.metadata;
+    return m;
+  };
+  std::size_t fine = 0;
+  const Model coarse = cut_at(st.max_error[2], fine);
+  EXPECT_EQ(coarse.slims.size(), st.patches[2]);
+  const SlimError ec = evaluate_slim(coarse, c, {.probe_height = 4 * st.bound[2]});
+  std::vector<double> level1(h.error.begin() + std::ptrdiff_t(leaves), h.error.begin() + std::ptrdiff_t(first[2]));
+  std::nth_element(level1.begin(), level1.begin() + std::ptrdiff_t(level1.size() / 2), level1.end());
+  const double mid = level1[level1.size() / 2];
+  const Model mixed = cut_at(mid, fine);
+  const SlimError em = evaluate_slim(mixed, c, {.probe_height = 4 * mid});
+  std::cout << "torus 1e-3 fitted levels " << st.patches[0] << "/" << st.patches[1] << "/" << st.patches[2]
+            << ", max errors " << st.max_error[0] / E << "/" << st.max_error[1] / E << "/" << st.max_error[2] / E
+            << " E, dropped " << st.dropped[1] << "/" << st.dropped[2] << "; level-2 cut points max " << ec.max / E
+            << "E misses " << ec.misses << "; mixed cut at " << mid / E << "E: " << mixed.slims.size() << " balls ("
+            << fine << " leaves), points max " << em.max / E << "E, misses " << em.misses << "\n";
+  EXPECT_EQ(ec.misses, 0u);
+  EXPECT_LE(ec.max, st.bound[2] * (1 + 1e-9));
+  EXPECT_GT(fine, 0u);
+  EXPECT_LT(fine, mixed.slims.size());
   EXPECT_EQ(em.misses, 0u);
   EXPECT_LE(em.max, 1.5 * mid);
 }
