@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -850,6 +851,8 @@ struct LocalRefinement {
   MeshDistance before;    ///< mesh → surface of the whole mesh before the first cut
   BeyondSamples before_where;
   PolygonMesh unrefined;
+  /// Surface → mesh of the mesh returned, when the last round measured it and cut nothing after
+  std::optional<SurfaceError> surface;
 };
 
 LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
@@ -934,10 +937,12 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
       const SurfaceError se = measure_surface_error(
           model, DataSurface::from_mesh(b.mesh), box,
           {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = 1u << 14});
-      if (se.beyond_points.empty()) break;
       // Cuts that leave as many of the drawn surface's pixels beyond the bound as the last ones
       // did do not reach them (a part or gap the grid missed, which no cut creates): stop.
-      if (se.beyond >= surface_beyond_before) break;
+      if (se.beyond_points.empty() || se.beyond >= surface_beyond_before) {
+        out.surface = se;
+        break;
+      }
       surface_beyond_before = se.beyond;
       const auto& V = b.mesh.vertices;
       for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
@@ -1078,7 +1083,11 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   }();
   // One mesh at a resolution level, the SLIM grid's cells in `refined` cut finer; with, when
   // `where` is given, the centroids of its SLIM triangles with a sample beyond the bound.
-  const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where) {
+  // `surface_bad`, `surface_measured`: where the last local round's surface → mesh measure holds
+  // for the mesh returned, it is its figure, and its points beyond the bound are given.
+  const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where,
+                           std::vector<Eigen::Vector3d>* surface_bad = nullptr, bool* surface_measured = nullptr,
+                           bool* undone = nullptr) {
     Builder b;
     b.colours = has_any_colour(model);
     if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
@@ -1090,10 +1099,15 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
       std::vector<std::uint8_t> on_surface;
+      const auto t0 = std::chrono::steady_clock::now();
       mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, refined, b, on_surface);
       snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
+      const auto t1 = std::chrono::steady_clock::now();
       reach = std::max(reach, 1.5 * h);
       local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
+      log::debug("mesh: SLIM grid ({} refined cells) in {:.2f} s, local refinement in {:.2f} s", refined.size(),
+                 std::chrono::duration<double>(t1 - t0).count(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
     }
     ToMeshResult r;
     r.bound = bound;
@@ -1116,8 +1130,17 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       r.mesh_to_surface = local.before;
       beyond = std::move(local.before_where);
       r.local_rounds = 0;
+      if (undone) *undone = true;
     }
     r.open_edges = count_open_edges(r.mesh);
+    if (surface_bad && local.surface && r.local_rounds == local.rounds) {  // its last measure is this mesh's
+      const SurfaceError& se = *local.surface;
+      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+      r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+      surface_bad->clear();
+      for (const auto& p : se.beyond_points) surface_bad->push_back(p.point);
+      *surface_measured = true;
+    }
     if (where)
       for (std::size_t f = first_face; f < r.mesh.face_count() && f < beyond.faces.size(); ++f)
         if (beyond.faces[f] > bound) {
@@ -1137,16 +1160,22 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     }
     if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
     const bool grid_refining = !model.slims.empty() && o.grid_refinements > 0;
-    std::vector<Eigen::Vector3d> bad;
-    ToMeshResult r = mesh_at(level, {}, grid_refining ? &bad : nullptr);
+    std::vector<Eigen::Vector3d> bad, surface_bad;
     bool surface_measured = false;
-    if (grid_refining) {
+    bool undone = false;
+    ToMeshResult r = mesh_at(level, {}, grid_refining ? &bad : nullptr, &surface_bad, &surface_measured, &undone);
+    // Where the triangles' refinement was undone, the samples beyond the bound come from a blend
+    // whose sheets the mesh's normals cannot tell apart (cracks of a fit), not from parts the grid
+    // missed; a finer grid there follows the same cracks (the kitten: more samples beyond and a
+    // larger maximum after each round), so the grid is not refined.
+    if (grid_refining && undone) log::info("mesh: local refinement undone: no grid refinement");
+    if (grid_refining && !undone) {
       // Where samples stay beyond the bound after the triangles' own refinement (parts or gaps
       // thinner than the grid, which no cut of its triangles creates), the grid cells holding
       // them are cut finer, one level per round, and the whole SLIM mesh made again; a round
-      // kept only while it leaves fewer samples beyond the bound (both ways).
+      // kept only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
       constexpr std::size_t kKeepBeyond = 1u << 14;
-      const std::vector<Eigen::Vector3d> surface_bad = measure_surface_side(r, kKeepBeyond);
+      if (!surface_measured) surface_bad = measure_surface_side(r, kKeepBeyond);
       bad.insert(bad.end(), surface_bad.begin(), surface_bad.end());
       surface_measured = true;
       const SlimGrid grid = slim_grid(model, slim_h0 / (1 << level));
@@ -1164,17 +1193,21 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
           }
         }
         if (raised.empty()) break;
+        for (std::size_t k = 0; k < bad.size(); k += std::max<std::size_t>(1, bad.size() / 8))
+          log::debug("mesh: grid round {}: beyond the bound at ({:.6g}, {:.6g}, {:.6g})", round + 1, bad[k].x(), bad[k].y(),
+                     bad[k].z());
         std::vector<KuhnCellDepth> refined;
         for (const auto& [k, d] : depth) refined.push_back({grid.node(k), d});
-        std::vector<Eigen::Vector3d> next_bad;
-        ToMeshResult next = mesh_at(level, refined, &next_bad);
-        const std::vector<Eigen::Vector3d> next_surface_bad = measure_surface_side(next, kKeepBeyond);
+        std::vector<Eigen::Vector3d> next_bad, next_surface_bad;
+        bool next_measured = false;
+        ToMeshResult next = mesh_at(level, refined, &next_bad, &next_surface_bad, &next_measured);
+        if (!next_measured) next_surface_bad = measure_surface_side(next, kKeepBeyond);
         next_bad.insert(next_bad.end(), next_surface_bad.begin(), next_surface_bad.end());
         log::info("mesh: grid round {}: {} cells cut finer ({} raised), {} triangles; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
                   round + 1, depth.size(), raised.size(), next.mesh.face_count(), next.mesh_to_surface.beyond,
                   next.surface_to_mesh.beyond, r.mesh_to_surface.beyond, r.surface_to_mesh.beyond,
                   next.mesh_to_surface.max, next.surface_to_mesh.max);
-        if (!next.within && total_beyond(next) >= total_beyond(r)) break;
+        if (!next.within && (total_beyond(next) >= total_beyond(r) || next.max_error() > r.max_error())) break;
         next.grid_rounds = round + 1;
         next.refined_cells = depth.size();
         r = std::move(next);

@@ -35,8 +35,9 @@ struct ToMeshOptions {
   int local_refinements = 12;
   /// SLIM: rounds of local grid refinement per resolution (the grid cells holding samples still
   /// beyond the bound after the triangles' refinement cut one level finer, at most to h/8, and
-  /// the SLIM mesh made again; a round kept only if it leaves fewer samples beyond); 0: off
-  int grid_refinements = 3;
+  /// the SLIM mesh made again; a round kept only if it leaves fewer samples beyond and no larger
+  /// maximum; none where the triangles' refinement was undone: a cracked blend); 0: off
+  int grid_refinements = 2;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)

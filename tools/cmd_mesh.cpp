@@ -99,7 +99,8 @@ void add_mesh(CLI::App& root, Commands& commands) {
   app->add_option("--grid-refinements", a->options.grid_refinements,
                   "SLIM: rounds of local grid refinement per grid (the cells holding samples still beyond the bound "
                   "cut one level finer, down to 1/8 of the grid, without cracks at the seams, and the mesh made "
-                  "again; kept while it leaves fewer samples beyond); 0: off")
+                  "again; kept while it leaves fewer samples beyond and no larger maximum; none where the triangles' "
+                  "refinement was undone); 0: off")
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_option("--slim-offset", a->options.slim_offset,
