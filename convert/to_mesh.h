@@ -62,7 +62,7 @@ struct ToMeshResult {
   int refinements = 0;              ///< doublings used
   int local_rounds = 0;             ///< local refinement rounds used on the last grid
   int grid_rounds = 0;              ///< local grid refinement rounds kept on the last grid
-  std::size_t refined_cells = 0;    ///< grid cells cut finer (with those their closure reached: more)
+  std::size_t refined_cells = 0;    ///< grid cells asked to be cut finer (the closure cuts some neighbours too)
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
