@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -12,9 +13,11 @@
 #include <numbers>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 
 #include <fmt/format.h>
 
+#include "convert/kuhn_bisection.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/reference.h"
@@ -304,55 +307,139 @@ std::vector<std::pair<double, int>> blend_crossings(const ReferenceScene& scene,
   return events;
 }
 
-/// SLIM patches as marching tetrahedra (Kuhn split of a grid of spacing h). Which side of the
-/// surface a node lies on is decided by the drawn blend itself: along the grid lines through it
-/// (one per axis), a node is inside when the last crossing before it is an entry, and the
-/// majority of the three lines decides, so one line grazing a gap cannot flip it. Sides from one
-/// consistent labelling make the triangles closed wherever the surface is. Crossings on cell
-/// edges are placed by the blended Taubin distance Σwᵢdᵢ/Σwᵢ; the caller moves them onto the blend.
-void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, double h, Builder& out,
-                std::vector<std::uint8_t>& on_surface) {
+/// The SLIM grid of spacing h: one spare node beyond the patches' bounds on each side.
+SlimGrid slim_grid(const Model& model, double h) {
   Box3 box;
   for (const auto& s : model.slims) box.extend(bounds(s));
   SlimGrid grid;
   grid.h = h;
   grid.origin = box.min - Eigen::Vector3d::Constant(h);
   grid.n = ((box.max - grid.origin) / h).array().ceil().cast<int>() + 2;
+  return grid;
+}
+
+/// Finest SLIM grid refinement: cells of h / 2^kGridLevels.
+constexpr int kGridLevels = 3;
+
+using LatticeEdge = std::pair<std::uint64_t, std::uint64_t>;
+struct LatticeEdgeHash {
+  std::size_t operator()(const LatticeEdge& e) const {
+    const std::uint64_t h = (e.first * 0x9E3779B97F4A7C15ull) ^ (e.second + 0x632BE59BD9B4E019ull + (e.first << 6));
+    return static_cast<std::size_t>(h ^ (h >> 31));
+  }
+};
+std::uint64_t lattice_key(const Eigen::Vector3i& p) {
+  return static_cast<std::uint64_t>(p.x()) | static_cast<std::uint64_t>(p.y()) << 21 | static_cast<std::uint64_t>(p.z()) << 42;
+}
+
+/// SLIM patches as marching tetrahedra (Kuhn split of a grid of spacing h; the cells in `refined`
+/// cut further by conforming bisection, convert/kuhn_bisection.h, so thin parts and gaps between
+/// coarse nodes get nodes of their own). Which side of the surface a node lies on is decided by
+/// the drawn blend itself: along the grid lines through it (one per axis), a node is inside when
+/// the last crossing before it is an entry, and the majority of the three lines decides, so one
+/// line grazing a gap cannot flip it. Sides from one consistent labelling make the triangles
+/// closed wherever the surface is. Crossings on cell edges are placed by the blended Taubin
+/// distance Σwᵢdᵢ/Σwᵢ; the caller moves them onto the blend.
+void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, double h,
+                std::span<const KuhnCellDepth> refined, Builder& out, std::vector<std::uint8_t>& on_surface) {
+  const SlimGrid grid = slim_grid(model, h);
   const std::uint64_t total = static_cast<std::uint64_t>(grid.n.x()) * grid.n.y() * grid.n.z();
-  // Bits 0–2: inside as seen along x, y, z; bit 3: a corner of a cell the surface crosses.
+  // Bits 0–2: inside as seen along x, y, z; bit 3: a corner of a cell the surface crosses (or of
+  // a refined cell); bit 4: the lowest corner of a refined cell.
   std::vector<std::uint8_t> state(total, 0);
+  // Inside along the line o + s·dir at each of `at` (line parameters, ascending not required).
+  const auto inside_along = [&](const Eigen::Vector3d& o, const Eigen::Vector3d& dir, double length,
+                                const auto& at, const auto& mark) {
+    const auto events = blend_crossings(scene, trace, o, dir, length);
+    if (events.empty()) return;
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      // Inside when the last crossing at or before it is an entry.
+      const auto it = std::upper_bound(events.begin(), events.end(), at[k],
+                                       [](double s, const std::pair<double, int>& e) { return s < e.first; });
+      if (it != events.begin() && std::prev(it)->second > 0) mark(k);
+    }
+  };
   for (int axis = 0; axis < 3; ++axis) {
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     const int n1 = grid.n[a1], n2 = grid.n[a2], len = grid.n[axis];
     const Eigen::Vector3d dir = Eigen::Vector3d::Unit(axis);
+    std::vector<double> at(len);
+    for (int k = 0; k < len; ++k) at[k] = k * h;
     tbb::parallel_for(tbb::blocked_range<int>(0, n1 * n2), [&](const tbb::blocked_range<int>& r) {
       for (int line = r.begin(); line < r.end(); ++line) {
         Eigen::Vector3i i = Eigen::Vector3i::Zero();
         i[a1] = line % n1;
         i[a2] = line / n1;
-        const auto events = blend_crossings(scene, trace, grid.at(i), dir, (len - 1) * h);
-        if (events.empty()) continue;
-        std::size_t e = 0;
-        bool inside = false;
-        for (int k = 0; k < len; ++k) {
-          while (e < events.size() && events[e].first <= k * h) inside = events[e++].second > 0;
-          if (!inside) continue;
-          i[axis] = k;
-          state[grid.index(i)] |= static_cast<std::uint8_t>(1u << axis);  // lines write disjoint nodes
-        }
+        inside_along(grid.at(i), dir, (len - 1) * h, at, [&](std::size_t k) {
+          Eigen::Vector3i j = i;
+          j[axis] = static_cast<int>(k);
+          state[grid.index(j)] |= static_cast<std::uint8_t>(1u << axis);  // lines write disjoint nodes
+        });
       }
     });
   }
   const auto corner_of = [&](std::uint64_t k0, int c) {
     return k0 + (c & 1) + ((c >> 1) & 1) * grid.n.x() + ((c >> 2) & 1) * static_cast<std::uint64_t>(grid.n.x()) * grid.n.y();
   };
+  // Refined cells: their tetrahedra on the lattice of spacing h / S, and the nodes of that
+  // lattice they add (not coarse nodes), labelled by their own three lines as coarse ones are.
+  constexpr int S = 1 << kGridLevels;
+  KuhnRefinement fine;
+  if (!refined.empty()) fine = refine_kuhn_cells(grid.n - Eigen::Vector3i::Ones(), refined, kGridLevels);
+  for (const Eigen::Vector3i& c : fine.cells) {
+    const std::uint64_t k0 = grid.index(c);
+    state[k0] |= 16u;
+    for (int k = 0; k < 8; ++k) state[corner_of(k0, k)] |= 8u;
+  }
+  const auto is_coarse = [](const Eigen::Vector3i& p) { return p.x() % S == 0 && p.y() % S == 0 && p.z() % S == 0; };
+  std::vector<Eigen::Vector3i> fine_nodes;
+  std::unordered_map<std::uint64_t, int> fine_index;
+  for (const auto& t : fine.tets)
+    for (const auto& p : t)
+      if (!is_coarse(p) && fine_index.emplace(lattice_key(p), static_cast<int>(fine_nodes.size())).second)
+        fine_nodes.push_back(p);
+  std::vector<std::uint8_t> fine_votes(fine_nodes.size(), 0);
+  const auto lattice_at = [&](const Eigen::Vector3i& p) -> Eigen::Vector3d {
+    return grid.origin + (h / S) * p.cast<double>();
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    // Fine nodes grouped by the line along `axis` through them.
+    std::unordered_map<std::uint64_t, std::vector<int>> lines;
+    for (std::size_t k = 0; k < fine_nodes.size(); ++k) {
+      Eigen::Vector3i q = fine_nodes[k];
+      q[axis] = 0;
+      lines[lattice_key(q)].push_back(static_cast<int>(k));
+    }
+    std::vector<const std::vector<int>*> list;
+    for (const auto& [key, nodes] : lines) list.push_back(&nodes);
+    const Eigen::Vector3d dir = Eigen::Vector3d::Unit(axis);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t l = r.begin(); l < r.end(); ++l) {
+        const std::vector<int>& nodes = *list[l];
+        Eigen::Vector3i q = fine_nodes[nodes[0]];
+        q[axis] = 0;
+        std::vector<double> at(nodes.size());
+        for (std::size_t k = 0; k < nodes.size(); ++k) at[k] = fine_nodes[nodes[k]][axis] * (h / S);
+        inside_along(lattice_at(q), dir, (grid.n[axis] - 1) * h, at,
+                     [&](std::size_t k) { fine_votes[nodes[k]] |= static_cast<std::uint8_t>(1u << axis); });
+      }
+    });
+  }
+  // Fine nodes by the refined cell holding them (the lowest, where several do).
+  std::unordered_map<std::uint64_t, std::vector<int>> fine_in_cell;
+  for (std::size_t k = 0; k < fine_nodes.size(); ++k) {
+    const Eigen::Vector3i c = (fine_nodes[k] / S).cwiseMin(grid.n - Eigen::Vector3i::Constant(2));
+    fine_in_cell[grid.index(c)].push_back(static_cast<int>(k));
+  }
   // Cells whose corners are not all unanimous alike (all three lines inside, or all outside):
-  // the surface may cross them. Their corners get the blended distance.
+  // the surface may cross them. Their corners get the blended distance. Refined cells are
+  // marched as their tetrahedra instead.
   std::vector<std::uint64_t> cells;
   for (int z = 0; z + 1 < grid.n.z(); ++z)
     for (int y = 0; y + 1 < grid.n.y(); ++y)
       for (int x = 0; x + 1 < grid.n.x(); ++x) {
         const std::uint64_t k0 = grid.index({x, y, z});
+        if (state[k0] & 16u) continue;
         const unsigned first = state[k0] & 7u;
         bool mixed = first != 0u && first != 7u;
         for (int c = 1; c < 8 && !mixed; ++c) mixed = (state[corner_of(k0, c)] & 7u) != first;
@@ -367,8 +454,24 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
     double we = 0, wde = 0;
   };
   constexpr double kReach = 1.5;
+  const auto accumulate = [&](const SlimPatch& s, const Eigen::Vector3d& x, Acc& a) {
+    const Eigen::Vector3d u = (x - s.centre) / s.radius;
+    const double r = u.norm();
+    const double we = slim_weight(r / kReach);
+    if (!(we > 0.0)) return;
+    const double gn = s.local.gradient(u).norm();
+    if (!(gn > 1e-12)) return;
+    const double d = s.radius * s.local.eval(u) / gn;  // Taubin's distance, world units
+    a.we += we;
+    a.wde += we * d;
+    const double w = slim_weight(r);
+    if (!(w > 0.0) || !s.clips.keeps(u)) return;
+    a.w += w;
+    a.wd += w * d;
+  };
   std::unordered_map<std::uint64_t, Acc> acc;
   acc.reserve(cells.size() * 2);
+  std::vector<Acc> fine_acc(fine_nodes.size());
   for (const SlimPatch& s : model.slims) {
     const double reach = kReach * s.radius;
     const Eigen::Vector3i lo = ((s.centre.array() - reach - grid.origin.array()) / h).floor().cast<int>().max(0);
@@ -379,81 +482,79 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
         for (int x = lo.x(); x <= hi.x(); ++x) {
           const Eigen::Vector3i i(x, y, z);
           const std::uint64_t k = grid.index(i);
-          if (!(state[k] & 8u)) continue;
-          const Eigen::Vector3d u = (grid.at(i) - s.centre) / s.radius;
-          const double r = u.norm();
-          const double we = slim_weight(r / kReach);
-          if (!(we > 0.0)) continue;
-          const double gn = s.local.gradient(u).norm();
-          if (!(gn > 1e-12)) continue;
-          const double d = s.radius * s.local.eval(u) / gn;  // Taubin's distance, world units
-          Acc& a = acc[k];
-          a.we += we;
-          a.wde += we * d;
-          const double w = slim_weight(r);
-          if (!(w > 0.0) || !s.clips.keeps(u)) continue;
-          a.w += w;
-          a.wd += w * d;
+          if (state[k] & 16u)
+            if (const auto it = fine_in_cell.find(k); it != fine_in_cell.end())
+              for (const int f : it->second) accumulate(s, lattice_at(fine_nodes[f]), fine_acc[f]);
+          if (state[k] & 8u) accumulate(s, grid.at(i), acc[k]);
         }
   }
-  const auto value = [&](std::uint64_t k) -> std::optional<double> {
-    const auto it = acc.find(k);
-    if (it == acc.end()) return std::nullopt;
-    if (it->second.w > 0) return it->second.wd / it->second.w;
-    if (it->second.we > 0) return it->second.wde / it->second.we;
+  const auto acc_of = [&](const Eigen::Vector3i& p) -> const Acc* {
+    if (is_coarse(p)) {
+      const auto it = acc.find(grid.index(p / S));
+      return it == acc.end() ? nullptr : &it->second;
+    }
+    return &fine_acc[fine_index.at(lattice_key(p))];
+  };
+  const auto value = [&](const Eigen::Vector3i& p) -> std::optional<double> {
+    const Acc* a = acc_of(p);
+    if (!a) return std::nullopt;
+    if (a->w > 0) return a->wd / a->w;
+    if (a->we > 0) return a->wde / a->we;
     return std::nullopt;
   };
   // A node the three lines agree on takes their side. Where they split (a line grazing the
   // surface sees a chord the blend shows at a slant, or misses it), the distance's sign decides
   // when the node is within a ball, else the majority.
-  const auto is_inside = [&](std::uint64_t k) {
-    const unsigned votes = state[k] & 7u;
+  const auto is_inside = [&](const Eigen::Vector3i& p) {
+    const unsigned votes = is_coarse(p) ? state[grid.index(p / S)] & 7u : fine_votes[fine_index.at(lattice_key(p))];
     if (votes == 0u || votes == 7u) return votes == 7u;
-    if (const auto it = acc.find(k); it != acc.end() && it->second.w > 0) return it->second.wd < 0;
+    if (const Acc* a = acc_of(p); a && a->w > 0) return a->wd < 0;
     return std::popcount(votes) >= 2;
   };
-  std::unordered_map<std::uint64_t, int> crossings;  // edge (a·N + b) → vertex
+  std::unordered_map<LatticeEdge, int, LatticeEdgeHash> crossings;  // edge → vertex
   const Rgb grey{200, 200, 200};
-  for (const std::uint64_t k0 : cells) {
-    const Eigen::Vector3i base = grid.node(k0);
-    for (const auto& perm : kPermutations) {
-      std::array<int, 4> corner{0, 0, 0, 0};
-      for (int s = 0; s < 3; ++s) corner[s + 1] = corner[s] | (1 << perm[s]);
-      std::array<Eigen::Vector3d, 4> p;
-      std::array<double, 4> side;
-      std::array<std::uint64_t, 4> id;
-      for (int s = 0; s < 4; ++s) {
-        const int c = corner[s];
-        p[s] = grid.at(base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1));
-        id[s] = corner_of(k0, c);
-        side[s] = is_inside(id[s]) ? -1.0 : 1.0;
-      }
-      march(p, side, out, [&](int i, int j) {
-        const std::uint64_t a = id[i], b = id[j];
-        const std::uint64_t ek = std::min(a, b) * total + std::max(a, b);
-        if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
-        // The blend where the edge enters it, seen from its outer end, as a ray would see it.
-        const int o = side[i] > 0 ? i : j, n = o == i ? j : i;
-        const Eigen::Vector3d d = p[n] - p[o];
-        const double len = d.norm();
-        if (const auto hit = scene.trace({p[o], d / len}, 0.0, len, trace); hit && hit->kind == PrimitiveKind::slim) {
-          const int v = out.add_vertex(hit->point, hit->colour);
-          crossings.emplace(ek, v);
-          on_surface.push_back(1);
-          return v;
-        }
-        // Else the distance's root where its signs agree with the sides, else the edge's middle;
-        // the caller moves it onto the blend along its normal.
-        double t = 0.5;
-        const auto fa = value(a), fb = value(b);
-        if (fa && fb && *fa * side[i] >= 0 && *fb * side[j] >= 0 && *fa != *fb) t = std::clamp(*fa / (*fa - *fb), 0.0, 1.0);
-        const int v = out.add_vertex(p[i] + t * (p[j] - p[i]), grey);
+  const auto march_tet = [&](const std::array<Eigen::Vector3i, 4>& lattice) {
+    std::array<Eigen::Vector3d, 4> p;
+    std::array<double, 4> side;
+    for (int s = 0; s < 4; ++s) {
+      p[s] = lattice_at(lattice[s]);
+      side[s] = is_inside(lattice[s]) ? -1.0 : 1.0;
+    }
+    march(p, side, out, [&](int i, int j) {
+      const std::uint64_t a = lattice_key(lattice[i]), b = lattice_key(lattice[j]);
+      const LatticeEdge ek = std::minmax(a, b);
+      if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
+      // The blend where the edge enters it, seen from its outer end, as a ray would see it.
+      const int o = side[i] > 0 ? i : j, n = o == i ? j : i;
+      const Eigen::Vector3d d = p[n] - p[o];
+      const double len = d.norm();
+      if (const auto hit = scene.trace({p[o], d / len}, 0.0, len, trace); hit && hit->kind == PrimitiveKind::slim) {
+        const int v = out.add_vertex(hit->point, hit->colour);
         crossings.emplace(ek, v);
-        on_surface.push_back(0);
+        on_surface.push_back(1);
         return v;
-      });
+      }
+      // Else the distance's root where its signs agree with the sides, else the edge's middle;
+      // the caller moves it onto the blend along its normal.
+      double t = 0.5;
+      const auto fa = value(lattice[i]), fb = value(lattice[j]);
+      if (fa && fb && *fa * side[i] >= 0 && *fb * side[j] >= 0 && *fa != *fb) t = std::clamp(*fa / (*fa - *fb), 0.0, 1.0);
+      const int v = out.add_vertex(p[i] + t * (p[j] - p[i]), grey);
+      crossings.emplace(ek, v);
+      on_surface.push_back(0);
+      return v;
+    });
+  };
+  for (const std::uint64_t k0 : cells) {
+    const Eigen::Vector3i base = grid.node(k0) * S;
+    for (const auto& perm : kPermutations) {
+      std::array<Eigen::Vector3i, 4> corner;
+      corner[0] = base;
+      for (int s = 0; s < 3; ++s) corner[s + 1] = corner[s] + S * Eigen::Vector3i::Unit(perm[s]);
+      march_tet(corner);
     }
   }
+  for (const auto& t : fine.tets) march_tet(t);
 }
 
 std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m) {
@@ -743,11 +844,15 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
 /// the faces with a sample beyond the bound (mesh → surface, measured on the new faces only) and,
 /// once there are none, on the faces nearest the drawn surface's points beyond it (surface →
 /// mesh); each midpoint moved onto the blend along its normal (snap_to_surface, kept where its
-/// line meets none). Returns the rounds used, and the mesh before them.
+/// line meets none). Returns the rounds used, and the mesh before them with its measure.
 struct LocalRefinement {
   int rounds = 0;
-  MeshDistance before;  ///< mesh → surface of the SLIM triangles before the first cut
+  bool measured = false;  ///< round 0 ran: `before` and `before_where` hold the whole mesh's measure
+  MeshDistance before;    ///< mesh → surface of the whole mesh before the first cut
+  BeyondSamples before_where;
   PolygonMesh unrefined;
+  /// Surface → mesh of the mesh returned, when the last round measured it and cut nothing after
+  std::optional<SurfaceError> surface;
 };
 
 LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
@@ -763,6 +868,7 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
   std::vector<std::uint8_t> resnapped;  // vertices already moved along their normal once
   LocalRefinement out;
   if (o.local_refinements > 0) out.unrefined = b.mesh;
+  std::size_t surface_beyond_before = std::numeric_limits<std::size_t>::max();
   int round = 0;
   for (; round < o.local_refinements && b.mesh.face_count() < o.max_triangles; ++round) {
     // Mesh → surface on the new faces (the others were measured within the bound before).
@@ -771,19 +877,30 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
     for (std::size_t f = first_face; f < b.mesh.face_count(); ++f)
       if (fresh[f])
         for (const int v : b.mesh.face(f)) touched[v] = 1;
+    // Round 0 measures the whole mesh (all faces are new but those of other primitives), so that
+    // the measure stands for the unrefined mesh should the refinement be undone.
     PolygonMesh part;
-    part.vertices = b.mesh.vertices;
     std::vector<std::size_t> of_part;
-    for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
-      const auto t = b.mesh.face(f);
-      if (fresh[f] || touched[t[0]] || touched[t[1]] || touched[t[2]]) {
-        part.add_face(t);
-        of_part.push_back(f);
+    if (round == 0) {
+      of_part.resize(b.mesh.face_count());
+      std::iota(of_part.begin(), of_part.end(), std::size_t{0});
+    } else {
+      part.vertices = b.mesh.vertices;
+      for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
+        const auto t = b.mesh.face(f);
+        if (fresh[f] || touched[t[0]] || touched[t[1]] || touched[t[2]]) {
+          part.add_face(t);
+          of_part.push_back(f);
+        }
       }
     }
     BeyondSamples part_beyond;
-    const MeshDistance md = mesh_to_surface(scene, trace, part, reach, bound, &part_beyond);
-    if (round == 0) out.before = md;
+    const MeshDistance md = mesh_to_surface(scene, trace, round == 0 ? b.mesh : part, reach, bound, &part_beyond);
+    if (round == 0) {
+      out.before = md;
+      out.before_where = part_beyond;
+      out.measured = true;
+    }
     std::vector<std::uint8_t> marked(b.mesh.face_count(), 0);
     for (std::size_t k = 0; k < of_part.size(); ++k) {
       const std::size_t f = of_part[k];
@@ -801,7 +918,8 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
     std::vector<double> half_edge(b.mesh.vertices.size(), 0.0);
     bool any_vertex = false;
     for (std::size_t v = 0; v < keep.size(); ++v)
-      if (part_beyond.vertices[v] && !resnapped[v]) keep[v] = 0, resnapped[v] = 1, any_vertex = true;
+      if (part_beyond.vertices[v] && !resnapped[v] && (round > 0 || touched[v]))  // SLIM vertices only
+        keep[v] = 0, resnapped[v] = 1, any_vertex = true;
     if (any_vertex) {
       for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
         const auto t = b.mesh.face(f);
@@ -819,7 +937,13 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
       const SurfaceError se = measure_surface_error(
           model, DataSurface::from_mesh(b.mesh), box,
           {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = 1u << 14});
-      if (se.beyond_points.empty()) break;
+      // Cuts that leave as many of the drawn surface's pixels beyond the bound as the last ones
+      // did do not reach them (a part or gap the grid missed, which no cut creates): stop.
+      if (se.beyond_points.empty() || se.beyond >= surface_beyond_before) {
+        out.surface = se;
+        break;
+      }
+      surface_beyond_before = se.beyond;
       const auto& V = b.mesh.vertices;
       for (std::size_t f = first_face; f < b.mesh.face_count(); ++f) {
         const auto t = b.mesh.face(f);
@@ -934,14 +1058,18 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                              : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
                                         diagonal / 256.0);
 
-  const auto measure_surface_side = [&](ToMeshResult& r) {
+  // Surface → mesh; `keep` of the drawn surface's points beyond the bound are returned.
+  const auto measure_surface_side = [&](ToMeshResult& r, std::size_t keep = 0) {
+    std::vector<Eigen::Vector3d> beyond;
     if (r.mesh.face_count() > 0) {
       const DataSurface data = DataSurface::from_mesh(r.mesh);
-      const SurfaceError se =
-          measure_surface_error(model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound});
+      const SurfaceError se = measure_surface_error(
+          model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = keep});
       r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+      for (const auto& b : se.beyond_points) beyond.push_back(b.point);
     }
     r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+    return beyond;
   };
   const auto share_beyond = [](const MeshDistance& d) {
     return d.samples == 0 ? 0.0 : static_cast<double>(d.beyond) / static_cast<double>(d.samples);
@@ -953,6 +1081,75 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     for (const auto& s : model.slims) b.extend(bounds(s));
     return model.slims.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : Eigen::Vector3d(b.max - b.min);
   }();
+  // One mesh at a resolution level, the SLIM grid's cells in `refined` cut finer; with, when
+  // `where` is given, the centroids of its SLIM triangles with a sample beyond the bound.
+  // `surface_bad`, `surface_measured`: where the last local round's surface → mesh measure holds
+  // for the mesh returned, it is its figure, and its points beyond the bound are given.
+  const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where,
+                           std::vector<Eigen::Vector3d>* surface_bad = nullptr, bool* surface_measured = nullptr,
+                           bool* undone = nullptr) {
+    Builder b;
+    b.colours = has_any_colour(model);
+    if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
+    for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
+    double reach = 4.0 * bound;
+    LocalRefinement local;
+    const std::size_t first_face = b.mesh.face_count();
+    if (!model.slims.empty()) {
+      const double h = slim_h0 / (1 << level);
+      const std::size_t first = b.mesh.vertices.size();
+      std::vector<std::uint8_t> on_surface;
+      const auto t0 = std::chrono::steady_clock::now();
+      mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, refined, b, on_surface);
+      snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
+      const auto t1 = std::chrono::steady_clock::now();
+      reach = std::max(reach, 1.5 * h);
+      local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
+      log::debug("mesh: SLIM grid ({} refined cells) in {:.2f} s, local refinement in {:.2f} s", refined.size(),
+                 std::chrono::duration<double>(t1 - t0).count(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
+    }
+    ToMeshResult r;
+    r.bound = bound;
+    r.refinements = level;
+    r.local_rounds = local.rounds;
+    r.mesh = std::move(b.mesh);
+    BeyondSamples beyond;
+    if (local.measured && local.rounds == 0) {  // nothing was cut: round 0's measure is this mesh's
+      r.mesh_to_surface = local.before;
+      beyond = std::move(local.before_where);
+    } else {
+      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, where ? &beyond : nullptr);
+    }
+    // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
+    // its normals cannot tell apart) is undone, with round 0's measure of the unrefined mesh.
+    if (local.rounds > 0 && local.before.beyond < r.mesh_to_surface.beyond) {
+      log::info("mesh: local refinement left {} samples beyond the bound, {} before it: undone", r.mesh_to_surface.beyond,
+                local.before.beyond);
+      r.mesh = std::move(local.unrefined);
+      r.mesh_to_surface = local.before;
+      beyond = std::move(local.before_where);
+      r.local_rounds = 0;
+      if (undone) *undone = true;
+    }
+    r.open_edges = count_open_edges(r.mesh);
+    if (surface_bad && local.surface && r.local_rounds == local.rounds) {  // its last measure is this mesh's
+      const SurfaceError& se = *local.surface;
+      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+      r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+      surface_bad->clear();
+      for (const auto& p : se.beyond_points) surface_bad->push_back(p.point);
+      *surface_measured = true;
+    }
+    if (where)
+      for (std::size_t f = first_face; f < r.mesh.face_count() && f < beyond.faces.size(); ++f)
+        if (beyond.faces[f] > bound) {
+          const auto t = r.mesh.face(f);
+          where->push_back((r.mesh.vertices[t[0]] + r.mesh.vertices[t[1]] + r.mesh.vertices[t[2]]) / 3.0);
+        }
+    return r;
+  };
+  const auto total_beyond = [](const ToMeshResult& r) { return r.mesh_to_surface.beyond + r.surface_to_mesh.beyond; };
   for (int level = 0; level <= o.max_refinements; ++level) {
     // The SLIM grid keeps a byte per node: no doubling past kMaxNodes of them.
     constexpr double kMaxNodes = 1.5e9;
@@ -962,51 +1159,71 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       break;
     }
     if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
-    Builder b;
-    b.colours = has_any_colour(model);
-    if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
-    for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
-    double reach = 4.0 * bound;
-    LocalRefinement local;
-    if (!model.slims.empty()) {
-      const double h = slim_h0 / (1 << level);
-      const std::size_t first = b.mesh.vertices.size();
-      const std::size_t first_face = b.mesh.face_count();
-      std::vector<std::uint8_t> on_surface;
-      mesh_slims(model, slim_scene ? *slim_scene : scene, trace, h, b, on_surface);
-      snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
-      reach = std::max(reach, 1.5 * h);
-      local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
-    }
-    ToMeshResult r;
-    r.bound = bound;
-    r.refinements = level;
-    r.local_rounds = local.rounds;
-    r.mesh = std::move(b.mesh);
-    r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound);
-    // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
-    // its normals cannot tell apart) is undone.
-    if (local.rounds > 0 && r.mesh_to_surface.beyond > local.before.beyond) {
-      const MeshDistance unrefined = mesh_to_surface(scene, trace, local.unrefined, reach, bound);
-      if (unrefined.beyond < r.mesh_to_surface.beyond) {
-        log::info("mesh: local refinement left {} samples beyond the bound, {} before it: undone", r.mesh_to_surface.beyond,
-                  unrefined.beyond);
-        r.mesh = std::move(local.unrefined);
-        r.mesh_to_surface = unrefined;
-        r.local_rounds = 0;
+    const bool grid_refining = !model.slims.empty() && o.grid_refinements > 0;
+    std::vector<Eigen::Vector3d> bad, surface_bad;
+    bool surface_measured = false;
+    bool undone = false;
+    ToMeshResult r = mesh_at(level, {}, grid_refining ? &bad : nullptr, &surface_bad, &surface_measured, &undone);
+    // Where the triangles' refinement was undone, the samples beyond the bound come from a blend
+    // whose sheets the mesh's normals cannot tell apart (cracks of a fit), not from parts the grid
+    // missed; a finer grid there follows the same cracks (the kitten: more samples beyond and a
+    // larger maximum after each round), so the grid is not refined.
+    if (grid_refining && undone) log::info("mesh: local refinement undone: no grid refinement");
+    if (grid_refining && !undone) {
+      // Where samples stay beyond the bound after the triangles' own refinement (parts or gaps
+      // thinner than the grid, which no cut of its triangles creates), the grid cells holding
+      // them are cut finer, one level per round, and the whole SLIM mesh made again; a round
+      // kept only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
+      constexpr std::size_t kKeepBeyond = 1u << 14;
+      if (!surface_measured) surface_bad = measure_surface_side(r, kKeepBeyond);
+      bad.insert(bad.end(), surface_bad.begin(), surface_bad.end());
+      surface_measured = true;
+      const SlimGrid grid = slim_grid(model, slim_h0 / (1 << level));
+      std::unordered_map<std::uint64_t, int> depth;  // refined cell → depth
+      for (int round = 0; round < o.grid_refinements && !r.within && r.mesh.face_count() < o.max_triangles; ++round) {
+        std::unordered_set<std::uint64_t> raised;
+        for (const Eigen::Vector3d& p : bad) {
+          const Eigen::Vector3i c = ((p - grid.origin) / grid.h).array().floor().cast<int>();
+          if ((c.array() < 0).any() || (c.array() > grid.n.array() - 2).any()) continue;
+          const std::uint64_t k = grid.index(c);
+          if (raised.contains(k)) continue;
+          if (int& d = depth[k]; d < kGridLevels) {
+            ++d;
+            raised.insert(k);
+          }
+        }
+        if (raised.empty()) break;
+        for (std::size_t k = 0; k < bad.size(); k += std::max<std::size_t>(1, bad.size() / 8))
+          log::debug("mesh: grid round {}: beyond the bound at ({:.6g}, {:.6g}, {:.6g})", round + 1, bad[k].x(), bad[k].y(),
+                     bad[k].z());
+        std::vector<KuhnCellDepth> refined;
+        for (const auto& [k, d] : depth) refined.push_back({grid.node(k), d});
+        std::vector<Eigen::Vector3d> next_bad, next_surface_bad;
+        bool next_measured = false;
+        ToMeshResult next = mesh_at(level, refined, &next_bad, &next_surface_bad, &next_measured);
+        if (!next_measured) next_surface_bad = measure_surface_side(next, kKeepBeyond);
+        next_bad.insert(next_bad.end(), next_surface_bad.begin(), next_surface_bad.end());
+        log::info("mesh: grid round {}: {} cells cut finer ({} raised), {} triangles; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
+                  round + 1, depth.size(), raised.size(), next.mesh.face_count(), next.mesh_to_surface.beyond,
+                  next.surface_to_mesh.beyond, r.mesh_to_surface.beyond, r.surface_to_mesh.beyond,
+                  next.mesh_to_surface.max, next.surface_to_mesh.max);
+        if (!next.within && (total_beyond(next) >= total_beyond(r) || next.max_error() > r.max_error())) break;
+        next.grid_rounds = round + 1;
+        next.refined_cells = depth.size();
+        r = std::move(next);
+        bad = std::move(next_bad);
       }
     }
-    r.open_edges = count_open_edges(r.mesh);
     // A refinement that leaves more than a quarter of the previous share of samples beyond the
     // bound is not converging there (cracks or gaps of the blend itself, which no resolution
     // closes): the previous, smaller mesh is kept.
     if (have_best && share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface)) {
-      measure_surface_side(best);
+      if (best.surface_to_mesh.samples == 0) measure_surface_side(best);
       break;
     }
     const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
     const bool close = r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0;
-    if (close || last) measure_surface_side(r);
+    if ((close || last) && !surface_measured) measure_surface_side(r);
     best = std::move(r);
     have_best = true;
     if (best.within || last) break;

@@ -13,7 +13,10 @@
 /// upper bound of the Euclidean distance: see mesh_distance), and surface → mesh from rendered
 /// views (fit/surface_error.h). SLIM meshes are first refined locally (longest-edge bisection
 /// without T-junctions where samples exceed the bound, new vertices moved onto the blend; open
-/// edges never cut). The resolution doubles until both are within the bound, or
+/// edges never cut), then, where samples stay beyond it (parts or gaps thinner than the grid),
+/// the grid cells there are cut finer by conforming bisection of their tetrahedra
+/// (convert/kuhn_bisection.h: no crack at the seam with the coarse cells) and the SLIM mesh made
+/// again, one level per round, while that helps. The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes); then the smaller mesh is kept.
 #include <cstddef>
@@ -30,6 +33,11 @@ struct ToMeshOptions {
   /// SLIM: rounds of local refinement per grid (longest-edge bisection of the triangles whose
   /// samples exceed the bound, or nearest the drawn surface's points beyond it); 0: off
   int local_refinements = 12;
+  /// SLIM: rounds of local grid refinement per resolution (the grid cells holding samples still
+  /// beyond the bound after the triangles' refinement cut one level finer, at most to h/8, and
+  /// the SLIM mesh made again; a round kept only if it leaves fewer samples beyond and no larger
+  /// maximum; none where the triangles' refinement was undone: a cracked blend); 0: off
+  int grid_refinements = 2;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -53,6 +61,8 @@ struct ToMeshResult {
   std::size_t open_edges = 0;       ///< edges not shared by exactly two triangles (0: watertight)
   int refinements = 0;              ///< doublings used
   int local_rounds = 0;             ///< local refinement rounds used on the last grid
+  int grid_rounds = 0;              ///< local grid refinement rounds kept on the last grid
+  std::size_t refined_cells = 0;    ///< grid cells asked to be cut finer (the closure cuts some neighbours too)
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };

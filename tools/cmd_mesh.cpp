@@ -52,6 +52,8 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"open_edges", r.open_edges},
                          {"refinements", r.refinements},
                          {"local_rounds", r.local_rounds},
+                         {"grid_rounds", r.grid_rounds},
+                         {"refined_cells", r.refined_cells},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
@@ -93,6 +95,13 @@ void add_mesh(CLI::App& root, Commands& commands) {
                   "triangles whose samples exceed the bound or lie nearest surface points beyond it; new vertices "
                   "moved onto the drawn surface); 0: uniform doublings only")
       ->check(number({.lo = 0, .hi = 40}))
+      ->capture_default_str();
+  app->add_option("--grid-refinements", a->options.grid_refinements,
+                  "SLIM: rounds of local grid refinement per grid (the cells holding samples still beyond the bound "
+                  "cut one level finer, down to 1/8 of the grid, without cracks at the seams, and the mesh made "
+                  "again; kept while it leaves fewer samples beyond and no larger maximum; none where the triangles' "
+                  "refinement was undone); 0: off")
+      ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_option("--slim-offset", a->options.slim_offset,
                   "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")

@@ -51,10 +51,11 @@ if [ -n "$bunny" ] && [ -f "$bunny" ]; then
     --colour-by error --report "$out/bunny_error_render.json"
   # A mesh for MeshLab, Blender or a printer, within a stated distance of the rendered surface
   # (the default bound, 1e-3 of the diagonal; one grid, no doubling, to keep the demo short).
-  # --allow-exceed: local refinement cuts the samples beyond the bound by about three quarters,
-  # but the fitted bunny's blend has cracks and holes (its scan is open at the base) that a mesh
-  # can only bridge or leave open, and ear tips the first grid under-resolves; the report says
-  # what the mesh reached.
+  # --allow-exceed: local refinement (of the triangles, then of the grid cells where samples stay
+  # beyond the bound, such as the ear tips) brings mesh -> surface within the bound, but
+  # surface -> mesh stays about twice the bound at pixels spread over the body: the fitted
+  # bunny's blend has cracks and holes (its scan is open at the base) that a mesh can only bridge
+  # or leave open. The report says what the mesh reached.
   run mesh "$out/bunny.qxm" -o "$out/bunny_mesh.ply" --max-refinements 0 --allow-exceed \
     --report "$out/bunny_mesh.json"
 else

@@ -284,15 +284,16 @@ TEST(ToMesh, FittedTorusClosedAndWithinItsBoundOfTheDrawnBlendAwayFromItsCracks)
 
 // A large smooth sphere and a small one: the first grid, sized for the large sphere's patches,
 // is too coarse only on the small one. Local refinement (bisecting the triangles there) reaches
-// the bound both ways with fewer triangles than uniform doubling, and no open edges; without it,
-// the first grid misses the bound.
+// the bound both ways with fewer triangles than uniform doubling, and no open edges; without it
+// (and without grid refinement), the first grid misses the bound.
 TEST(ToMesh, LocalRefinementWhereOnlyOneSmallPartNeedsIt) {
   Model m;
   add_slim_sphere(m, Eigen::Vector3d::Zero(), 1.0, 200);
   add_slim_sphere(m, Eigen::Vector3d(1.6, 0, 0), kSmallRadius, kSmallBalls);
   const ToMeshResult local = mesh_model(m, {.max_refinements = 0, .progress = {}});
-  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .local_refinements = 0, .progress = {}});
-  const ToMeshResult uniform = mesh_model(m, {.local_refinements = 0, .progress = {}});
+  const ToMeshResult first =
+      mesh_model(m, {.max_refinements = 0, .local_refinements = 0, .grid_refinements = 0, .progress = {}});
+  const ToMeshResult uniform = mesh_model(m, {.local_refinements = 0, .grid_refinements = 0, .progress = {}});
   std::cout << "two spheres, bound " << local.bound << ": first grid " << first.mesh.face_count() << " triangles, max "
             << first.mesh_to_surface.max << " / " << first.surface_to_mesh.max << "; local (" << local.local_rounds
             << " rounds) " << local.mesh.face_count() << ", max " << local.mesh_to_surface.max << " / "
@@ -311,6 +312,48 @@ TEST(ToMesh, LocalRefinementWhereOnlyOneSmallPartNeedsIt) {
   EXPECT_GT(uniform.refinements, 0);
   EXPECT_LT(local.mesh.face_count() * 2, uniform.mesh.face_count()) << "local refinement should need far fewer triangles";
   EXPECT_LT(local.mesh.face_count(), first.mesh.face_count() * 5 / 4) << "refinement should stay local";
+}
+
+// A large sphere and, beside it, a sphere a third of a grid cell across: no grid node falls
+// inside it and no cut of the large sphere's triangles can create it, so the first grid misses
+// it whatever its triangles do. Local grid refinement (the cells where the drawn surface is
+// beyond the bound cut finer) finds it, closed, with no crack at the seams between fine and
+// coarse cells, and far fewer triangles than a uniform doubling.
+TEST(ToMesh, LocalGridRefinementFindsAPartBetweenGridNodes) {
+  Model m;
+  add_slim_sphere(m, Eigen::Vector3d::Zero(), 1.0, 200);
+  add_slim_sphere(m, Eigen::Vector3d(1.45, 0.31, -0.17), 0.016, 40);
+  const ToMeshResult grid = mesh_model(m, {.max_refinements = 0, .progress = {}});
+  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .grid_refinements = 0, .progress = {}});
+  std::cout << "sphere and a speck, bound " << grid.bound << ": first grid " << first.mesh.face_count()
+            << " triangles, max " << first.mesh_to_surface.max << " / " << first.surface_to_mesh.max << ", beyond "
+            << first.mesh_to_surface.beyond << " / " << first.surface_to_mesh.beyond << "; grid refined ("
+            << grid.grid_rounds << " rounds, " << grid.refined_cells << " cells) " << grid.mesh.face_count()
+            << ", max " << grid.mesh_to_surface.max << " / " << grid.surface_to_mesh.max << ", open " << grid.open_edges
+            << "\n";
+  EXPECT_FALSE(first.within) << "the first grid should miss the small sphere";
+  EXPECT_GT(first.surface_to_mesh.max, 10 * first.bound) << "the small sphere should be missing, not coarse";
+  ASSERT_TRUE(grid.within) << "max " << grid.mesh_to_surface.max << " / " << grid.surface_to_mesh.max << ", misses "
+                           << grid.mesh_to_surface.misses;
+  EXPECT_GT(grid.grid_rounds, 0);
+  EXPECT_EQ(grid.open_edges, 0u);
+  EXPECT_EQ(first.open_edges, 0u);
+  // Two closed pieces: V − E + F = 2 + 2, wound outward.
+  std::map<std::pair<int, int>, int> uses;
+  for (std::size_t f = 0; f < grid.mesh.face_count(); ++f) {
+    const auto v = grid.mesh.face(f);
+    for (int i = 0; i < 3; ++i) ++uses[std::minmax(v[i], v[(i + 1) % 3])];
+  }
+  EXPECT_EQ(static_cast<long>(grid.mesh.vertices.size()) - static_cast<long>(uses.size()) +
+                static_cast<long>(grid.mesh.face_count()),
+            4);
+  EXPECT_GT(signed_volume(grid.mesh), 0.0);
+  // The speck is there: vertices on it, none far from it.
+  std::size_t on_speck = 0;
+  for (const auto& p : grid.mesh.vertices)
+    if ((p - Eigen::Vector3d(1.45, 0.31, -0.17)).norm() < 0.016 + grid.bound) ++on_speck;
+  EXPECT_GT(on_speck, 20u);
+  EXPECT_LT(grid.mesh.face_count(), first.mesh.face_count() * 5 / 4) << "grid refinement should stay local";
 }
 
 TEST(ToMesh, EmptyModelRefused) { EXPECT_THROW(mesh_model(Model{}), InvalidInput); }
