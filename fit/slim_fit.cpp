@@ -719,6 +719,29 @@ private:
 
   struct Changed;  // below: the balls a repair changed
 
+  // The chosen balls that may hold a point of the triangle abc, nearest centres first.
+  void balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                           const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const {
+    const auto& slims = result_.model.slims;
+    const Eigen::Vector3d mid = (a + b + c) / 3.0;
+    const double spread = std::max({(a - mid).norm(), (b - mid).norm(), (c - mid).norm()});
+    index.radius(mid, max_radius + spread, nb);
+    std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
+    near.clear();
+    for (const auto& [i, d2] : nb)
+      if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
+  }
+
+  // The triangle pqs split at its edges' midpoints: visit(corner piece ×3, middle piece).
+  template <class Visit>
+  static void split_in_four(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s, Visit&& visit) {
+    const Eigen::Vector3d pq = 0.5 * (p + q), qs = 0.5 * (q + s), sp = 0.5 * (s + p);
+    visit(p, pq, sp);
+    visit(pq, q, qs);
+    visit(sp, qs, s);
+    visit(pq, qs, sp);
+  }
+
   // Spots of the data's faces outside every chosen ball: holes of the drawn surface between
   // points that are all covered. A fan triangle some one ball holds whole (its three corners:
   // balls are convex) is covered; else it is split in four, down to face_hole_depth levels, and
@@ -752,12 +775,7 @@ private:
         const std::size_t spots_before = out.size();
         for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
           const Eigen::Vector3d &a = m.vertices[vs[0]], &b = m.vertices[vs[k]], &c = m.vertices[vs[k + 1]];
-          const Eigen::Vector3d mid = (a + b + c) / 3.0;
-          const double spread = std::max({(a - mid).norm(), (b - mid).norm(), (c - mid).norm()});
-          index.radius(mid, max_radius + spread, nb);
-          near.clear();
-          for (const auto& [i, d2] : nb)
-            if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
+          balls_near_triangle(index, max_radius, a, b, c, nb, near);
           // Inside the ball and its clip planes, its zero set passing within `band`:
           // a boundary plane that stops a sheet short of a crease leaves the strip beyond it
           // uncovered although the ball reaches across, and the prism of a face patch across
@@ -787,11 +805,7 @@ private:
                 }
               return;
             }
-            const Eigen::Vector3d pq = 0.5 * (p + q), qs = 0.5 * (q + s), sp = 0.5 * (s + p);
-            self(self, p, pq, sp, depth + 1);
-            self(self, pq, q, qs, depth + 1);
-            self(self, sp, qs, s, depth + 1);
-            self(self, pq, qs, sp, depth + 1);
+            split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
           };
           check(check, a, b, c, 0);
         }
@@ -873,18 +887,11 @@ private:
           if (!(n.norm() > 0)) continue;
           n.normalize();
           if (n.dot(N_[faces_->centroid[f]]) < 0) n = -n;
-          const Eigen::Vector3d mid = (a + b + c) / 3.0;
           const Eigen::Vector3d t1 = (b - a).normalized(), t2 = n.cross(t1);
           // The balls that hold the triangle's spots: one of their patches hit on the ray makes
           // the blend hit it (each patch's own first hit, as the blend's first pass takes it), so
           // only a ray none of them meets is traced through the scene.
-          const double spread = std::max({(a - mid).norm(), (b - mid).norm(), (c - mid).norm()});
-          index.radius(mid, max_radius + spread, nb);
-          // Nearest centres first: the ball most likely to hold the hit is tried first.
-          std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
-          near.clear();
-          for (const auto& [i, d2] : nb)
-            if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
+          balls_near_triangle(index, max_radius, a, b, c, nb, near);
           // A patch that meets every view of x without tracing: x well inside its ball and
           // planes, its zero set δ from x (to first order) and its normal within
           // 85° − view_hole_angle_deg of the face's, so every ray up to that angle meets it
@@ -942,11 +949,7 @@ private:
               }
               return;
             }
-            const Eigen::Vector3d pq = 0.5 * (p + q), qs = 0.5 * (q + s), sp = 0.5 * (s + p);
-            self(self, p, pq, sp, depth + 1);
-            self(self, pq, q, qs, depth + 1);
-            self(self, sp, qs, s, depth + 1);
-            self(self, pq, qs, sp, depth + 1);
+            split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
           };
           check(check, a, b, c, 0);
         }

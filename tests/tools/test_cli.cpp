@@ -554,7 +554,7 @@ TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
   const std::set<std::string> no_default = {
       "--out",    "--report", "--mesh",   "--depth-out", "--normal-out", "--camera", "--save-camera", "--screenshot",
       "--press",  "--holdout-out", "--implicit", "--surface", "--param", "--bounds", "--tets", "--values",
-      "--synth",  "--baseline-mesh", "--write-volume", "--animate", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models",
+      "--synth",  "--baseline-mesh", "--baseline-model", "--write-volume", "--animate", "--ellipsoids", "--colour", "--dims", "--type", "--spacing", "--keep-models",
       "--points"};
   const std::vector<std::string> commands = {"info",          "render",         "synth",         "fit",
                                              "view",          "mesh",           "convert quads", "convert skin",
