@@ -990,6 +990,51 @@ private:
     return balls_.size() - first;
   }
 
+  // A regular ball (radius search, surface side) at the centroid of each face that holds a spot
+  // (the centroid is one of the points), largest first, kept through pruning. A face whose
+  // centroid lies within half the radius of a ball taken here needs none of its own; a face whose
+  // ball comes out smaller than view_ball_min_reach × the face (or as a face patch, or unbounded)
+  // joins `small` for a face patch instead. Returns the number of balls taken.
+  std::size_t add_view_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
+                             std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& small) {
+    std::vector<std::uint32_t> centres, face;
+    std::vector<double> caps;
+    for (std::size_t k = 0; k < spots.size(); ++k) {
+      if (k > 0 && spots[k].first == spots[k - 1].first) continue;
+      const auto c = faces_->centroid[spots[k].first];
+      centres.push_back(c);
+      face.push_back(spots[k].first);
+      caps.push_back(cap_[c]);
+    }
+    const std::size_t first = balls_.size();
+    evaluate(centres, &caps);
+    std::vector<std::uint32_t> fresh(balls_.size() - first);
+    std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
+    settle(fresh);
+    chosen_flag_.resize(balls_.size(), 0);
+    pinned_.resize(balls_.size(), 0);
+    patch_excess_.resize(balls_.size(), -1.0);
+    patch_errors_.resize(balls_.size());
+    patch_reach_.resize(balls_.size(), kInf);
+    std::sort(fresh.begin(), fresh.end(), [&](auto a, auto b) { return balls_[a].R > balls_[b].R; });
+    std::vector<std::uint32_t> taken;
+    for (const auto b : fresh) {
+      const Eigen::Vector3d& c = P_[balls_[b].centre];
+      const std::uint32_t f = face[b - first];
+      if (balls_[b].face >= 0 || !balls_[b].is_bounded || balls_[b].R < opt_.view_ball_min_reach * faces_->reach[f]) {
+        small.push_back({f, c});
+        continue;
+      }
+      if (std::any_of(taken.begin(), taken.end(), [&](auto t) { return (P_[balls_[t].centre] - c).norm() < 0.5 * balls_[t].R; }))
+        continue;
+      cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
+      pinned_[b] = 1;
+      take(b);
+      taken.push_back(b);
+    }
+    return taken.size();
+  }
+
   // The spots join the points, uncovered, on their faces with their faces' normals.
   void add_points(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
     const std::size_t n0 = P_.size();
@@ -1560,6 +1605,20 @@ private:
       if (view_fill) {
         // Faces inside the balls that a view still sees through: their own face patches (the
         // data there), as for the many spots above.
+        // With view_balls, a face seen through for the first time gets a regular ball at its
+        // centroid instead, unless that ball comes out smaller than the face.
+        if (opt_.view_balls) {
+          view_tried_.resize(faces_->mesh->face_count(), 0);
+          std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> fresh, again;
+          for (const auto& s : seen) (view_tried_[s.first] ? again : fresh).push_back(s);
+          for (const auto& s : fresh) view_tried_[s.first] = 1;
+          const std::size_t balls = add_view_balls(fresh, again);
+          log::debug("fit_slim: round {}: {} faces seen through for the first time get {} balls at their centroids", round + 1,
+                     fresh.size(), balls);
+          st_.view_balls += balls;
+          std::sort(again.begin(), again.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+          seen.swap(again);
+        }
         const std::size_t added = add_face_patches(seen);
         log::debug("fit_slim: round {}: {} faces seen through from some view get patches of their own", round + 1, added);
         st_.view_face_patches += added;
@@ -1679,6 +1738,7 @@ private:
     if (st_.hole_points > 0) md["hole_points"] = std::to_string(st_.hole_points);
     if (st_.hole_face_patches > 0) md["hole_face_patches"] = std::to_string(st_.hole_face_patches);
     if (st_.view_face_patches > 0) md["view_face_patches"] = std::to_string(st_.view_face_patches);
+    if (st_.view_balls > 0) md["view_balls"] = std::to_string(st_.view_balls);
     if (can_add_points_ && opt_.cover_face_holes && face_prisms()) md["view_holes"] = std::to_string(st_.view_holes);
     if (can_add_points_ && opt_.cover_face_holes) md["face_holes"] = std::to_string(st_.face_holes);
     md["patches"] = std::to_string(st_.patches);
@@ -1750,6 +1810,7 @@ private:
   std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
+  std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
   std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches
 };
 

@@ -143,6 +143,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"hole_face_patches", s.hole_face_patches},
                                             {"face_holes", s.face_holes},
                                             {"view_face_patches", s.view_face_patches},
+                                            {"view_balls", s.view_balls},
                                             {"view_holes", s.view_holes},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},

@@ -501,14 +501,21 @@ TEST(FitSlimHard, GrazingViewsSeeNoHolesBetweenCoveringBalls) {
   };
   const Outcome with = fit_and_measure(s, 1e-2);
   expect_two_sided(with);
-  EXPECT_GT(with.fit.stats.view_face_patches, 0u);
+  EXPECT_GT(with.fit.stats.view_balls + with.fit.stats.view_face_patches, 0u);
   EXPECT_EQ(with.fit.stats.view_holes, 0u);
   const SurfaceError fine = holes(with);
   const Outcome without = fit_and_measure(s, 1e-2, {.view_hole_rays = 0});
   const SurfaceError before = holes(without);
-  std::cerr << "  holes at 512²: " << fine.holes << " of " << fine.data_pixels << " pixels; without the view check "
-            << before.holes << "\n";
+  // Face patches alone (one per face seen through) mend the same slits with more patches.
+  const Outcome patches_only = fit_and_measure(s, 1e-2, {.view_balls = false});
+  expect_two_sided(patches_only);
+  const SurfaceError by_patches = holes(patches_only);
+  std::cerr << "  holes at 512²: " << fine.holes << " of " << fine.data_pixels << " pixels (" << with.fit.model.slims.size()
+            << " patches, " << with.fit.stats.view_balls << " view balls, " << with.fit.stats.view_face_patches
+            << " view face patches); face patches only " << by_patches.holes << " (" << patches_only.fit.model.slims.size()
+            << " patches); without the view check " << before.holes << " (" << without.fit.model.slims.size() << ")\n";
   EXPECT_LE(fine.hole_share, 5e-5) << fine.holes << " of " << fine.data_pixels;
+  EXPECT_LE(by_patches.hole_share, 5e-5) << by_patches.holes << " of " << by_patches.data_pixels;
   EXPECT_GT(before.holes, 3 * fine.holes) << "the case no longer leaves holes the lattice check misses";
 }
 
