@@ -1556,8 +1556,11 @@ private:
       const bool few = holes.size() <= std::max<std::size_t>(64, faces_ ? faces_->mesh->face_count() / 8 : 0);
       // Not in the last two rounds: the balls that cover new points need verifying and repairing too.
       const bool fill = !holes.empty() && few && round + 2 < budget;
-      // Too many: the faces with spots get face patches of their own (below).
-      const bool face_fill = !holes.empty() && !few && round + 2 < budget && face_prisms();
+      // Too many: the faces with spots get face patches of their own (below). So do the faces
+      // with spots in the last round that may still change the model (too late for points: the
+      // balls that would cover them would go unverified), as face patches are the data itself.
+      const bool late = round + 2 >= budget && round + 1 < budget;
+      const bool face_fill = !holes.empty() && face_prisms() && ((!few && round + 2 < budget) || late);
       const std::size_t failing =
           st_.blend_failures + st_.surface_failures + (fill || face_fill ? holes.size() : 0) + (view_fill ? seen.size() : 0);
       const double score = failures();
@@ -1586,17 +1589,33 @@ private:
         // One spot per face (the first; spots come sorted by face): the ball that covers it
         // mostly covers the face's others too, which the next round finds if not. Every spot at
         // once cost the bunny 260 points and 220 patches at 1e-3; one per face 74 and 35.
-        std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> one;
+        // A face that still holds a spot after a point was added on it (the balls that cover
+        // the points there come out smaller than the face: E below the sampling in this region)
+        // gets a face patch instead of another point (bunny at 1e-4: 568 spots were left after
+        // the fill rounds, each round's repair opening new ones).
+        std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> one, again;
+        hole_tried_.resize(faces_->mesh->face_count(), 0);
         for (const auto& h : holes)
-          if (one.empty() || one.back().first != h.first) one.push_back(h);
+          if ((one.empty() || one.back().first != h.first) && (again.empty() || again.back().first != h.first))
+            (hole_tried_[h.first] && face_prisms() ? again : one).push_back(h);
+        for (const auto& h : one) hole_tried_[h.first] = 1;
         add_points(one);
+        if (!again.empty()) {
+          const std::size_t added = add_face_patches(again);
+          log::debug("fit_slim: round {}: {} faces with spots left after a point joined them get patches of their own", round + 1, added);
+          st_.hole_face_patches += added;
+        }
         best = Verified{};  // other points: not comparable
       } else if (face_fill) {
         // Too many to join the points: each face with a spot gets its own face patch instead, its
         // plane clipped to its prism — the data itself, covering the whole face.
         const std::size_t added = add_face_patches(holes);
-        log::info("fit_slim: round {}: {} spots of the data's faces lie outside every ball (balls smaller than the faces: "
-                  "E below the data's sampling); {} faces get patches of their own", round + 1, holes.size(), added);
+        if (few)
+          log::debug("fit_slim: round {}: {} spots of the data's faces outside every ball; too late for points, {} faces get "
+                     "patches of their own", round + 1, holes.size(), added);
+        else
+          log::info("fit_slim: round {}: {} spots of the data's faces lie outside every ball (balls smaller than the faces: "
+                    "E below the data's sampling); {} faces get patches of their own", round + 1, holes.size(), added);
         st_.hole_face_patches += added;
       } else if (!few && round == 0) {
         log::info("fit_slim: {} spots of the data's faces lie outside every ball (balls smaller than the faces: E below "
@@ -1626,7 +1645,9 @@ private:
       ++st_.repair_rounds;
       log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E, {} face spots outside every "
                  "ball (failures {:.3g})", round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, st_.face_holes, score);
-      repair(at_fault);
+      // The late round's face patches are verified on the model as it is: a repair there opens
+      // new spots that no later round may fill (bunny at 1e-4: 219 → 946).
+      if (!(late && face_fill)) repair(at_fault);
       prune();
       build_model();
     }
@@ -1810,6 +1831,7 @@ private:
   std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
+  std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
   std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
   std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches
 };
