@@ -1,6 +1,7 @@
 #include "core/slim.h"
 
 #include <algorithm>
+#include <numbers>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -152,6 +153,36 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
           out.push_back({patch.centre + patch.radius * u, g / gn, std::sqrt(r2)});
         }
       }
+  }
+}
+
+void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out) {
+  const Eigen::Vector3d g0 = patch.local.gradient(Eigen::Vector3d::Zero());
+  if (!(g0.norm() > 0.0) || !(spacing > 0.0)) return;
+  const Eigen::Vector3d n = g0.normalized(), e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  constexpr double kRho = 1.0 - 1e-9;  // on the sphere, still drawn
+  constexpr int kSteps = 48, kBisections = 30;
+  const int meridians = std::clamp(static_cast<int>(std::ceil(2.0 * std::numbers::pi * patch.radius / spacing)), 16, 4096);
+  for (int m = 0; m < meridians; ++m) {
+    const double phi = 2.0 * std::numbers::pi * m / meridians;
+    const Eigen::Vector3d t = std::cos(phi) * e1 + std::sin(phi) * e2;
+    const auto at = [&](double theta) { return Eigen::Vector3d(kRho * (std::cos(theta) * n + std::sin(theta) * t)); };
+    double th0 = 0.0, g_prev = patch.local.eval(at(0.0));
+    for (int k = 1; k <= kSteps; ++k) {
+      const double th1 = std::numbers::pi * k / kSteps, g1 = patch.local.eval(at(th1));
+      if ((g_prev < 0.0) != (g1 < 0.0)) {
+        double lo = th0, hi = th1, glo = g_prev;
+        for (int it = 0; it < kBisections; ++it) {
+          const double mid = 0.5 * (lo + hi), gm = patch.local.eval(at(mid));
+          if ((gm < 0.0) == (glo < 0.0)) lo = mid, glo = gm;
+          else hi = mid;
+        }
+        const Eigen::Vector3d u = at(0.5 * (lo + hi));
+        const Eigen::Vector3d g = patch.local.gradient(u);
+        if (patch.clips.keeps(u) && g.norm() > 0.0) out.push_back({patch.centre + patch.radius * u, g.normalized(), kRho});
+      }
+      th0 = th1, g_prev = g1;
+    }
   }
 }
 

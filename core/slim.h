@@ -67,6 +67,13 @@ struct SlimSurfaceSample {
 /// sheet leaves the ball and extrapolates farthest, is sampled on a 3× finer lattice.
 void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurfaceSample>& out);
 
+/// Samples a patch's rim, where its zero set meets its sphere (r → 1; inside the clip planes):
+/// meridians from the pole along the centre's gradient, one every `spacing` (world units) of the
+/// equator, each crossing found by sign changes of the quadric along it (48 steps, then
+/// bisection), appended to out. A sheet that curls away near its rim can pass between the
+/// lattice lines of sample_slim_patch; drawn where no other patch is hit, it is a fin or a speck.
+void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out);
+
 /// One patch's contribution to a ray: its hit and its weight.
 struct SlimSample {
   Hit hit;

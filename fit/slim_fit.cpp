@@ -1326,7 +1326,7 @@ private:
     patch_errors_.resize(balls_.size());
     patch_reach_.resize(balls_.size(), kInf);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
-      std::vector<SlimSurfaceSample> zero;
+      std::vector<SlimSurfaceSample> zero, rim;
       std::vector<SlimSample> blended;
       for (std::size_t k = r.begin(); k != r.end(); ++k) {
         if (!stale[k]) continue;
@@ -1353,6 +1353,12 @@ private:
         }
         zero.clear();
         sample_slim_patch(slims[k], opt_.verify_surface_grid, zero);
+        // The rim every E/2: its points off the data are seen through the blend too (elsewhere
+        // other patches hide it, or the lattice samples above vouch for the blend).
+        rim.clear();
+        sample_slim_rim(slims[k], 0.5 * E_, rim);
+        for (const auto& z : rim)
+          if (!(data_->distance(z.point, bound, bound) <= bound)) zero.push_back(z);
         for (const auto& z : zero) {
           const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
           if (!hit) continue;

@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "core/bounds.h"
 #include "core/camera.h"
 #include "core/lighting.h"
 #include "core/reference.h"
+#include "core/slim.h"
 #include "core/synth.h"
 
 using namespace quadrix;
@@ -221,3 +223,55 @@ TEST(ShadowLight, FrustumFitsTheBoxAndTheMapFollowsTheView) {
     if (n > 256 && m < 4096) EXPECT_NEAR(double(m) / n, 2.0, 0.01);
   }
 }
+
+namespace quadrix {
+namespace {
+
+// The rim of a patch (its zero set on its sphere): a tilted plane through the centre meets the
+// sphere in a great circle, a sheet curling up (z = 0.6 x² − 0.1) in a lower loop; every sample
+// lies on the sphere and on the zero set, they are spaced along the whole loop, and a clip plane
+// keeps only its side.
+TEST(SlimRim, SamplesLieOnTheSphereAndTheZeroSetAlongTheWholeLoop) {
+  const double R = 3.0;
+  const auto patch = [&](const Eigen::Vector3d& c, const Quadric& g, ClipPlanes clips = {}) {
+    SlimPatch p;
+    p.centre = c, p.radius = R, p.local = g, p.clips = clips;
+    return p;
+  };
+  const auto check = [&](const SlimPatch& p, double spacing) {
+    std::vector<SlimSurfaceSample> rim;
+    sample_slim_rim(p, spacing, rim);
+    for (const auto& s : rim) {
+      const Eigen::Vector3d u = (s.point - p.centre) / R;
+      EXPECT_NEAR(u.norm(), 1.0, 1e-8);
+      EXPECT_NEAR(p.local.eval(u), 0.0, 1e-7);
+      EXPECT_TRUE(p.clips.keeps(u));
+      EXPECT_GT(s.normal.dot(p.local.gradient(u)), 0.0);
+    }
+    return rim;
+  };
+  const SlimPatch plane = patch(Eigen::Vector3d(10, -4, 2), Quadric::plane(Eigen::Vector3d(0.3, -0.2, 1.0).normalized(), 0.0));
+  const auto circle = check(plane, 0.1);
+  EXPECT_GE(circle.size(), std::size_t(2 * std::numbers::pi * R / 0.1));
+  // The largest gap between neighbours along the circle is about the spacing.
+  double widest = 0;
+  for (const auto& a : circle) {
+    double nearest = 1e9;
+    for (const auto& b : circle)
+      if (&a != &b) nearest = std::min(nearest, (a.point - b.point).norm());
+    widest = std::max(widest, nearest);
+  }
+  EXPECT_LT(widest, 0.15);
+  // A curled sheet: g = z − 0.6x² + 0.1 (local), its rim below the equator at x = 0.
+  const Quadric curl = Quadric::from_coefficients({-0.6, 0, 0, 0, 0, 0, 0, 0, 1, 0.1});
+  const auto loop = check(patch(Eigen::Vector3d::Zero(), curl), 0.1);
+  EXPECT_GE(loop.size(), 150u);
+  // Clipped to x ≥ 0.2: only that part of the loop.
+  const SlimPatch half = patch(Eigen::Vector3d::Zero(), curl, ClipPlanes::of(ClipPlane{Eigen::Vector3d(1, 0, 0), -0.2}));
+  const auto part = check(half, 0.1);
+  EXPECT_GT(part.size(), 20u);
+  EXPECT_LT(part.size(), loop.size() / 2);
+}
+
+}  // namespace
+}  // namespace quadrix

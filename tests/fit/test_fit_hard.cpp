@@ -523,7 +523,7 @@ TEST(FitSlimHard, GrazingViewsSeeNoHolesBetweenCoveringBalls) {
 // 1e-4, far below the coarse sheet's sampling and at the fine one's: most of the coarse faces get
 // face patches, the rest are covered by balls that come out smaller than the faces. Both sides
 // hold and the fit ends with no face outside every ball (bunny at 1e-4 used to end with 568 such
-// spots: fit_slim_bunny.cpp).
+// spots: test_fit_scans.cpp).
 TEST(FitSlimHard, MixedSamplingEndsWithNoFaceOutsideEveryBall) {
   const auto f = [](double ox, double u, double v) {
     return Vec(ox + u, v, 0.06 * std::sin(5 * u) * std::cos(4 * v) + 0.03 * std::sin(11 * u * v));

@@ -1,0 +1,61 @@
+// Fits of the shared scans (slow label: about 50 s of two cores in all).
+//
+// The Stanford bunny fitted at 1e-4, far below its mesh's sampling (about 40 s): the fit must
+// end with every face of the mesh inside the union of the balls. Its repairs open new spots
+// round after round (a ball at fault is replaced by smaller ones), so the faces still holding
+// spots in the last round that may change the model get face patches, and a face that keeps a
+// spot after a point was added on it gets one at once (it used to end with 568 spots outside
+// every ball: 1.67e-4 of the data's pixels seen as holes at 1024²).
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/io/io.h"
+#include "core/mesh_io.h"
+#include "fit/data_surface.h"
+#include "fit/slim_fit.h"
+#include "fit/surface_error.h"
+
+namespace quadrix {
+namespace {
+
+TEST(FitSlimScans, AtOneTenThousandthEndsWithEveryFaceInsideTheBalls) {
+  const std::string file = std::string(QUADRIX_DATASETS) + "/meshes/bunny.ply";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
+  const PolygonMesh mesh = read_mesh(file);
+  const SlimFitResult r = fit_slim(points_from_mesh(mesh), mesh, {.max_error = 1e-4});
+  const SlimFitStats& s = r.stats;
+  std::cerr << "  " << s.patches << " patches, " << s.face_holes << " face spots left, " << s.hole_points
+            << " hole points, " << s.hole_face_patches << " hole face patches, " << s.blend_failures << " points beyond E, "
+            << s.surface_failures << " of " << s.surface_samples << " surface samples beyond 2E (max "
+            << s.surface_max / s.max_error_abs << "E), " << s.time_total << " s\n";
+  EXPECT_EQ(s.face_holes, 0u);
+  EXPECT_EQ(s.blend_failures, 0u);
+  // The surface side: a few samples past 2E remain at this E (21–28 of ~820,000, up to 3.7E).
+  EXPECT_LE(double(s.surface_failures), 1e-4 * double(s.surface_samples));
+  EXPECT_LE(s.surface_max, 4.0 * s.max_error_abs);
+}
+
+// The armadillo at 1e-3, seen as bench fit sees it (8 views at 1024²): no speck of the drawn
+// surface far from the data. Two patches' sheets curled away within 2 % of their rims, between
+// the verification's lattice lines, and showed 9–11E from the data where no other patch is hit;
+// their rims are now sampled (core/slim.h sample_slim_rim) and seen through the blend.
+TEST(FitSlimScans, ArmadilloAtOneThousandthShowsNoSpeckFarFromTheData) {
+  const std::string file = std::string(QUADRIX_DATASETS) + "/meshes/armadillo.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
+  const PolygonMesh mesh = read_mesh(file);
+  const SlimFitResult r = fit_slim(points_from_mesh(mesh), mesh, {.max_error = 1e-3});
+  Box3 box;
+  for (const auto& v : mesh.vertices) box.extend(v);
+  const double E = r.stats.max_error_abs;
+  const SurfaceError se = measure_surface_error(r.model, *r.data, box, {.views = 8, .resolution = 1024, .bound = 2 * E});
+  std::cerr << "  " << r.stats.patches << " patches; drawn surface max " << se.max / E << "E, p99.9 " << se.p999 / E
+            << "E, " << se.beyond << " of " << se.pixels << " pixels beyond 2E, " << se.holes << " holes\n";
+  EXPECT_EQ(r.stats.blend_failures, 0u);
+  EXPECT_LE(se.p999, 2 * E);
+  EXPECT_LE(se.max, 4 * E);
+}
+
+}  // namespace
+}  // namespace quadrix
