@@ -17,6 +17,7 @@
 
 #include <fmt/format.h>
 
+#include "convert/between_views.h"
 #include "convert/kuhn_bisection.h"
 #include "convert/mesh_measure.h"
 #include "core/error.h"
@@ -981,11 +982,15 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     }
     return se;
   };
+  const auto set_surface_side = [&](ToMeshResult& r, const SurfaceError& se) {
+    r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+    r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+  };
   const auto measure_surface_side = [&](ToMeshResult& r, std::size_t keep = 0) {
     std::vector<Eigen::Vector3d> beyond;
     if (r.mesh.face_count() > 0) {
       const SurfaceError se = surface_error(r.mesh, keep);
-      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+      set_surface_side(r, se);
       for (const auto& b : se.beyond_points) beyond.push_back(b.point);
     }
     r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
@@ -1008,6 +1013,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   // `where` is given, the centroids of its SLIM triangles with a sample beyond the bound.
   // `surface_bad`, `surface_measured`: where the last local round's surface → mesh measure holds
   // for the mesh returned, it is its figure, and its points beyond the bound are given.
+  // The last mesh made: its SLIM triangles' first face, and the reach its samples were measured with.
+  std::size_t slim_first_face = 0;
+  double mesh_reach = 0;
   const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where,
                            std::vector<Eigen::Vector3d>* surface_bad = nullptr, bool* surface_measured = nullptr,
                            bool* undone = nullptr) {
@@ -1018,6 +1026,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     double reach = 4.0 * bound;
     LocalRefinement local;
     const std::size_t first_face = b.mesh.face_count();
+    slim_first_face = first_face;
     if (!model.slims.empty()) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
@@ -1027,6 +1036,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
       const auto t1 = std::chrono::steady_clock::now();
       reach = std::max(reach, 1.5 * h);
+      mesh_reach = reach;
       local = refine_locally(scene, trace, o, bound, reach, 1.5 * h, first_face, b, memo,
                              [&](const PolygonMesh& m) { return surface_error(m, kKeepBeyond); });
       log::debug("mesh: SLIM grid ({} refined cells) in {:.2f} s, local refinement in {:.2f} s", refined.size(),
@@ -1136,6 +1146,36 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         next.refined_cells = depth.size();
         r = std::move(next);
         bad = std::move(next_bad);
+      }
+    }
+    // Where grazing views see the blend off the surface the mesh follows (the per-ray blend differs
+    // by view direction), the vertices move part of the way towards what they see; a round kept
+    // only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
+    if (!model.slims.empty() && !undone && !r.within && o.view_rounds > 0) {
+      SurfaceError se = surface_error(r.mesh, kKeepBeyond);
+      set_surface_side(r, se);
+      surface_measured = true;
+      std::vector<double> offset;
+      for (int round = 0; round < o.view_rounds && !r.within && r.surface_to_mesh.beyond > 0; ++round) {
+        ToMeshResult next = r;
+        std::vector<double> next_offset = offset;
+        const std::size_t moved = move_between_views(next.mesh, se.beyond_points,
+                                                     {.bound = bound, .first_face = slim_first_face}, next_offset);
+        if (moved == 0) break;
+        next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+        SurfaceError next_se = surface_error(next.mesh, kKeepBeyond);
+        set_surface_side(next, next_se);
+        log::info("mesh: view round {}: {} vertices moved; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}", round + 1,
+                  moved, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
+                  r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+        if (!next.within && (total_beyond(next) >= total_beyond(r) ||
+                             next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
+                             next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
+          break;
+        next.view_rounds = round + 1;
+        r = std::move(next);
+        offset = std::move(next_offset);
+        se = std::move(next_se);
       }
     }
     // A refinement that leaves more than a quarter of the previous share of samples beyond the
