@@ -17,7 +17,9 @@
 
 #include <fmt/format.h>
 
+#include "convert/between_views.h"
 #include "convert/kuhn_bisection.h"
+#include "convert/mesh_measure.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/reference.h"
@@ -557,18 +559,6 @@ void mesh_slims(const Model& model, const ReferenceScene& scene, const TraceOpti
   for (const auto& t : fine.tets) march_tet(t);
 }
 
-std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m) {
-  std::vector<Eigen::Vector3d> n(m.vertices.size(), Eigen::Vector3d::Zero());
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto v = m.face(f);
-    const Eigen::Vector3d fn = (m.vertices[v[1]] - m.vertices[v[0]]).cross(m.vertices[v[2]] - m.vertices[v[0]]);
-    for (const int i : v) n[i] += fn;
-  }
-  for (auto& x : n)
-    if (x.norm() > 0) x.normalize();
-  return n;
-}
-
 /// The drawn surface seen along −n from p + reach·n, within 2·reach: the first hit.
 std::optional<SurfaceHit> along_normal(const ReferenceScene& scene, const TraceOptions& trace,
                                        const Eigen::Vector3d& p, const Eigen::Vector3d& n, double reach) {
@@ -624,119 +614,6 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
   out.mesh = std::move(kept);
 }
 
-/// Where samples lie beyond the bound: per face, its samples' largest distance (its vertices'
-/// included; +inf where one met no surface); per vertex, whether it is beyond.
-struct BeyondSamples {
-  std::vector<double> faces;
-  std::vector<std::uint8_t> vertices;
-};
-
-MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& m,
-                             double reach, double bound, BeyondSamples* where = nullptr) {
-  const std::vector<Eigen::Vector3d> vn = vertex_normals(m);
-  struct Sample {
-    Eigen::Vector3d p, n;
-  };
-  std::vector<Sample> samples;
-  std::vector<std::int64_t> owner;  // face index, or −1 − vertex index
-  samples.reserve(m.vertices.size() + 4 * m.face_count());
-  for (std::size_t v = 0; v < m.vertices.size(); ++v)
-    if (vn[v].norm() > 0) {
-      samples.push_back({m.vertices[v], vn[v]});
-      owner.push_back(-1 - static_cast<std::int64_t>(v));
-    }
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto v = m.face(f);
-    const Eigen::Vector3d &a = m.vertices[v[0]], &b = m.vertices[v[1]], &c = m.vertices[v[2]];
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (!(n.norm() > 0)) continue;
-    n.normalize();
-    samples.push_back({(a + b + c) / 3.0, n});
-    samples.push_back({0.5 * (a + b), n});
-    samples.push_back({0.5 * (b + c), n});
-    samples.push_back({0.5 * (c + a), n});
-    owner.insert(owner.end(), 4, static_cast<std::int64_t>(f));
-  }
-  // A sample on a crease or on the surface's boundary (a cylinder's rim, where an open sheet leaves
-  // its tetrahedra) may see its normal line graze past the edge; then parallel lines offset by
-  // ε around it are tried (ε growing from reach/1000 to reach/5), each bounding the distance by
-  // its own plus ε.
-  std::vector<double> d(samples.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const auto& [p, n] = samples[i];
-      // Along the normal the surface may lie at a slant (a crease of the mesh, a normal the grid
-      // tilted): the 13 grid lines through p tighten it.
-      d[i] = nearest_along_lines(scene, trace, p, n, reach, bound);
-      if (d[i] >= 0) continue;
-      const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-      for (const double eps : {1e-3 * reach, 1e-2 * reach, 0.05 * reach, 0.2 * reach}) {
-        for (int k = 0; k < 8; ++k) {
-          const double a = k * std::numbers::pi / 4;
-          const Eigen::Vector3d q = p + eps * (std::cos(a) * e1 + std::sin(a) * e2);
-          if (const double dq = line_distance(scene, trace, q, n, reach); dq >= 0)
-            d[i] = d[i] < 0 ? dq + eps : std::min(d[i], dq + eps);
-        }
-        if (d[i] >= 0) break;
-      }
-    }
-  });
-  if (where) {
-    where->faces.assign(m.face_count(), 0.0);
-    where->vertices.assign(m.vertices.size(), 0);
-    std::vector<double> at_vertex(m.vertices.size(), 0.0);
-    for (std::size_t i = 0; i < d.size(); ++i) {
-      const double x = d[i] < 0 ? std::numeric_limits<double>::infinity() : d[i];
-      if (owner[i] >= 0) {
-        where->faces[owner[i]] = std::max(where->faces[owner[i]], x);
-      } else {
-        at_vertex[-1 - owner[i]] = x;
-        where->vertices[-1 - owner[i]] = x > bound;
-      }
-    }
-    for (std::size_t f = 0; f < m.face_count(); ++f)
-      for (const int v : m.face(f)) where->faces[f] = std::max(where->faces[f], at_vertex[v]);
-  }
-  MeshDistance out;
-  out.samples = samples.size();
-  double sum2 = 0;
-  std::vector<double> found;
-  found.reserve(d.size());
-  for (const double x : d) {
-    if (x < 0) {
-      ++out.misses;
-      continue;
-    }
-    found.push_back(x);
-    out.beyond += x > bound;
-    out.max = std::max(out.max, x);
-    sum2 += x * x;
-  }
-  if (!found.empty()) {
-    out.rms = std::sqrt(sum2 / found.size());
-    const std::size_t k = std::min(found.size() - 1, static_cast<std::size_t>(0.99 * found.size()));
-    std::nth_element(found.begin(), found.begin() + k, found.end());
-    out.p99 = found[k];
-  }
-  if (log::level() <= log::Level::debug) {  // where the mesh strays most: -vv
-    std::vector<std::size_t> order(d.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    const auto key = [&](std::size_t i) { return d[i] < 0 ? std::numeric_limits<double>::infinity() : d[i]; };
-    const std::size_t shown = std::min<std::size_t>(8, order.size());
-    std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(shown), order.end(),
-                      [&](std::size_t a, std::size_t b) { return key(a) > key(b); });
-    for (std::size_t k = 0; k < shown && key(order[k]) > bound; ++k) {
-      const auto& [p, n] = samples[order[k]];
-      log::debug("mesh: sample at ({:.6g}, {:.6g}, {:.6g}) normal ({:.3f}, {:.3f}, {:.3f}): {}", p.x(), p.y(), p.z(), n.x(),
-                 n.y(), n.z(), d[order[k]] < 0 ? std::string("no surface along any of its lines") : fmt::format("{:.3g} from the surface", d[order[k]]));
-    }
-  }
-  // A miss is at least `reach` away (nothing was hit within it).
-  if (out.misses > 0) out.max = std::max(out.max, reach);
-  out.beyond += out.misses;
-  return out;
-}
-
 std::size_t count_open_edges(const PolygonMesh& m) {
   std::unordered_map<std::uint64_t, int> uses;
   for (std::size_t f = 0; f < m.face_count(); ++f) {
@@ -779,31 +656,43 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
       if (longer(t[i], t[(i + 1) % 3], t[best], t[(best + 1) % 3])) best = i;
     return edge_key(t[best], t[(best + 1) % 3]);
   };
-  // Open edges (the blend's own holes) are never split: their count stays as it was.
-  std::unordered_map<std::uint64_t, int> uses;
+  // Each edge's faces (more than two: the edge is open or non-manifold). Open edges (the blend's
+  // own holes) are never split: their count stays as it was.
+  struct EdgeFaces {
+    int uses = 0;
+    std::size_t face[2] = {0, 0};
+  };
+  std::unordered_map<std::uint64_t, EdgeFaces> edges;
+  edges.reserve(3 * (m.face_count() - first_face) / 2 + 1);
   for (std::size_t f = first_face; f < m.face_count(); ++f) {
     const auto t = m.face(f);
-    for (int i = 0; i < 3; ++i) ++uses[edge_key(t[i], t[(i + 1) % 3])];
+    for (int i = 0; i < 3; ++i) {
+      EdgeFaces& e = edges[edge_key(t[i], t[(i + 1) % 3])];
+      if (e.uses < 2) e.face[e.uses] = f;
+      ++e.uses;
+    }
   }
   std::unordered_map<std::uint64_t, int> midpoint;  // edge → its midpoint vertex (−1 until made)
+  std::vector<std::uint64_t> to_close;              // split edges whose faces are not yet closed
   const auto split_longest = [&](std::span<const int> t) {
     const std::uint64_t e = longest(t);
-    return uses.at(e) == 2 && midpoint.emplace(e, -1).second;
+    if (edges.at(e).uses == 2 && midpoint.emplace(e, -1).second) to_close.push_back(e);
   };
   for (std::size_t f = first_face; f < m.face_count(); ++f)
     if (marked[f]) split_longest(m.face(f));
-  for (bool changed = true; changed;) {  // the closure: a split edge forces its faces' longest ones
-    changed = false;
-    for (std::size_t f = first_face; f < m.face_count(); ++f) {
-      const auto t = m.face(f);
-      bool any = false;
-      for (int i = 0; i < 3 && !any; ++i) any = midpoint.contains(edge_key(t[i], t[(i + 1) % 3]));
-      if (any && split_longest(t)) changed = true;
-    }
+  while (!to_close.empty()) {  // the closure: a split edge forces its faces' longest ones
+    const EdgeFaces e = edges.at(to_close.back());
+    to_close.pop_back();
+    for (int k = 0; k < 2; ++k) split_longest(m.face(e.face[k]));
   }
-  for (auto& [key, v] : midpoint) {
+  // Midpoints numbered in edge order, whatever order the closure reached them in.
+  std::vector<std::uint64_t> split_edges;
+  split_edges.reserve(midpoint.size());
+  for (const auto& [key, v] : midpoint) split_edges.push_back(key);
+  std::sort(split_edges.begin(), split_edges.end());
+  for (const std::uint64_t key : split_edges) {
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
-    v = out.add_vertex(0.5 * ((*V)[a] + (*V)[b]), out.colours ? out.mesh.colours[a] : Rgb{200, 200, 200});
+    midpoint[key] = out.add_vertex(0.5 * ((*V)[a] + (*V)[b]), out.colours ? out.mesh.colours[a] : Rgb{200, 200, 200});
   }
   PolygonMesh next;
   next.vertices = std::move(out.mesh.vertices);
@@ -855,9 +744,12 @@ struct LocalRefinement {
   std::optional<SurfaceError> surface;
 };
 
-LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const Box3& box,
-                   const ToMeshOptions& o, double bound, double reach, double snap_reach, std::size_t first_face,
-                   Builder& b) {
+/// surface_error: surface → mesh of a mesh, keeping its points beyond the bound.
+using SurfaceMeasure = std::function<SurfaceError(const PolygonMesh&)>;
+
+LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& trace, const ToMeshOptions& o,
+                               double bound, double reach, double snap_reach, std::size_t first_face, Builder& b,
+                               SampleMemo& memo, const SurfaceMeasure& surface_error) {
   std::vector<std::uint8_t> fresh(b.mesh.face_count(), 0);
   std::fill(fresh.begin() + static_cast<std::ptrdiff_t>(first_face), fresh.end(), 1);
   // Per face: its worst sample, and how many generations it has been cut without that dropping
@@ -895,7 +787,7 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
       }
     }
     BeyondSamples part_beyond;
-    const MeshDistance md = mesh_to_surface(scene, trace, round == 0 ? b.mesh : part, reach, bound, &part_beyond);
+    const MeshDistance md = mesh_to_surface(scene, trace, round == 0 ? b.mesh : part, reach, bound, &part_beyond, &memo);
     if (round == 0) {
       out.before = md;
       out.before_where = part_beyond;
@@ -934,9 +826,7 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
     std::size_t n_marked = static_cast<std::size_t>(std::count(marked.begin(), marked.end(), 1));
     if (md.beyond == 0) {
       // Surface → mesh: the faces whose bounding sphere reaches within a beyond point's distance.
-      const SurfaceError se = measure_surface_error(
-          model, DataSurface::from_mesh(b.mesh), box,
-          {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = 1u << 14});
+      const SurfaceError se = surface_error(b.mesh);
       // Cuts that leave as many of the drawn surface's pixels beyond the bound as the last ones
       // did do not reach them (a part or gap the grid missed, which no cut creates): stop.
       if (se.beyond_points.empty() || se.beyond >= surface_beyond_before) {
@@ -995,6 +885,10 @@ LocalRefinement refine_locally(const Model& model, const ReferenceScene& scene, 
   }
   out.rounds = round;
   return out;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 double median_radius(const Model& m) {
@@ -1058,14 +952,45 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                              : std::max(std::min(median_radius(model) / 2.0, 0.5 * std::sqrt(8.0 * bound * median_radius(model))),
                                         diagonal / 256.0);
 
-  // Surface → mesh; `keep` of the drawn surface's points beyond the bound are returned.
+  // Surface → mesh points beyond the bound kept for local and grid refinement.
+  constexpr std::size_t kKeepBeyond = 1u << 14;
+  // Surface → mesh, keeping `keep` of the drawn surface's points beyond the bound. The drawn
+  // surface is ray-cast from the views once, for every mesh measured.
+  std::optional<SurfaceViews> views;
+  const auto surface_error = [&](const PolygonMesh& mesh, std::size_t keep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SurfaceErrorOptions so{.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = keep,
+                                 .holes = false};
+    if (!views)
+      views = render_surface_views(
+          [&](const Ray& ray) -> std::optional<double> {
+            if (const auto hit = scene.trace(ray, 0.0, std::numeric_limits<double>::infinity(), trace)) return hit->t;
+            return std::nullopt;
+          },
+          box, so);
+    SurfaceError se = measure_surface_error(*views, DataSurface::from_mesh(mesh), so);
+    log::debug("mesh: surface -> mesh measured in {:.2f} s: {} pixels beyond the bound, max {:.3g}", seconds_since(t0),
+               se.beyond, se.max);
+    if (log::level() <= log::Level::debug) {  // where the mesh leaves the drawn surface most: -vv
+      std::vector<SurfaceError::Beyond> worst = se.beyond_points;
+      const std::size_t shown = std::min<std::size_t>(8, worst.size());
+      std::partial_sort(worst.begin(), worst.begin() + std::ptrdiff_t(shown), worst.end(),
+                        [](const auto& x, const auto& y) { return x.distance > y.distance; });
+      for (std::size_t k = 0; k < shown; ++k)
+        log::debug("mesh: drawn surface at ({:.6g}, {:.6g}, {:.6g}): {:.3g} from the mesh", worst[k].point.x(),
+                   worst[k].point.y(), worst[k].point.z(), worst[k].distance);
+    }
+    return se;
+  };
+  const auto set_surface_side = [&](ToMeshResult& r, const SurfaceError& se) {
+    r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+    r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
+  };
   const auto measure_surface_side = [&](ToMeshResult& r, std::size_t keep = 0) {
     std::vector<Eigen::Vector3d> beyond;
     if (r.mesh.face_count() > 0) {
-      const DataSurface data = DataSurface::from_mesh(r.mesh);
-      const SurfaceError se = measure_surface_error(
-          model, data, box, {.views = o.views, .resolution = o.view_resolution, .bound = bound, .keep_beyond_points = keep});
-      r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
+      const SurfaceError se = surface_error(r.mesh, keep);
+      set_surface_side(r, se);
       for (const auto& b : se.beyond_points) beyond.push_back(b.point);
     }
     r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
@@ -1076,6 +1001,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   };
   ToMeshResult best;
   bool have_best = false;
+  // Mesh → surface samples measured so far at this level (each grid round makes most of the
+  // SLIM mesh again as it was: those samples are not traced again).
+  SampleMemo memo;
   const Eigen::Vector3d slim_extent = [&] {
     Box3 b;
     for (const auto& s : model.slims) b.extend(bounds(s));
@@ -1085,6 +1013,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   // `where` is given, the centroids of its SLIM triangles with a sample beyond the bound.
   // `surface_bad`, `surface_measured`: where the last local round's surface → mesh measure holds
   // for the mesh returned, it is its figure, and its points beyond the bound are given.
+  // The last mesh made: its SLIM triangles' first face, and the reach its samples were measured with.
+  std::size_t slim_first_face = 0;
+  double mesh_reach = 0;
   const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where,
                            std::vector<Eigen::Vector3d>* surface_bad = nullptr, bool* surface_measured = nullptr,
                            bool* undone = nullptr) {
@@ -1095,6 +1026,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     double reach = 4.0 * bound;
     LocalRefinement local;
     const std::size_t first_face = b.mesh.face_count();
+    slim_first_face = first_face;
     if (!model.slims.empty()) {
       const double h = slim_h0 / (1 << level);
       const std::size_t first = b.mesh.vertices.size();
@@ -1104,7 +1036,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       snap_to_surface(scene, trace, 1.5 * h, first, on_surface, b);
       const auto t1 = std::chrono::steady_clock::now();
       reach = std::max(reach, 1.5 * h);
-      local = refine_locally(model, scene, trace, box, o, bound, reach, 1.5 * h, first_face, b);
+      mesh_reach = reach;
+      local = refine_locally(scene, trace, o, bound, reach, 1.5 * h, first_face, b, memo,
+                             [&](const PolygonMesh& m) { return surface_error(m, kKeepBeyond); });
       log::debug("mesh: SLIM grid ({} refined cells) in {:.2f} s, local refinement in {:.2f} s", refined.size(),
                  std::chrono::duration<double>(t1 - t0).count(),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
@@ -1119,7 +1053,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       r.mesh_to_surface = local.before;
       beyond = std::move(local.before_where);
     } else {
-      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, where ? &beyond : nullptr);
+      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, where ? &beyond : nullptr, &memo);
     }
     // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
     // its normals cannot tell apart) is undone, with round 0's measure of the unrefined mesh.
@@ -1133,6 +1067,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       if (undone) *undone = true;
     }
     r.open_edges = count_open_edges(r.mesh);
+    log::debug("mesh: mesh -> surface samples so far: {} traced, {} from the memo", memo.traced(), memo.reused());
     if (surface_bad && local.surface && r.local_rounds == local.rounds) {  // its last measure is this mesh's
       const SurfaceError& se = *local.surface;
       r.surface_to_mesh = {se.max, se.rms, se.p99, se.pixels, 0, se.beyond};
@@ -1174,7 +1109,6 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       // thinner than the grid, which no cut of its triangles creates), the grid cells holding
       // them are cut finer, one level per round, and the whole SLIM mesh made again; a round
       // kept only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
-      constexpr std::size_t kKeepBeyond = 1u << 14;
       if (!surface_measured) surface_bad = measure_surface_side(r, kKeepBeyond);
       bad.insert(bad.end(), surface_bad.begin(), surface_bad.end());
       surface_measured = true;
@@ -1212,6 +1146,36 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         next.refined_cells = depth.size();
         r = std::move(next);
         bad = std::move(next_bad);
+      }
+    }
+    // Where grazing views see the blend off the surface the mesh follows (the per-ray blend differs
+    // by view direction), the vertices move part of the way towards what they see; a round kept
+    // only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
+    if (!model.slims.empty() && !undone && !r.within && o.view_rounds > 0) {
+      SurfaceError se = surface_error(r.mesh, kKeepBeyond);
+      set_surface_side(r, se);
+      surface_measured = true;
+      std::vector<double> offset;
+      for (int round = 0; round < o.view_rounds && !r.within && r.surface_to_mesh.beyond > 0; ++round) {
+        ToMeshResult next = r;
+        std::vector<double> next_offset = offset;
+        const std::size_t moved = move_between_views(next.mesh, se.beyond_points,
+                                                     {.bound = bound, .first_face = slim_first_face}, next_offset);
+        if (moved == 0) break;
+        next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+        SurfaceError next_se = surface_error(next.mesh, kKeepBeyond);
+        set_surface_side(next, next_se);
+        log::info("mesh: view round {}: {} vertices moved; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}", round + 1,
+                  moved, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
+                  r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+        if (!next.within && (total_beyond(next) >= total_beyond(r) ||
+                             next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
+                             next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
+          break;
+        next.view_rounds = round + 1;
+        r = std::move(next);
+        offset = std::move(next_offset);
+        se = std::move(next_se);
       }
     }
     // A refinement that leaves more than a quarter of the previous share of samples beyond the

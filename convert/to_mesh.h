@@ -16,7 +16,10 @@
 /// edges never cut), then, where samples stay beyond it (parts or gaps thinner than the grid),
 /// the grid cells there are cut finer by conforming bisection of their tetrahedra
 /// (convert/kuhn_bisection.h: no crack at the seam with the coarse cells) and the SLIM mesh made
-/// again, one level per round, while that helps. The resolution doubles until both are within the bound, or
+/// again, one level per round, while that helps (samples unchanged since an earlier round are not
+/// traced again: convert/mesh_measure.h). Where the drawn surface's pixels stay beyond the bound
+/// because grazing views see the per-ray blend off where head-on views do, the vertices there move
+/// part of the way towards them (convert/between_views.h). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes); then the smaller mesh is kept.
 #include <cstddef>
@@ -38,6 +41,10 @@ struct ToMeshOptions {
   /// the SLIM mesh made again; a round kept only if it leaves fewer samples beyond and no larger
   /// maximum; none where the triangles' refinement was undone: a cracked blend); 0: off
   int grid_refinements = 2;
+  /// SLIM: rounds moving vertices part of the way towards what grazing views see, where the
+  /// per-ray blend shows them the surface off where a head-on view does (convert/between_views.h);
+  /// a round kept only if it leaves fewer samples beyond the bound and no larger maximum; 0: off
+  int view_rounds = 3;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -63,6 +70,7 @@ struct ToMeshResult {
   int local_rounds = 0;             ///< local refinement rounds used on the last grid
   int grid_rounds = 0;              ///< local grid refinement rounds kept on the last grid
   std::size_t refined_cells = 0;    ///< grid cells asked to be cut finer (the closure cuts some neighbours too)
+  int view_rounds = 0;              ///< rounds of moves towards what grazing views see, kept
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };

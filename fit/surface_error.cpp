@@ -31,12 +31,33 @@ std::vector<Camera> views_of(const Box3& box, const SurfaceErrorOptions& o) {
 
 }  // namespace
 
+SurfaceViews render_surface_views(const TraceFn& trace, const Box3& data_box, const SurfaceErrorOptions& o) {
+  SurfaceViews out;
+  out.cameras = views_of(data_box, o);
+  for (const Camera& cam : out.cameras) {
+    const int W = cam.width, H = cam.height;
+    std::vector<double>& hit_t = out.t.emplace_back(std::size_t(W) * H, -1.0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 2), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < W; ++x)
+          if (const auto t = trace(cam.pixel_ray(x + 0.5, y + 0.5))) hit_t[std::size_t(y) * W + x] = *t;
+    });
+  }
+  return out;
+}
+
 SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data, const Box3& data_box,
                                    const SurfaceErrorOptions& o) {
+  return measure_surface_error(render_surface_views(trace, data_box, o), data, o);
+}
+
+SurfaceError measure_surface_error(const SurfaceViews& views, const DataSurface& data, const SurfaceErrorOptions& o) {
   SurfaceError out;
-  out.has_holes_measure = data.has_faces();
+  out.has_holes_measure = o.holes && data.has_faces();
   std::vector<double> all;
-  for (const Camera& cam : views_of(data_box, o)) {
+  for (std::size_t v = 0; v < views.cameras.size(); ++v) {
+    const Camera& cam = views.cameras[v];
+    const std::vector<double>& hit_t = views.t[v];
     const int W = cam.width, H = cam.height;
     const std::size_t n = std::size_t(W) * H;
     std::vector<double> dist(n, -1.0);        // −1: surface missed the pixel
@@ -46,7 +67,7 @@ SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data
         for (int x = 0; x < W; ++x) {
           const Ray ray = cam.pixel_ray(x + 0.5, y + 0.5);
           const std::size_t i = std::size_t(y) * W + x;
-          if (const auto t = trace(ray)) dist[i] = data.distance(ray.at(*t));
+          if (hit_t[i] >= 0) dist[i] = data.distance(ray.at(hit_t[i]));
           // Data seen from behind (an open sheet's back) is not something the surface must show:
           // SLIM patches are culled from behind as well.
           bool front = false;
@@ -59,7 +80,7 @@ SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data
       all.push_back(dist[i]);
       if (o.bound > 0 && dist[i] > o.bound && out.beyond_points.size() < o.keep_beyond_points) {
         const Ray ray = cam.pixel_ray(double(i % W) + 0.5, double(i / W) + 0.5);
-        if (const auto t = trace(ray)) out.beyond_points.push_back({ray.at(*t), dist[i]});
+        out.beyond_points.push_back({ray.at(hit_t[i]), dist[i]});
       }
     }
     if (!out.has_holes_measure) continue;

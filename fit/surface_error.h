@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/camera.h"
 #include "core/mesh_io.h"
 #include "core/model.h"
 #include "core/ray.h"
@@ -29,6 +30,8 @@ struct SurfaceErrorOptions {
   std::size_t keep_hole_points = 0;
   /// Keep where the first this many pixels beyond bound are (the surface's points there).
   std::size_t keep_beyond_points = 0;
+  /// With mesh data: count the holes (the data ray-cast at every pixel); false: skip them.
+  bool holes = true;
 };
 
 struct SurfaceError {
@@ -52,8 +55,19 @@ struct SurfaceError {
 /// A ray caster: the distance t along the ray (unit dir) to the first visible surface.
 using TraceFn = std::function<std::optional<double>(const Ray&)>;
 
+/// What a surface shows from the views framing a box (options.views, options.resolution), kept
+/// to be measured against several data surfaces in turn without ray-casting the surface again.
+struct SurfaceViews {
+  std::vector<Camera> cameras;
+  std::vector<std::vector<double>> t;  ///< per view, per pixel (row-major): the hit's ray distance, −1: none
+};
+SurfaceViews render_surface_views(const TraceFn& trace, const Box3& data_box, const SurfaceErrorOptions& options = {});
+
 /// Measures what trace shows against data, from views framing data_box.
 SurfaceError measure_surface_error(const TraceFn& trace, const DataSurface& data, const Box3& data_box,
+                                   const SurfaceErrorOptions& options = {});
+/// The same from views rendered before (options.views and options.resolution are theirs).
+SurfaceError measure_surface_error(const SurfaceViews& views, const DataSurface& data,
                                    const SurfaceErrorOptions& options = {});
 /// The same for a model (CPU reference, the model's own SLIM blend offset).
 SurfaceError measure_surface_error(const Model& model, const DataSurface& data, const Box3& data_box,

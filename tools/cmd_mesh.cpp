@@ -54,6 +54,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"local_rounds", r.local_rounds},
                          {"grid_rounds", r.grid_rounds},
                          {"refined_cells", r.refined_cells},
+                         {"view_rounds", r.view_rounds},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
@@ -101,6 +102,12 @@ void add_mesh(CLI::App& root, Commands& commands) {
                   "cut one level finer, down to 1/8 of the grid, without cracks at the seams, and the mesh made "
                   "again; kept while it leaves fewer samples beyond and no larger maximum; none where the triangles' "
                   "refinement was undone); 0: off")
+      ->check(number({.lo = 0, .hi = 8}))
+      ->capture_default_str();
+  app->add_option("--view-rounds", a->options.view_rounds,
+                  "SLIM: rounds moving vertices part of the way towards what grazing views see, where the per-ray "
+                  "blend shows them the surface off where a head-on view sees it (at most 0.85 of the bound off it); "
+                  "kept while it leaves fewer samples beyond and no larger maximum; 0: off")
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_option("--slim-offset", a->options.slim_offset,
