@@ -24,7 +24,7 @@ struct SlimLodOptions {
 /// A cut of the hierarchy: every leaf lies under exactly one of its balls.
 struct SlimLodCut {
   std::vector<std::int32_t> balls;        ///< ball ids (SlimHierarchy), increasing
-  /// Balls of the cut per level: [0] leaves, [k] balls k merges above their deepest leaf.
+  /// Balls of the cut per level: [0] leaves, [k] balls k levels above their deepest leaf.
   std::vector<std::size_t> level_counts;
   std::size_t outside_view = 0;  ///< balls taken unrefined because their subtree is outside the view
   bool operator==(const SlimLodCut& o) const { return balls == o.balls; }

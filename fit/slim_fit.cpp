@@ -1601,9 +1601,9 @@ private:
         // the fill rounds, each round's repair opening new ones).
         std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> one, again;
         hole_tried_.resize(faces_->mesh->face_count(), 0);
-        for (const auto& h : holes)
-          if ((one.empty() || one.back().first != h.first) && (again.empty() || again.back().first != h.first))
-            (hole_tried_[h.first] && face_prisms() ? again : one).push_back(h);
+        for (std::size_t k = 0; k < holes.size(); ++k)
+          if (k == 0 || holes[k].first != holes[k - 1].first)
+            (hole_tried_[holes[k].first] && face_prisms() ? again : one).push_back(holes[k]);
         for (const auto& h : one) hole_tried_[h.first] = 1;
         add_points(one);
         if (!again.empty()) {
@@ -1629,9 +1629,9 @@ private:
       }
       if (view_fill) {
         // Faces inside the balls that a view still sees through: their own face patches (the
-        // data there), as for the many spots above.
-        // With view_balls, a face seen through for the first time gets a regular ball at its
-        // centroid instead, unless that ball comes out smaller than the face.
+        // data there), as for the many spots above; with view_balls, a face seen through for the
+        // first time gets a regular ball at its centroid instead, unless that ball would not
+        // reach across the face.
         if (opt_.view_balls) {
           view_tried_.resize(faces_->mesh->face_count(), 0);
           std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> fresh, again;
