@@ -1,6 +1,7 @@
 #include "core/slim.h"
 
 #include <algorithm>
+#include <array>
 #include <numbers>
 #include <cmath>
 #include <cstdlib>
@@ -157,31 +158,52 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
 }
 
 void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out) {
-  const Eigen::Vector3d g0 = patch.local.gradient(Eigen::Vector3d::Zero());
+  const Quadric& q = patch.local;
+  const Eigen::Vector3d g0 = q.gradient(Eigen::Vector3d::Zero());
   if (!(g0.norm() > 0.0) || !(spacing > 0.0)) return;
   const Eigen::Vector3d n = g0.normalized(), e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   constexpr double kRho = 1.0 - 1e-9;  // on the sphere, still drawn
   constexpr int kSteps = 48, kBisections = 30;
+  // The steps' (cos θ, sin θ), θ = πk/kSteps, once.
+  static const std::array<Eigen::Vector2d, kSteps + 1> kStep = [] {
+    std::array<Eigen::Vector2d, kSteps + 1> a;
+    for (int k = 0; k <= kSteps; ++k) a[k] = {std::cos(std::numbers::pi * k / kSteps), std::sin(std::numbers::pi * k / kSteps)};
+    return a;
+  }();
+  // Along the meridian x(θ) = ρ(cos θ n + sin θ t), g is a trigonometric polynomial of degree 2:
+  // ρ²(c² nAn + 2cs nAt + s² tAt) + 2ρ(c b·n + s b·t) + c₀, evaluated from (c, s) alone; a
+  // bisection step takes the midpoint on the circle as the normalised sum of its ends.
+  const Eigen::Vector3d An = q.A * n, Ae1 = q.A * e1, Ae2 = q.A * e2;
+  const double nAn = n.dot(An), e1Ae1 = e1.dot(Ae1), e2Ae2 = e2.dot(Ae2), e1Ae2 = e1.dot(Ae2);
+  const double nAe1 = n.dot(Ae1), nAe2 = n.dot(Ae2), bn = q.b.dot(n), be1 = q.b.dot(e1), be2 = q.b.dot(e2);
   const int meridians = std::clamp(static_cast<int>(std::ceil(2.0 * std::numbers::pi * patch.radius / spacing)), 16, 4096);
   for (int m = 0; m < meridians; ++m) {
-    const double phi = 2.0 * std::numbers::pi * m / meridians;
-    const Eigen::Vector3d t = std::cos(phi) * e1 + std::sin(phi) * e2;
-    const auto at = [&](double theta) { return Eigen::Vector3d(kRho * (std::cos(theta) * n + std::sin(theta) * t)); };
-    double th0 = 0.0, g_prev = patch.local.eval(at(0.0));
+    const double phi = 2.0 * std::numbers::pi * m / meridians, cp = std::cos(phi), sp = std::sin(phi);
+    const Eigen::Vector3d t = cp * e1 + sp * e2;
+    const double tAt = cp * cp * e1Ae1 + 2.0 * cp * sp * e1Ae2 + sp * sp * e2Ae2, nAt = cp * nAe1 + sp * nAe2,
+                 bt = cp * be1 + sp * be2;
+    const auto g = [&](const Eigen::Vector2d& cs) {
+      const double c = cs[0], s = cs[1];
+      return kRho * (kRho * (c * c * nAn + 2.0 * c * s * nAt + s * s * tAt) + 2.0 * (c * bn + s * bt)) + q.c;
+    };
+    double g_prev = g(kStep[0]);
     for (int k = 1; k <= kSteps; ++k) {
-      const double th1 = std::numbers::pi * k / kSteps, g1 = patch.local.eval(at(th1));
+      const double g1 = g(kStep[k]);
       if ((g_prev < 0.0) != (g1 < 0.0)) {
-        double lo = th0, hi = th1, glo = g_prev;
+        Eigen::Vector2d lo = kStep[k - 1], hi = kStep[k];
+        double glo = g_prev;
         for (int it = 0; it < kBisections; ++it) {
-          const double mid = 0.5 * (lo + hi), gm = patch.local.eval(at(mid));
+          const Eigen::Vector2d mid = (lo + hi).normalized();
+          const double gm = g(mid);
           if ((gm < 0.0) == (glo < 0.0)) lo = mid, glo = gm;
           else hi = mid;
         }
-        const Eigen::Vector3d u = at(0.5 * (lo + hi));
-        const Eigen::Vector3d g = patch.local.gradient(u);
-        if (patch.clips.keeps(u) && g.norm() > 0.0) out.push_back({patch.centre + patch.radius * u, g.normalized(), kRho});
+        const Eigen::Vector2d cs = (lo + hi).normalized();
+        const Eigen::Vector3d u = kRho * (cs[0] * n + cs[1] * t);
+        const Eigen::Vector3d gu = q.gradient(u);
+        if (patch.clips.keeps(u) && gu.norm() > 0.0) out.push_back({patch.centre + patch.radius * u, gu.normalized(), kRho});
       }
-      th0 = th1, g_prev = g1;
+      g_prev = g1;
     }
   }
 }

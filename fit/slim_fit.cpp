@@ -845,10 +845,13 @@ private:
     if (!t || !front || std::abs(*t - L) > 1e-3 * E_) return false;
     const Eigen::Vector3d u = d.unitOrthogonal(), v = d.cross(u);
     const double r = opt_.surface_factor * E_;
-    for (int k = 0; k < 6; ++k) {
-      const double a = std::numbers::pi * k / 3.0;
-      if (!data_->intersect(Ray{o + r * (std::cos(a) * u + std::sin(a) * v), d}, 0.0, &front) || !front) return false;
-    }
+    static const std::array<Eigen::Vector2d, 6> kAround = [] {
+      std::array<Eigen::Vector2d, 6> a;
+      for (int k = 0; k < 6; ++k) a[k] = {std::cos(std::numbers::pi * k / 3.0), std::sin(std::numbers::pi * k / 3.0)};
+      return a;
+    }();
+    for (const Eigen::Vector2d& a : kAround)
+      if (!data_->intersect(Ray{o + r * (a[0] * u + a[1] * v), d}, 0.0, &front) || !front) return false;
     // Last, as the dearest: the whole ray through the blend.
     return !scene.trace(Ray{o, d}, 0.0, kInf, trace);
   }
@@ -869,7 +872,16 @@ private:
     face_patched_.resize(m.face_count(), 0);
     TraceOptions trace;
     trace.slim = blend();
+    // The view directions in the face's frame (n, t1, t2): j = 0 the normal; then `rays` at half
+    // the widest angle, `rays` at it, the outer cone turned by half a step.
     const int rays = opt_.view_hole_rays;
+    std::vector<Eigen::Vector3d> cone;
+    for (int j = 0; j <= 2 * rays; ++j) {
+      const int ring = j == 0 ? 0 : (j - 1) / rays + 1;
+      const double theta = widest * ring / 2.0;
+      const double phi = 2.0 * std::numbers::pi * ((j - 1) % rays + (ring == 2 ? 0.5 : 0.0)) / rays;
+      cone.emplace_back(std::cos(theta), std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi));
+    }
     tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 128), [&](const tbb::blocked_range<std::size_t>& r) {
       auto& out = found.local();
@@ -919,14 +931,8 @@ private:
             return false;
           };
           const auto sees_through = [&](const Eigen::Vector3d& x) {
-            for (int j = 0; j <= 2 * rays; ++j) {
-              // j = 0: the normal; then `rays` directions at half the widest angle, `rays` at it,
-              // the outer cone turned by half a step.
-              const int ring = j == 0 ? 0 : (j - 1) / rays + 1;
-              const double theta = widest * ring / 2.0;
-              const double phi = 2.0 * std::numbers::pi * ((j - 1) % rays + (ring == 2 ? 0.5 : 0.0)) / rays;
-              const Eigen::Vector3d d =
-                  -(std::cos(theta) * n + std::sin(theta) * (std::cos(phi) * t1 + std::sin(phi) * t2)).normalized();
+            for (const Eigen::Vector3d& c : cone) {
+              const Eigen::Vector3d d = -(c[0] * n + c[1] * t1 + c[2] * t2).normalized();
               if (!local_hit(Ray{x - L * d, d}) && seen_through(scene, trace, x, d, L)) return true;
             }
             return false;
