@@ -1,0 +1,123 @@
+#pragma once
+/// Internal to fit/ (fit/slim_fit.cpp's fitter, not an API): one SLIM ball at a time — its
+/// radius search, local quadric, sharp and boundary clips, and surface-side check — with the
+/// nested point subsamples and the data's faces it reads. The fitter (fit/slim_fitter.h) chooses
+/// among the balls this makes.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/io/io.h"
+#include "core/quadric.h"
+#include "core/slim.h"
+#include "fit/data_surface.h"
+#include "fit/point_index.h"
+#include "fit/slim_fit.h"
+
+namespace quadrix::fit_detail {
+
+struct Ball {
+  std::uint32_t centre = 0;  // point index
+  double R = 0;
+  Quadric g;                 // local: u = (x − c)/R
+  bool is_height = false;
+  bool is_bounded = true;    // error ≤ E was reached
+  double max_taubin = 0, sum_sq_taubin = 0;  // local units × R = world
+  std::size_t count = 0;     // points in the ball
+  // Sharp features, open boundaries, a face's prism: the patch keeps the sheet of its centre.
+  ClipPlanes clips;
+  Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
+  bool settled = false;      // the surface side (BallFitter::settle) was checked
+  std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
+  int surface_lattice = 0;   // settle's surface_ok passed on a lattice this fine (lines per side)
+  // A point of the ball (local u, normal n) belongs to this patch's sheet.
+  bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
+    return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));
+  }
+};
+
+// Nested random subsamples of the cloud (level k holds n/4^k points), each with its own kd-tree:
+// a large ball's fit and check use at most max_fit_points and max_check_points of its points, so
+// its radius query can run on the coarsest level that still returns max_check_points, not on
+// all n (1M torus points: balls of 10⁵ points, queried ~10 times per candidate).
+struct Subsamples {
+  struct Level {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::uint32_t> ids;  // into the full cloud
+    std::unique_ptr<PointIndex> index;
+    double scale = 1;  // full-cloud points per point of this level
+  };
+  std::vector<Level> levels;  // coarsest first; the full cloud is not among them
+
+  Subsamples(const std::vector<Eigen::Vector3d>& P, std::size_t min_points, std::uint64_t seed);
+};
+
+// The faces of the data's mesh, for face patches: which face each face sample lies on, and per
+// face the sample at its centroid and its largest centroid–vertex distance.
+struct FaceSet {
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const PolygonMesh* mesh = nullptr;
+  std::vector<std::uint32_t> face_of;   // per point: its face, or kNone (a cloud point)
+  std::vector<std::uint32_t> centroid;  // per face: the point at its centroid, or kNone
+  std::vector<double> reach;            // per face: largest centroid–vertex distance
+  // A side wall of a face's prism: the plane through one of its edges, perpendicular to the face.
+  struct Side {
+    Eigen::Vector3d inward;  // unit, in the face's plane, towards the centroid
+    double offset = 0;       // the edge's distance from the centroid along -inward
+    double length = 0;       // the edge's length
+    bool open = false;       // the edge is used by this face only (the data's boundary)
+  };
+  std::vector<std::vector<Side>> sides;  // per face: one per edge for a convex face of at most
+                                         // ClipPlanes::kMax edges, else its longest open edge
+
+  FaceSet(const PolygonMesh& m, std::vector<std::uint32_t> of, const std::vector<Eigen::Vector3d>& P, bool prisms);
+  /// Distance from x to face f.
+  double distance(std::uint32_t f, const Eigen::Vector3d& x) const;
+};
+
+/// Fits one ball: the largest radius around a centre point whose local quadric keeps its points
+/// within E and its surface near the data (its own sheet, clipped at sharp features and open
+/// boundaries), or a face patch where E is below the data's sampling. Stateless between calls:
+/// each thread brings its Scratch.
+struct BallFitter {
+  const std::vector<Eigen::Vector3d>& P;
+  const std::vector<Eigen::Vector3d>& N;
+  const PointIndex& index;
+  const SlimFitOptions& opt;
+  double E;       // world
+  double probe;   // world
+  const Subsamples* subsamples = nullptr;
+  const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
+  const FaceSet* faces = nullptr;     // face patches (SlimFitOptions::face_patches)
+  double diagonal = 0;
+
+  struct Scratch {
+    std::vector<Neighbour> nb;
+    std::vector<Eigen::Vector3d> u, n, fu, fn;
+    std::vector<double> fw, fe;
+  };
+
+  /// The largest ball around point ci (up to limit) that fits; guess: a nearby ball's radius.
+  Ball grow(std::uint32_t ci, Scratch& s, double limit = std::numeric_limits<double>::infinity(), double guess = 0) const;
+  /// The ball of radius R around point ci if its fit holds (accept_any: its best fit regardless).
+  std::optional<Ball> try_ball(std::uint32_t ci, double R, Scratch& s, bool accept_any = false) const;
+  /// Face f's plane clipped to its prism, around its centroid.
+  std::optional<Ball> face_patch(std::uint32_t f) const;
+  /// The face patch of the face point ci lies on, where E is below the data's sampling.
+  std::optional<Ball> face_ball(std::uint32_t ci, Scratch& s) const;
+  /// The surface side of a ball: its zero set within the surface bound of the data.
+  Ball settle(Ball b, Scratch& s) const;
+  bool surface_ok(const Ball& b) const;
+
+private:
+  std::optional<Ball> try_both_sides(std::uint32_t ci, double R, Scratch& s) const;
+  std::optional<Ball> try_boundary(const Ball& b, const Scratch& s) const;
+  std::size_t ball_points(const Eigen::Vector3d& c, double R, Scratch& s) const;
+  std::optional<Ball> try_sharp(std::uint32_t ci, double R, Scratch& s) const;
+};
+
+}  // namespace quadrix::fit_detail

@@ -1,0 +1,505 @@
+#include "fit/slim_fitter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "core/log.h"
+#include "fit/evaluate.h"
+
+// The fitter's checks (fit/slim_fitter.h): the points and the drawn surface against their bounds,
+// the data's faces outside every ball or seen through from some view, and what fills those.
+
+namespace quadrix::fit_detail {
+
+// The chosen balls that may hold a point of the triangle abc, nearest centres first.
+void SlimFitter::balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                         const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const {
+  const auto& slims = result_.model.slims;
+  const Eigen::Vector3d mid = (a + b + c) / 3.0;
+  const double spread = std::max({(a - mid).norm(), (b - mid).norm(), (c - mid).norm()});
+  index.radius(mid, max_radius + spread, nb);
+  std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
+  near.clear();
+  for (const auto& [i, d2] : nb)
+    if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
+}
+
+// Spots of the data's faces outside every chosen ball: holes of the drawn surface between
+// points that are all covered. A fan triangle some one ball holds whole (its three corners:
+// balls are convex) is covered; else it is split in four, down to face_hole_depth levels, and
+// a smallest piece contributes its first corner or centroid that no ball holds.
+// index: the round's index of the patches' centres; changed: the balls that left or joined
+// the model since the last check (none: the first), so a face covered then and far from all
+// of them is covered still.
+std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(const PointIndex& index, const Changed* changed) {
+  const auto& slims = result_.model.slims;
+  if (!faces_ || slims.empty()) return {};
+  double max_radius = 0;
+  for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
+  const PolygonMesh& m = *faces_->mesh;
+  // A ray along the face's normal meets such a zero set within this of the face (twice the
+  // surface bound: the points of a noisy face may lie beyond the bound from a patch within E of
+  // its vertices; a face patch across a crease lies hundreds of E away).
+  const double band = 2.0 * opt_.surface_factor * E_;
+  if (!changed) face_covered_.assign(m.face_count(), 0);
+  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    auto& out = found.local();
+    std::vector<Neighbour> nb;
+    std::vector<std::uint32_t> near;
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      if (faces_->centroid[f] == FaceSet::kNone) continue;  // a sliver: no surface of its own
+      const auto vs = m.face(f);
+      if (face_covered_[f] && changed) {
+        const Eigen::Vector3d& o = P_[faces_->centroid[f]];
+        if (!changed->near_ball(o, faces_->reach[f], nb)) continue;
+      }
+      const std::size_t spots_before = out.size();
+      for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+        const Eigen::Vector3d &a = m.vertices[vs[0]], &b = m.vertices[vs[k]], &c = m.vertices[vs[k + 1]];
+        balls_near_triangle(index, max_radius, a, b, c, nb, near);
+        // Inside the ball and its clip planes, its zero set passing within `band`:
+        // a boundary plane that stops a sheet short of a crease leaves the strip beyond it
+        // uncovered although the ball reaches across, and the prism of a face patch across
+        // the crease holds the strip but its plane is elsewhere. (Ball and planes are convex,
+        // and so is the band about a plane, so a piece whose corners one such patch holds is
+        // held whole, up to a quadric's bending over the piece.)
+        const auto holds = [&](std::uint32_t i, const Eigen::Vector3d& x) {
+          const SlimPatch& sp = slims[i];
+          if (!((x - sp.centre).squaredNorm() < sp.radius * sp.radius)) return false;
+          const Eigen::Vector3d u = (x - sp.centre) / sp.radius;
+          if (!sp.clips.keeps(u)) return false;
+          const double g = sp.local.eval(u), gn = sp.local.gradient(u).norm();
+          return std::abs(g) * sp.radius <= band * gn;
+        };
+        const auto any_holds = [&](const Eigen::Vector3d& x) {
+          return std::any_of(near.begin(), near.end(), [&](std::uint32_t i) { return holds(i, x); });
+        };
+        const auto check = [&](const auto& self, const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                               const Eigen::Vector3d& s, int depth) -> void {
+          for (const std::uint32_t i : near)
+            if (holds(i, p) && holds(i, q) && holds(i, s)) return;
+          if (depth == opt_.face_hole_depth) {
+            for (const Eigen::Vector3d& x : {Eigen::Vector3d((p + q + s) / 3.0), p, q, s})
+              if (!any_holds(x)) {
+                out.push_back({std::uint32_t(f), x});
+                return;
+              }
+            return;
+          }
+          split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
+        };
+        check(check, a, b, c, 0);
+      }
+      face_covered_[f] = out.size() == spots_before;
+    }
+  });
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> all;
+  for (auto& v : found) all.insert(all.end(), v.begin(), v.end());
+  // The same spot from two pieces (a shared corner) once.
+  std::sort(all.begin(), all.end(), [](const auto& x, const auto& y) {
+    return std::tie(x.first, x.second.x(), x.second.y(), x.second.z()) < std::tie(y.first, y.second.x(), y.second.y(), y.second.z());
+  });
+  all.erase(std::unique(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first == y.first && x.second == y.second; }),
+            all.end());
+  return all;
+}
+
+// Holes a view sees although the balls cover the face: a ray through a face's spot from a
+// direction within view_hole_angle_deg of its normal that meets no patch near the face (a patch
+// leaning against the face at a grazing view, a hit just outside its ball's rim or clip
+// planes). The lattice check above is view-independent and cannot see these (buddha at 1e-2:
+// hole pixels inside balls whose zero sets pass 0.002–0.15E from the data). Each fan triangle's
+// centroid is seen along its normal and along two cones of view_hole_rays directions about it,
+// from L before it (L the surface band at the widest angle) on (seen_through). Faces covered at the last check and far from every changed ball are
+// skipped; faces that hold a face patch already are not checked (their prism holds the spot).
+// Whether the view along d sees the data at x (the first data hit from L before it is x, from
+// its front, and the data covers the view's neighbourhood: rays surface_factor·E to each side
+// meet it from the front too, so x is not on the data's silhouette), but the model shows nothing
+// anywhere on that ray: a hole as bench fit counts them (fit/surface_error.h).
+bool SlimFitter::seen_through(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
+                  double L) const {
+  const Eigen::Vector3d o = x - L * d;
+  bool front = false;
+  const auto t = data_->intersect(Ray{o, d}, 0.0, &front);
+  if (!t || !front || std::abs(*t - L) > 1e-3 * E_) return false;
+  const Eigen::Vector3d u = d.unitOrthogonal(), v = d.cross(u);
+  const double r = opt_.surface_factor * E_;
+  static const std::array<Eigen::Vector2d, 6> kAround = [] {
+    std::array<Eigen::Vector2d, 6> a;
+    for (int k = 0; k < 6; ++k) a[k] = {std::cos(std::numbers::pi * k / 3.0), std::sin(std::numbers::pi * k / 3.0)};
+    return a;
+  }();
+  for (const Eigen::Vector2d& a : kAround)
+    if (!data_->intersect(Ray{o + r * (a[0] * u + a[1] * v), d}, 0.0, &front) || !front) return false;
+  // Last, as the dearest: the whole ray through the blend.
+  return !scene.trace(Ray{o, d}, 0.0, kInf, trace);
+}
+
+std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(const ReferenceScene& scene, const PointIndex& index,
+                                                                  const Changed* changed) {
+  const auto& slims = result_.model.slims;
+  if (!faces_ || slims.empty() || opt_.view_hole_rays <= 0) return {};
+  double max_radius = 0;
+  for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
+  const PolygonMesh& m = *faces_->mesh;
+  const double widest = std::clamp(opt_.view_hole_angle_deg, 0.0, 85.0) * std::numbers::pi / 180.0;
+  const double L = 2.0 * opt_.surface_factor * E_ / std::cos(widest);
+  // meets_every_view: normals within `lean` of the face's (views then meet them at most 85° off).
+  const double lean = std::max(0.0, 85.0 * std::numbers::pi / 180.0 - widest);
+  if (!changed) view_clear_.assign(m.face_count(), 0);
+  view_clear_.resize(m.face_count(), 0);
+  face_patched_.resize(m.face_count(), 0);
+  TraceOptions trace;
+  trace.slim = blend();
+  // The view directions in the face's frame (n, t1, t2): j = 0 the normal; then `rays` at half
+  // the widest angle, `rays` at it, the outer cone turned by half a step.
+  const int rays = opt_.view_hole_rays;
+  std::vector<Eigen::Vector3d> cone;
+  for (int j = 0; j <= 2 * rays; ++j) {
+    const int ring = j == 0 ? 0 : (j - 1) / rays + 1;
+    const double theta = widest * ring / 2.0;
+    const double phi = 2.0 * std::numbers::pi * ((j - 1) % rays + (ring == 2 ? 0.5 : 0.0)) / rays;
+    cone.emplace_back(std::cos(theta), std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi));
+  }
+  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 128), [&](const tbb::blocked_range<std::size_t>& r) {
+    auto& out = found.local();
+    std::vector<Neighbour> nb;
+    std::vector<std::uint32_t> near;
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      if (faces_->centroid[f] == FaceSet::kNone || !face_covered_[f] || face_patched_[f]) continue;
+      const Eigen::Vector3d& o = P_[faces_->centroid[f]];
+      if (view_clear_[f] && changed && !changed->near_ball(o, faces_->reach[f] + 2.0 * opt_.surface_factor * E_, nb)) continue;
+      const auto vs = m.face(f);
+      bool clear = true;
+      for (std::size_t k = 1; k + 1 < vs.size() && clear; ++k) {
+        const Eigen::Vector3d &a = m.vertices[vs[0]], &b = m.vertices[vs[k]], &c = m.vertices[vs[k + 1]];
+        Eigen::Vector3d n = (b - a).cross(c - a);
+        if (!(n.norm() > 0)) continue;
+        n.normalize();
+        if (n.dot(N_[faces_->centroid[f]]) < 0) n = -n;
+        const Eigen::Vector3d t1 = (b - a).normalized(), t2 = n.cross(t1);
+        // The balls that hold the triangle's spots: one of their patches hit on the ray makes
+        // the blend hit it (each patch's own first hit, as the blend's first pass takes it), so
+        // only a ray none of them meets is traced through the scene.
+        balls_near_triangle(index, max_radius, a, b, c, nb, near);
+        // A patch that meets every view of x without tracing: x well inside its ball and
+        // planes, its zero set δ from x (to first order) and its normal within
+        // 85° − view_hole_angle_deg of the face's, so every ray up to that angle meets it
+        // front-facing within s = δ / cos 85° of x; twice that room is asked inside the ball and
+        // the planes (the zero set's bending over s).
+        const double steepest = std::cos(widest + lean);  // least |cos| of a view against such a normal
+        const auto meets_every_view = [&](std::uint32_t i, const Eigen::Vector3d& x) {
+          const SlimPatch& sp = slims[i];
+          const Eigen::Vector3d u = (x - sp.centre) / sp.radius;
+          const double r = u.norm();
+          if (!(r < 1.0)) return false;
+          const Eigen::Vector3d g = sp.local.gradient(u);
+          const double gn = g.norm();
+          if (!(gn > 0) || g.dot(n) < std::cos(lean) * gn) return false;
+          const double room = 2.0 * std::abs(sp.local.eval(u)) / (gn * steepest) + 1e-3;
+          if (1.0 - r <= room) return false;
+          for (const ClipPlane& c : sp.clips)
+            if (!(c.n.dot(u) + c.d > room * c.n.norm())) return false;
+          return true;
+        };
+        const auto local_hit = [&](const Ray& ray) {
+          Hit h;
+          for (const std::uint32_t i : near)
+            if (intersect_slim_patch(slims[i], ray, 0.0, 2.0 * L, h) && (h.point - slims[i].centre).norm() < slims[i].radius) return true;
+          return false;
+        };
+        const auto sees_through = [&](const Eigen::Vector3d& x) {
+          for (const Eigen::Vector3d& c : cone) {
+            const Eigen::Vector3d d = -(c[0] * n + c[1] * t1 + c[2] * t2).normalized();
+            if (!local_hit(Ray{x - L * d, d}) && seen_through(scene, trace, x, d, L)) return true;
+          }
+          return false;
+        };
+        // A piece one patch meets from every view at its three corners is clear (ball, planes
+        // and the room they leave are convex); else it is split in four, down to
+        // view_hole_depth levels, and a smallest piece's centroid is seen along the rays.
+        const auto check = [&](const auto& self, const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
+                               int depth) -> void {
+          if (!clear) return;
+          if (lean > 0)
+            for (const std::uint32_t i : near)
+              if (meets_every_view(i, p) && meets_every_view(i, q) && meets_every_view(i, s)) return;
+          if (depth >= opt_.view_hole_depth) {
+            const Eigen::Vector3d x = (p + q + s) / 3.0;
+            if (lean > 0 && std::any_of(near.begin(), near.end(), [&](std::uint32_t i) { return meets_every_view(i, x); })) return;
+            if (sees_through(x)) {
+              out.push_back({std::uint32_t(f), x});
+              clear = false;
+            }
+            return;
+          }
+          split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
+        };
+        check(check, a, b, c, 0);
+      }
+      view_clear_[f] = clear;
+    }
+  });
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> all;
+  for (auto& v : found) all.insert(all.end(), v.begin(), v.end());
+  std::sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  return all;
+}
+
+// A face patch (BallFitter::face_patch) for each face that holds a spot, kept through pruning.
+std::size_t SlimFitter::add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
+  const std::size_t first = balls_.size();
+  for (std::size_t k = 0; k < spots.size(); ++k) {
+    if (k > 0 && spots[k].first == spots[k - 1].first) continue;  // sorted by face
+    if (auto b = fitter_->face_patch(spots[k].first)) {
+      balls_.push_back(std::move(*b));
+      face_patched_.resize(faces_->mesh->face_count(), 0);
+      face_patched_[spots[k].first] = 1;
+    }
+  }
+  covers_.resize(balls_.size());
+  chosen_flag_.resize(balls_.size(), 0);
+  pinned_.resize(balls_.size(), 0);
+  // Not verified yet: the next round traces them whole.
+  patch_excess_.resize(balls_.size(), -1.0);
+  patch_errors_.resize(balls_.size());
+  patch_reach_.resize(balls_.size(), kInf);
+  std::vector<Neighbour> nb;
+  for (std::size_t b = first; b < balls_.size(); ++b) {
+    cover_of(b, nb);
+    pinned_[b] = 1;
+    take(std::uint32_t(b));
+  }
+  return balls_.size() - first;
+}
+
+// A regular ball (radius search, surface side) at the centroid of each face that holds a spot
+// (the centroid is one of the points), largest first, kept through pruning. A face whose
+// centroid lies within half the radius of a ball taken here needs none of its own; a face whose
+// ball comes out smaller than view_ball_min_reach × the face (or as a face patch, or unbounded)
+// joins `small` for a face patch instead. Returns the number of balls taken.
+std::size_t SlimFitter::add_view_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
+                           std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& small) {
+  std::vector<std::uint32_t> centres, face;
+  std::vector<double> caps;
+  for (std::size_t k = 0; k < spots.size(); ++k) {
+    if (k > 0 && spots[k].first == spots[k - 1].first) continue;
+    const auto c = faces_->centroid[spots[k].first];
+    centres.push_back(c);
+    face.push_back(spots[k].first);
+    caps.push_back(cap_[c]);
+  }
+  const std::size_t first = balls_.size();
+  evaluate(centres, &caps);
+  std::vector<std::uint32_t> fresh(balls_.size() - first);
+  std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
+  settle(fresh);
+  chosen_flag_.resize(balls_.size(), 0);
+  pinned_.resize(balls_.size(), 0);
+  patch_excess_.resize(balls_.size(), -1.0);
+  patch_errors_.resize(balls_.size());
+  patch_reach_.resize(balls_.size(), kInf);
+  std::sort(fresh.begin(), fresh.end(), [&](auto a, auto b) { return balls_[a].R > balls_[b].R; });
+  std::vector<std::uint32_t> taken;
+  for (const auto b : fresh) {
+    const Eigen::Vector3d& c = P_[balls_[b].centre];
+    const std::uint32_t f = face[b - first];
+    if (balls_[b].face >= 0 || !balls_[b].is_bounded || balls_[b].R < opt_.view_ball_min_reach * faces_->reach[f]) {
+      small.push_back({f, c});
+      continue;
+    }
+    if (std::any_of(taken.begin(), taken.end(), [&](auto t) { return (P_[balls_[t].centre] - c).norm() < 0.5 * balls_[t].R; }))
+      continue;
+    cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
+    pinned_[b] = 1;
+    take(b);
+    taken.push_back(b);
+  }
+  return taken.size();
+}
+
+// The spots join the points, uncovered, on their faces with their faces' normals.
+void SlimFitter::add_points(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
+  const std::size_t n0 = P_.size();
+  for (const auto& [f, x] : spots) {
+    owned_.points.push_back(x);
+    N_.push_back(N_[faces_->centroid[f]]);
+    faces_->face_of.push_back(f);
+  }
+  const std::size_t n1 = P_.size();
+  const std::vector<double> h = probe_heights(std::span<const Eigen::Vector3d>(P_).subspan(n0),
+                                              std::span<const Eigen::Vector3d>(N_).subspan(n0), opt_.probe_factor * E_, data_.get());
+  probe_height_.insert(probe_height_.end(), h.begin(), h.end());
+  covered_.resize(n1, 0);
+  cap_.resize(n1, kInf);
+  point_error_.resize(n1, kInf);
+  point_reach_.resize(n1, kInf);
+  other_direction_.resize(n1, 0);
+  for (std::size_t i = n0; i < n1; ++i) order_.push_back(std::uint32_t(i));
+  index_ = std::make_unique<PointIndex>(P_);
+  make_fitter();
+  st_.hole_points += n1 - n0;
+}
+
+// Points side: every point's probe against the blended surface (core/reference.h).
+// Culprits: patches whose own hit in the blend is farther than E, or whose ball holds a
+// point the blend misses.
+std::size_t SlimFitter::verify_points(const ReferenceScene& scene, const PointIndex& centres, const std::vector<std::uint8_t>& stale,
+                          std::vector<std::uint8_t>& at_fault) {
+  const std::size_t n = P_.size();
+  point_error_.resize(n, kInf);
+  point_reach_.resize(n, kInf);
+  other_direction_.resize(n, 0);
+  const auto& slims = result_.model.slims;
+  double max_radius = 0;
+  for (const auto& s : slims) max_radius = std::max(max_radius, s.radius);
+  TraceOptions trace;
+  trace.slim = blend();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<SlimSample> blended;
+    std::vector<Neighbour> near;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (!stale[i]) continue;
+      const double h = probe_height_[i];
+      bool other = false;
+      const PointProbe probe = measure_point(scene, trace, *index_, N_, P_[i], N_[i], h, E_, &blended, &other);
+      // Measured along its neighbourhood's normal: traced again in every round (staleness
+      // follows the first ray only).
+      other_direction_[i] = other;
+      point_error_[i] = probe.error;
+      point_reach_[i] = probe.reach;
+      if (!std::isfinite(probe.error)) {
+        centres.radius(P_[i], max_radius, near);
+        for (const auto& [k, d2] : near)
+          if (d2 <= slims[k].radius * slims[k].radius) at_fault[k] = 1;  // benign race: all store 1
+        continue;
+      }
+      if (probe.error > E_)
+        for (const auto& s : blended)
+          if (std::abs(s.hit.t - h) > E_) at_fault[static_cast<std::size_t>(s.index)] = 1;
+    }
+  });
+  std::size_t failing = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(point_error_[i] <= E_) && ++failing <= 8)
+      log::debug("fit_slim: point {} at ({:.6g}, {:.6g}, {:.6g}) normal ({:.3f}, {:.3f}, {:.3f}): {:.3g} E from the surface",
+                 i, P_[i].x(), P_[i].y(), P_[i].z(), N_[i].x(), N_[i].y(), N_[i].z(), point_error_[i] / E_);
+  return failing;
+}
+
+// The chosen patches' surface-sample distances, all in one list (the figures' source).
+void SlimFitter::collect_surface_errors() {
+  surface_error_.clear();
+  for (const auto b : chosen_) surface_error_.insert(surface_error_.end(), patch_errors_[b].begin(), patch_errors_[b].end());
+}
+
+// Surface side: samples of every patch's zero set, each seen along its normal through the
+// blend; the blended point must lie within surface_factor·E of the data. Culprits: the
+// blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
+std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
+                           std::vector<std::uint8_t>& at_fault) {
+  debug_shown_ = 0;
+  const auto& slims = result_.model.slims;
+  const double bound = opt_.surface_factor * E_, local = opt_.local_surface_factor * E_;
+  const double h = opt_.surface_probe_factor * E_;
+  TraceOptions trace;
+  trace.slim = blend();
+  shrink_.assign(slims.size(), opt_.shrink_step);
+  patch_excess_.resize(balls_.size(), -1.0);
+  patch_errors_.resize(balls_.size());
+  patch_reach_.resize(balls_.size(), kInf);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<SlimSurfaceSample> zero, rim;
+    std::vector<SlimSample> blended;
+    for (std::size_t k = r.begin(); k != r.end(); ++k) {
+      if (!stale[k]) continue;
+      auto& errors = patch_errors_[chosen_[k]];
+      double& reach = patch_reach_[chosen_[k]];
+      errors.clear();
+      reach = 0;
+      // The patch alone on a lattice fine in world units (≈ verify_spacing·E), so slivers
+      // past a curved boundary are found on large balls too; a patch found d > bound away
+      // shrinks by √(bound/d) (a sliver's sagitta goes with R²).
+      const int grid = std::clamp(static_cast<int>(std::ceil(2.0 * slims[k].radius / (opt_.verify_spacing * E_))),
+                                  opt_.verify_surface_grid, opt_.verify_max_grid);
+      // A patch's own zero set does not change between rounds: checked once per candidate ball.
+      double& excess = patch_excess_[chosen_[k]];
+      // Skipped when settle's check already passed on a lattice at least as fine (same bound).
+      if (excess < 0)
+        excess = grid <= balls_[chosen_[k]].surface_lattice ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
+      if (const double d = excess; d > 0) {
+        at_fault[k] = 1;
+        errors.push_back(d);
+        reach = kInf;
+        shrink_[k] = std::clamp(std::sqrt(local / d), 0.3, opt_.shrink_step);
+        continue;
+      }
+      zero.clear();
+      sample_slim_patch(slims[k], opt_.verify_surface_grid, zero);
+      // The rim every E/2: its points off the data are seen through the blend too (elsewhere
+      // other patches hide it, or the lattice samples above vouch for the blend).
+      rim.clear();
+      sample_slim_rim(slims[k], 0.5 * E_, rim);
+      for (const auto& z : rim)
+        if (!(data_->distance(z.point, bound, bound) <= bound)) zero.push_back(z);
+      for (const auto& z : zero) {
+        const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
+        if (!hit) continue;
+        reach = std::max(reach, blend_reach(blended, trace.slim));
+        double d = data_->distance(hit->point, bound);
+        if (!(d <= bound)) d = data_->distance(hit->point);
+        errors.push_back(d);
+        if (d <= bound) continue;
+        reach = kInf;
+        if (log::level() <= log::Level::debug) {
+          const std::lock_guard lock(debug_mutex_);
+          if (++debug_shown_ <= 8) {
+            std::string who;
+            for (const auto& sb : blended) {
+              const Ball& bb = balls_[chosen_[static_cast<std::size_t>(sb.index)]];
+              who += fmt::format(" [{}{} R {:.3g}E w {:.2g} t-h {:.3g}E data {:.3g}E]", sb.index, bb.face >= 0 ? " face" : "",
+                                 sb.radius / E_, sb.weight, (sb.hit.t - h) / E_, data_->distance(sb.hit.point) / E_);
+            }
+            log::debug("fit_slim: surface sample of patch {}{} (R {:.3g}E) at ({:.6g}, {:.6g}, {:.6g}): blend {:.3g}E from the data;{}", k,
+                       balls_[chosen_[k]].face >= 0 ? " (face)" : "", slims[k].radius / E_, z.point.x(), z.point.y(), z.point.z(), d / E_, who);
+          }
+        }
+        bool blamed = false;
+        for (const auto& s : blended)
+          if (data_->distance(s.hit.point, local) > local) at_fault[static_cast<std::size_t>(s.index)] = 1, blamed = true;
+        if (!blamed)
+          for (const auto& s : blended) at_fault[static_cast<std::size_t>(s.index)] = 1;
+      }
+    }
+  });
+  collect_surface_errors();
+  std::size_t failing = 0;
+  for (const double e : surface_error_) failing += e > bound;
+  return failing;
+}
+
+SlimFitter::Changed SlimFitter::changed_since(const std::vector<std::uint32_t>& before) const {
+  std::vector<std::uint8_t> was(balls_.size(), 0), is(balls_.size(), 0);
+  for (const auto b : before) was[b] = 1;
+  for (const auto b : chosen_) is[b] = 1;
+  Changed c;
+  for (std::size_t b = 0; b < balls_.size(); ++b)
+    if (was[b] != is[b]) {
+      c.centres.push_back(P_[balls_[b].centre]);
+      c.radii.push_back(balls_[b].R);
+      c.max_radius = std::max(c.max_radius, balls_[b].R);
+    }
+  c.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(c.centres));
+  return c;
+}
+
+}  // namespace quadrix::fit_detail

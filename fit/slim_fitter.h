@@ -1,0 +1,177 @@
+#pragma once
+/// Internal to fit/ (not an API): the SLIM fit as a class of named steps behind fit/slim_fit.h's
+/// fit_slim — candidates, covering, pruning, then rounds of verification on both sides of the
+/// contract and repair of the patches at fault. The steps are defined in fit/slim_fit.cpp; the
+/// checks (points, drawn surface, face and view holes) and what they add in fit/slim_fit_checks.cpp.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <queue>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/reference.h"
+#include "fit/ball_fitter.h"
+
+namespace quadrix::fit_detail {
+
+class SlimFitter {
+public:
+  SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)
+      : cloud_(cloud), opt_(options), P_(cloud.points), surface_(surface) {}
+  // Owning its points (a mesh's vertices and face samples), the fitter may add points where the
+  // faces between them are left uncovered (SlimFitOptions::cover_face_holes).
+  SlimFitter(PointCloud&& cloud, const SlimFitOptions& options, const PolygonMesh* surface, std::vector<std::uint32_t> face_of)
+      : owned_(std::move(cloud)), cloud_(owned_), opt_(options), P_(owned_.points), surface_(surface),
+        face_of_(std::move(face_of)), can_add_points_(true) {}
+
+  /// The whole fit: set-up, candidates, covering, pruning, verification and repair, the model.
+  SlimFitResult run();
+
+private:
+  struct Changed;  // below: the balls a repair changed
+
+  // Set-up and candidates (slim_fit.cpp).
+  void setup();
+  void make_fitter();
+  void evaluate(const std::vector<std::uint32_t>& centres, const std::vector<double>* caps);
+  void cover_of(std::size_t b, std::vector<Neighbour>& nb);
+  void settle(const std::vector<std::uint32_t>& ids);
+  void initial_candidates();
+  // Covering and pruning (slim_fit.cpp).
+  std::size_t gain(std::uint32_t b) const;
+  void take(std::uint32_t b);
+  void run_greedy(std::size_t from);
+  void cover(const std::vector<double>* cap_of_point);
+  void prune();
+  void build_model();
+  SlimBlendOptions blend() const;
+  // Verification rounds and repair (slim_fit.cpp).
+  void verify_and_repair();
+  void repair(const std::vector<std::uint8_t>& at_fault);
+  void finish();
+
+  // The checks and what fills what they find (slim_fit_checks.cpp).
+  std::size_t verify_points(const ReferenceScene& scene, const PointIndex& centres, const std::vector<std::uint8_t>& stale,
+                            std::vector<std::uint8_t>& at_fault);
+  void collect_surface_errors();
+  std::size_t verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
+                             std::vector<std::uint8_t>& at_fault);
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index, const Changed* changed);
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> view_holes(const ReferenceScene& scene, const PointIndex& index,
+                                                                    const Changed* changed);
+  bool seen_through(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
+                    double L) const;
+  void balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                           const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
+  std::size_t add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
+  std::size_t add_view_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
+                             std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& small);
+  void add_points(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
+  bool face_prisms() const { return faces_ && opt_.face_patches && opt_.face_prisms; }
+  // The triangle pqs split at its edges' midpoints: visit(corner piece ×3, middle piece).
+  template <class Visit>
+  static void split_in_four(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s, Visit&& visit) {
+    const Eigen::Vector3d pq = 0.5 * (p + q), qs = 0.5 * (q + s), sp = 0.5 * (s + p);
+    visit(p, pq, sp);
+    visit(pq, q, qs);
+    visit(sp, qs, s);
+    visit(pq, qs, sp);
+  }
+
+  // What a repair changed: the balls that left the model and those that joined it. Only the
+  // probes whose blend looked inside one of them need tracing again.
+  struct Changed {
+    std::vector<Eigen::Vector3d> centres;
+    std::vector<double> radii;
+    double max_radius = 0;
+    std::unique_ptr<PointIndex> index;
+
+    // Whether any changed ball meets the ball (c, r).
+    bool near_ball(const Eigen::Vector3d& c, double r, std::vector<Neighbour>& near) const {
+      if (centres.empty()) return false;
+      index->radius(c, r + max_radius, near);
+      for (const auto& [k, d2] : near)
+        if (d2 <= (r + radii[k]) * (r + radii[k])) return true;
+      return false;
+    }
+
+    // Whether any changed ball meets the segment o + t·d, t ∈ [0, length] (d unit).
+    bool meets(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double length, std::vector<Neighbour>& near) const {
+      if (centres.empty()) return false;
+      if (!std::isfinite(length)) return true;
+      index->radius(o + 0.5 * length * d, 0.5 * length + max_radius, near);
+      for (const auto& [c, d2] : near) {
+        const Eigen::Vector3d v = centres[c] - o;
+        const double t = std::clamp(v.dot(d), 0.0, length);
+        if ((v - t * d).squaredNorm() <= radii[c] * radii[c] * (1.0 + 1e-9)) return true;
+      }
+      return false;
+    }
+  };
+  Changed changed_since(const std::vector<std::uint32_t>& before) const;
+
+  // A verified model: its balls and what verification measured on it.
+  struct Verified {
+    std::vector<std::uint32_t> chosen;
+    std::vector<double> point_error;
+    std::vector<std::vector<double>> patch_errors;  // per chosen ball
+    std::size_t blend_failures = 0, surface_failures = 0, face_holes = 0, view_holes = 0;
+    int round = -1;  // -1: none
+    double score = 0;  // failures() of that model
+  };
+  double failures() const;
+  Verified snapshot(int round, double score) const;
+  void restore(Verified&& v);
+
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  PointCloud owned_;  // the points, when the fitter owns them (may grow: add_points)
+  const PointCloud& cloud_;
+  const SlimFitOptions& opt_;
+  const std::vector<Eigen::Vector3d>& P_;
+  const PolygonMesh* surface_;
+  std::vector<Eigen::Vector3d> N_;
+  double E_ = 0;
+  SlimFitResult result_;
+  SlimFitStats& st_ = result_.stats;
+  std::unique_ptr<PointIndex> index_;
+  std::unique_ptr<Subsamples> subsamples_;
+  std::shared_ptr<DataSurface> data_;
+  std::unique_ptr<BallFitter> fitter_;
+  std::vector<std::uint32_t> order_;                 // the points in random order
+  std::mutex debug_mutex_;                           // -vv: the first failing surface samples
+  std::size_t debug_shown_ = 0;
+  std::vector<Ball> balls_;                          // evaluated candidates
+  std::vector<std::vector<std::uint32_t>> covers_;   // points each candidate covers
+  std::vector<Eigen::Vector3d> pilot_centres_;
+  std::vector<double> pilot_R_;
+  std::unique_ptr<PointIndex> pilot_index_;
+  std::vector<std::uint8_t> covered_, chosen_flag_;
+  std::vector<std::uint8_t> pinned_;                 // per candidate: kept through pruning (repair)
+  std::size_t uncovered_ = 0;
+  std::vector<std::uint32_t> chosen_;
+  std::priority_queue<std::pair<std::size_t, std::uint32_t>> heap_;  // gain, candidate
+  std::vector<double> cap_;                           // radius cap per centre point (repair)
+  std::vector<double> point_error_, surface_error_;
+  std::vector<double> shrink_;                        // per chosen patch: radius factor on repair
+  std::vector<double> patch_excess_;                 // per candidate: zero_set_excess, −1 unknown
+  std::vector<std::vector<double>> patch_errors_;    // per candidate: its last surface samples' distances
+  std::vector<double> patch_reach_;                  // per candidate: how far its probes' blends looked
+  std::vector<double> point_reach_;                  // per point: how far its probe's blend looked
+  std::vector<std::uint8_t> other_direction_;         // per point: measured along its neighbourhood's normal
+  std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
+  std::vector<std::uint32_t> face_of_;                // per point: its face (face samples), until setup
+  std::unique_ptr<FaceSet> faces_;                    // face patches
+  bool can_add_points_ = false;                       // owned_ holds the points
+  std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
+  std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
+  std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
+  std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
+  std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
+  std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches
+};
+
+}  // namespace quadrix::fit_detail
