@@ -158,9 +158,26 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
   // Clipped to the face's prism: a hair outside an open edge, so the edge's vertices stay;
   // face_patch_margin·E outside an inner edge, so neighbouring faces' pieces overlap (no crack
   // where the GPU's rounding puts a ray on neither side) and stay within that of the data.
-  for (const FaceSet::Side& sd : faces->sides[f]) {
-    const double margin = sd.open ? 1e-3 * E : opt.face_patch_margin * E;
-    b.clips.add(ClipPlane{sd.inward, (sd.offset + margin) / R});
+  const auto& sides = faces->sides[f];
+  const auto margin = [&](const FaceSet::Side& sd) { return sd.open ? 1e-3 * E : opt.face_patch_margin * E; };
+  for (const FaceSet::Side& sd : sides) b.clips.add(ClipPlane{sd.inward, (sd.offset + margin(sd)) / R});
+  // Whole prism of a triangle (sides in edge order, consecutive ones meeting at a corner v): the
+  // cross-section's corner p beyond v has a·(p − v) = −m_a and b·(p − v) = −m_b for the two walls'
+  // inward normals a, b; the cross-section lies within max |p − v| of the triangle.
+  if (sides.size() == 3 && faces->mesh->face(f).size() == 3) {
+    double reach = 0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const FaceSet::Side &sa = sides[i], &sb = sides[(i + 1) % 3];
+      const double k = sa.inward.dot(sb.inward), det = 1.0 - k * k;
+      if (!(det > 1e-12)) {
+        reach = std::numeric_limits<double>::infinity();
+        break;
+      }
+      const double ma = margin(sa), mb = margin(sb);
+      const double x = (-ma + k * mb) / det, y = (-mb + k * ma) / det;
+      reach = std::max(reach, std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k)));
+    }
+    b.on_data = reach <= opt.local_surface_factor * E;
   }
   if (!b.clips.empty()) b.sheet = N[c], b.other = -N[c];
   b.face = f;

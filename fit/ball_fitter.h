@@ -34,6 +34,10 @@ struct Ball {
   bool settled = false;      // the surface side (BallFitter::settle) was checked
   std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
   int surface_lattice = 0;   // settle's surface_ok passed on a lattice this fine (lines per side)
+  // A face patch on a triangle clipped to its whole prism whose cross-section reaches no farther
+  // than local_surface_factor·E past the triangle: its zero set is the data by construction, so
+  // neither its lattice nor its rim needs checking on its own.
+  bool on_data = false;
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));

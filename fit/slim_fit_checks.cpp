@@ -434,8 +434,9 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       // A patch's own zero set does not change between rounds: checked once per candidate ball.
       double& excess = patch_excess_[chosen_[k]];
       // Skipped when settle's check already passed on a lattice at least as fine (same bound).
+      const Ball& ball = balls_[chosen_[k]];
       if (excess < 0)
-        excess = grid <= balls_[chosen_[k]].surface_lattice ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
+        excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
       if (const double d = excess; d > 0) {
         at_fault[k] = 1;
         errors.push_back(d);
@@ -448,7 +449,7 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       // The rim every E/2: its points off the data are seen through the blend too (elsewhere
       // other patches hide it, or the lattice samples above vouch for the blend).
       rim.clear();
-      sample_slim_rim(slims[k], 0.5 * E_, rim);
+      if (!ball.on_data) sample_slim_rim(slims[k], 0.5 * E_, rim);
       for (const auto& z : rim)
         if (!(data_->distance(z.point, bound, bound) <= bound)) zero.push_back(z);
       for (const auto& z : zero) {
