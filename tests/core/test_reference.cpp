@@ -220,7 +220,9 @@ TEST(ShadowLight, FrustumFitsTheBoxAndTheMapFollowsTheView) {
     Camera big = view;
     big.width = big.height = 1024;
     const int n = matched_shadow_map_size(view, box), m = matched_shadow_map_size(big, box);
-    if (n > 256 && m < 4096) EXPECT_NEAR(double(m) / n, 2.0, 0.01);
+    if (n > 256 && m < 4096) {
+      EXPECT_NEAR(double(m) / n, 2.0, 0.01);
+    }
   }
 }
 
@@ -271,6 +273,71 @@ TEST(SlimRim, SamplesLieOnTheSphereAndTheZeroSetAlongTheWholeLoop) {
   const auto part = check(half, 0.1);
   EXPECT_GT(part.size(), 20u);
   EXPECT_LT(part.size(), loop.size() / 2);
+}
+
+// The rim's shortcuts (closed form for planes, jumps where no root can lie, clipped steps left
+// unbisected, bisection then a secant step) find what the plain scan finds: every sign change of
+// g between the 48 grid points of each meridian, kept by the clip planes, to 1e-8 of the radius.
+TEST(SlimRim, ShortcutsFindWhatThePlainScanFinds) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const auto unit = [&] { return Eigen::Vector3d(U(rng), U(rng), U(rng)).normalized(); };
+  const double R = 2.0, spacing = 0.25;
+  constexpr double kRho = 1.0 - 1e-9;
+  std::size_t total = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    SlimPatch p;
+    p.centre = Eigen::Vector3d(U(rng), U(rng), U(rng)) * 5.0, p.radius = R;
+    if (trial % 3 == 0) {
+      p.local = Quadric::plane(unit(), 0.6 * U(rng));  // planes, some off the centre
+    } else {
+      QuadricCoefficients k;
+      for (int i = 0; i < 10; ++i) k[i] = U(rng);
+      k[9] *= 0.3;
+      p.local = Quadric::from_coefficients(k);
+    }
+    for (int c = 0; c < trial % 3; ++c) p.clips.add(ClipPlane{unit(), 0.5 * U(rng)});
+    std::vector<SlimSurfaceSample> rim;
+    sample_slim_rim(p, spacing, rim);
+    // The plain scan, in angles, with the same poles and meridians.
+    const Eigen::Vector3d g0 = p.local.gradient(Eigen::Vector3d::Zero());
+    const Eigen::Vector3d n = g0.normalized(), e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    const int meridians = std::clamp(static_cast<int>(std::ceil(2.0 * std::numbers::pi * R / spacing)), 16, 4096);
+    std::vector<Eigen::Vector3d> expected;
+    std::size_t near_plane = 0;
+    for (int m = 0; m < meridians; ++m) {
+      const double phi = 2.0 * std::numbers::pi * m / meridians;
+      const Eigen::Vector3d t = std::cos(phi) * e1 + std::sin(phi) * e2;
+      const auto at = [&](double th) { return Eigen::Vector3d(kRho * (std::cos(th) * n + std::sin(th) * t)); };
+      for (int k = 0; k < 48; ++k) {
+        double lo = std::numbers::pi * k / 48, hi = std::numbers::pi * (k + 1) / 48;
+        const double glo = p.local.eval(at(lo)), ghi = p.local.eval(at(hi));
+        if ((glo < 0) == (ghi < 0)) continue;
+        for (int it = 0; it < 60; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          if ((p.local.eval(at(mid)) < 0) == (glo < 0)) lo = mid;
+          else hi = mid;
+        }
+        const Eigen::Vector3d u = at(0.5 * (lo + hi));
+        bool kept = true, close = false;
+        for (const ClipPlane& c : p.clips) {
+          const double v = c.n.dot(u) + c.d;
+          kept &= v >= 0, close |= std::abs(v) < 1e-7;
+        }
+        if (close) ++near_plane;
+        else if (kept) expected.push_back(p.centre + R * u);
+      }
+    }
+    ASSERT_EQ(near_plane, 0u) << "trial " << trial << ": a root on a clip plane; choose another seed";
+    ASSERT_EQ(rim.size(), expected.size()) << "trial " << trial;
+    for (const auto& x : expected) {
+      double best = 1e9;
+      for (const auto& s : rim) best = std::min(best, (s.point - x).norm());
+      EXPECT_LT(best, 1e-8 * R) << "trial " << trial;
+    }
+    total += expected.size();
+  }
+  EXPECT_GT(total, 1000u);  // the trials do cross their spheres
 }
 
 }  // namespace

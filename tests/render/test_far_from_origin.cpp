@@ -211,7 +211,7 @@ Model flat_unit(const std::string& kind) {
     QuadricCoefficients k{};
     k[7] = 1;
     for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) m.slims.push_back({.centre = {0.25 * i, 0, 0.25 * j}, .radius = 0.3, .local = Quadric::from_coefficients(k)});
+      for (int i = 0; i < 4; ++i) m.slims.push_back({.centre = {0.25 * i, 0, 0.25 * j}, .radius = 0.3, .local = Quadric::from_coefficients(k), .clips = {}, .colour = std::nullopt, .measured_error = std::nullopt, .max_push = std::nullopt});
   }
   return m;
 }
