@@ -465,9 +465,12 @@ Ball BallFitter::grow(std::uint32_t ci, Scratch& s, double limit, double guess) 
       // the best fit at R instead left 15 points beyond E, 2 of them with no hit at all).
       // No larger than the repair's cap (limit): else a disc that failed the surface side came
       // back the same size every round (a sheet's open corner, beside face-hole points).
+      // Points within E/1000 count as the centre itself (happy_buddha_10k: a vertex one ulp
+      // from another made a ball of radius 8.7e-19, which float32 cannot place, so the model fell
+      // back to the double encoding).
       index.nearest(P[ci], 2 * opt.min_points, s.nb);
       for (const auto& [j, d2] : s.nb)
-        if (d2 > 0) return Ball{ci, std::min(0.5 * std::sqrt(d2), limit), Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, ClipPlanes{}};
+        if (d2 > 1e-6 * E * E) return Ball{ci, std::min(0.5 * std::sqrt(d2), limit), Quadric::plane(N[ci], 0.0), true, false, 0, 0, 1, ClipPlanes{}};
       R /= 0.7 * 0.7 * 0.7;
       auto any = try_ball(ci, R, s, true);
       // Last resort: the tangent plane at the centre.

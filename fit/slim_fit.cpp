@@ -491,10 +491,11 @@ void SlimFitter::verify_and_repair() {
     const bool stalled = !improved && round - best.round >= 3;
     if (failing == 0 || round >= budget || stalled) {
       if (!improved) {
-        log::info("fit_slim: the repairs after verification round {} made the fit worse ({} points beyond E and {} surface "
-                  "samples beyond {}E in round {}, against {} and {}); the model of round {} is kept",
-                  best.round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, round + 1,
-                  best.blend_failures, best.surface_failures, best.round + 1);
+        log::info("fit_slim: the repairs after verification round {} made the fit worse ({} points beyond E, {} surface "
+                  "samples beyond {}E, {} face spots outside every ball and {} faces seen through in round {}, against "
+                  "{}, {}, {} and {}); the model of round {} is kept",
+                  best.round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, st_.face_holes, st_.view_holes,
+                  round + 1, best.blend_failures, best.surface_failures, best.face_holes, best.view_holes, best.round + 1);
         st_.kept_round = best.round;
         restore(std::move(best));
       }
