@@ -159,24 +159,66 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
   // face_patch_margin·E outside an inner edge, so neighbouring faces' pieces overlap (no crack
   // where the GPU's rounding puts a ray on neither side) and stay within that of the data.
   const auto& sides = faces->sides[f];
-  const auto margin = [&](const FaceSet::Side& sd) { return sd.open ? 1e-3 * E : opt.face_patch_margin * E; };
-  for (const FaceSet::Side& sd : sides) b.clips.add(ClipPlane{sd.inward, (sd.offset + margin(sd)) / R});
-  // Whole prism of a triangle (sides in edge order, consecutive ones meeting at a corner v): the
-  // cross-section's corner p beyond v has a·(p − v) = −m_a and b·(p − v) = −m_b for the two walls'
-  // inward normals a, b; the cross-section lies within max |p − v| of the triangle.
-  if (sides.size() == 3 && faces->mesh->face(f).size() == 3) {
-    double reach = 0;
-    for (std::size_t i = 0; i < 3; ++i) {
-      const FaceSet::Side &sa = sides[i], &sb = sides[(i + 1) % 3];
-      const double k = sa.inward.dot(sb.inward), det = 1.0 - k * k;
-      if (!(det > 1e-12)) {
-        reach = std::numeric_limits<double>::infinity();
-        break;
+  std::vector<double> m;
+  for (const FaceSet::Side& sd : sides) m.push_back(sd.open ? 1e-3 * E : opt.face_patch_margin * E);
+  // A triangle's whole prism (sides in edge order, consecutive ones meeting at a corner v): the
+  // cross-section's corner p beyond v has a·(p − v) = −m_a and b·(p − v) = −m_b for the two
+  // walls' inward normals a, b, so |p − v| = m / sin(θ/2) for a corner angle θ and equal
+  // margins: far past a sharp corner (happy_buddha_10k at 1e-3: face patches on needle
+  // triangles reached 8E past them, and the fit ended with 11 surface samples beyond 2E). The
+  // sharpest corner beyond 2·face_patch_margin·E gets the fourth plane, across its bisector at
+  // that distance from v; at any other such corner the two margins shrink until p is that close.
+  // The cross-section then lies within the largest of these distances of the triangle.
+  const bool triangle = sides.size() == 3 && faces->mesh->face(f).size() == 3;
+  const auto corner = [&](std::size_t i) {
+    const FaceSet::Side &sa = sides[i], &sb = sides[(i + 1) % 3];
+    const double k = sa.inward.dot(sb.inward), det = 1.0 - k * k;
+    if (!(det > 1e-12)) return std::numeric_limits<double>::infinity();
+    const double ma = m[i], mb = m[(i + 1) % 3];
+    const double x = (-ma + k * mb) / det, y = (-mb + k * ma) / det;
+    return std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k));
+  };
+  const double most = 2.0 * opt.face_patch_margin * E;
+  std::optional<ClipPlane> tip;  // the fourth plane, across the sharpest corner
+  double tip_reach = 0;
+  std::size_t worst_tip = 3;
+  if (triangle) {
+    std::size_t worst = 0;
+    for (std::size_t i = 1; i < 3; ++i)
+      if (corner(i) > corner(worst)) worst = i;
+    const FaceSet::Side &sa = sides[worst], &sb = sides[(worst + 1) % 3];
+    const Eigen::Vector3d bis = sa.inward + sb.inward;
+    const double p = corner(worst);
+    if (p > most && std::isfinite(p) && bis.norm() > 1e-9) {
+      const Eigen::Vector3d n = bis.normalized();
+      const int v = faces->mesh->face(f)[(worst + 1) % 3];
+      const Eigen::Vector3d vl = (faces->mesh->vertices[v] - P[c]) / R;
+      tip = ClipPlane{n, -n.dot(vl) + most / R};
+      worst_tip = worst;
+      // Where the cut meets the two walls: a·(q − v) = −m_a, n·(q − v) = −most.
+      for (const auto* sd : {&sa, &sb}) {
+        const double ma = sd == &sa ? m[worst] : m[(worst + 1) % 3];
+        const double k = sd->inward.dot(n), det = 1.0 - k * k;
+        if (!(det > 1e-12)) continue;
+        const double x = (-ma + k * most) / det, y = (-most + k * ma) / det;
+        tip_reach = std::max(tip_reach, std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k)));
       }
-      const double ma = margin(sa), mb = margin(sb);
-      const double x = (-ma + k * mb) / det, y = (-mb + k * ma) / det;
-      reach = std::max(reach, std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k)));
     }
+  }
+  if (triangle) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t i = 0; i < 3; ++i)
+        if (const double p = corner(i); p > most && std::isfinite(p) && !(tip && i == worst_tip)) {
+          m[i] = std::max(1e-3 * E, m[i] * most / p);
+          m[(i + 1) % 3] = std::max(1e-3 * E, m[(i + 1) % 3] * most / p);
+        }
+  }
+  for (std::size_t i = 0; i < sides.size(); ++i) b.clips.add(ClipPlane{sides[i].inward, (sides[i].offset + m[i]) / R});
+  if (tip) b.clips.add(*tip);
+  if (triangle) {
+    double reach = tip_reach;
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!(tip && i == worst_tip)) reach = std::max(reach, corner(i));
     b.on_data = reach <= opt.local_surface_factor * E;
   }
   if (!b.clips.empty()) b.sheet = N[c], b.other = -N[c];

@@ -137,8 +137,10 @@ struct SlimFitOptions {
   /// With face_prisms, each face patch is clipped to its face's prism (a wall through every edge,
   /// perpendicular to the face; ClipPlanes), face_patch_margin·E outside an inner edge and a hair
   /// outside an open one: its plane, the data itself inside, runs on no farther than that into
-  /// its neighbours' territory, where the blend would mix it with their planes. Without, only
-  /// its longest open edge clips it.
+  /// its neighbours' territory, where the blend would mix it with their planes. A triangle's
+  /// walls meet far past a sharp corner (m / sin(θ/2)): its sharpest corner is cut by a fourth
+  /// plane 2·face_patch_margin·E past it, and the margins of any other such corner shrink.
+  /// Without face_prisms, only its longest open edge clips it.
   bool face_patches = true;
   double face_patch_reach = 1.0;
   double face_patch_spacing = 10.0;
