@@ -67,6 +67,10 @@ struct Renderer::Impl {
                                    {&outline, &FrameStats::ms_shading},
                                    {&slim_outline, &FrameStats::ms_shading}}};
 
+  /// No G-buffer pass before SLIM's (the last) draws anything.
+  bool depth_clear_before_slim(const RenderOptions& o) const {
+    return !tet.needed(o) && !glyph.needed(o) && !mesh.needed(o) && !implicit.needed(o);
+  }
   /// Draws the G-buffer passes from the key light into light_targets, depth only.
   ShadowMap draw_shadow_map(const Camera& camera, const Box3& scene, const RenderOptions& o);
 };
@@ -84,7 +88,8 @@ ShadowMap Renderer::Impl::draw_shadow_map(const Camera& camera, const Box3& scen
   // occluders); not found yet, so the light's view ray-casts every proxy fragment.
   lo.glyph_early_depth = false;
   lo.cull = o.cull && backface_culling_is_exact(box, closed, light);
-  const Frame frame{light_uniforms, lo, light_targets, statistics.buffer(), empty_vao.id(), o.cull, /*depth_only=*/true};
+  Frame frame{light_uniforms, lo, light_targets, statistics.buffer(), empty_vao.id(), o.cull, /*depth_only=*/true};
+  frame.is_depth_clear_before_slim = depth_clear_before_slim(lo);
   glViewport(0, 0, size, size);
   light_targets.clear();
   for (const auto& s : gbuffer_steps)
@@ -155,6 +160,7 @@ FrameStats Renderer::draw(const Camera& camera, const RenderOptions& o) {
   if (I.mesh.needed(o)) scene.extend(I.mesh_box);
   Frame frame{camera_uniforms, exact, I.targets, I.statistics.buffer(), I.empty_vao.id(), o.cull};
   frame.depth_needed_after_tets = I.glyph.needed(o) || I.mesh.needed(o) || I.implicit.needed(o) || I.slim.needed(o);
+  frame.is_depth_clear_before_slim = I.depth_clear_before_slim(o);
   frame.scene_radius = scene.empty() ? 1.0f : static_cast<float>(0.5 * scene.diagonal());
   ShadowMap shadow;
   if (o.shadows && !scene.empty()) {

@@ -50,6 +50,12 @@ struct RenderOptions {
   /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,
   /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
   bool slim_tight_splats = true;
+  /// SLIM pass 2 runs the depth test before the ray–quadric code (render/passes/slim_pass.h):
+  /// its splats lie in front of their hits and write no depth, each hit is compared with pass 1's
+  /// depth in the shader; chunks outside the view frustum are skipped, and clears and the resolve
+  /// cover only the visible balls' screen bound. The same G-buffer. false: every splat fragment
+  /// of both passes ray-casts and writes its hit's depth (no early depth test on llvmpipe).
+  bool slim_early_depth = true;
   /// SLIM level of detail, for models with a hierarchy (core/slim_lod.h): each frame draws the
   /// coarsest cut whose balls' errors project below this many pixels at their distance (the cut
   /// is uploaded only when it changes). 0: the leaves, full detail.
@@ -96,8 +102,12 @@ struct FrameStats {
   std::uint64_t occluded_in_chunks = 0;  ///< patches in those chunks
   std::uint64_t fragments = 0;         ///< fragment shader invocations (-1 when unsupported)
   std::uint64_t fragments_hit = 0;     ///< fragments that passed (not discarded, depth test)
-  std::uint64_t slim_splat_fragments = 0;  ///< SLIM pass 1 fragments: the splats' area [Toledo04] A_RTA
+  /// SLIM pass 1 fragments: the splats' area [Toledo04] A_RTA (with slim_early_depth, the part
+  /// past the early depth test).
+  std::uint64_t slim_splat_fragments = 0;
   std::uint64_t slim_hit_fragments = 0;    ///< of those, rays that met their patch: A_obj
+  std::uint64_t slim_accumulate_fragments = 0;  ///< SLIM pass 2 fragments run
+  std::uint64_t slim_cast_fragments = 0;   ///< SLIM fragments of passes 1 and 2 that ray-cast their patch
   /// [Toledo04] Waste = (A_RTA − A_obj)/A_RTA of the SLIM splats (statistics only).
   double slim_waste() const {
     return slim_splat_fragments ? double(slim_splat_fragments - slim_hit_fragments) / slim_splat_fragments : 0.0;

@@ -5,6 +5,7 @@
 // silhouettes stay within half a pixel.
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <numbers>
 #include <filesystem>
 #include <fstream>
@@ -29,11 +30,15 @@ namespace {
 
 struct Row {
   std::string name;
+  double ms_cpu_median = 0;  // CPU time of the process per frame (all of llvmpipe's threads): steadier under load
   double ms_median = 0, ms_min = 0, ms_clear = 0, ms_geometry = 0, ms_slim = 0, ms_shading = 0, ms_shadows = 0;
   std::uint64_t primitives = 0, culled = 0, fragments = 0, covered = 0;
   std::uint64_t chunks = 0, chunks_culled = 0, culled_in_chunks = 0;  // tetrahedron chunks
   std::uint64_t chunks_occluded = 0, occluded_in_chunks = 0;
   double slim_waste = 0;
+  // SLIM fragment shader runs of passes 1 and 2, and those that ray-cast their patch (the rest
+  // returned after a depth test in the shader or outside the ball's disc).
+  std::uint64_t slim_runs = 0, slim_casts = 0;
   double glyph_waste = 0;  // glyph proxy fragments outside their glyph over those run
   // SLIM level of detail (models with a hierarchy): the bound, the cut, its image error.
   double pixel_error = 0;
@@ -46,6 +51,12 @@ struct Row {
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 
+double cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
+}
+
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
             const SlimBlendOptions& blend = {}, bool tight_splats = true, bool effects = false,
             bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0) {
@@ -57,6 +68,7 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
   o.tet_early_depth = tet_early_depth;
   o.glyph_early_depth = tet_early_depth;  // glyphs: occluders and nearest hits first (render/passes/glyph_pass.h)
+  o.slim_early_depth = tet_early_depth;   // SLIM: splats at conservative depths, nearest chunks first (slim_pass.h)
   o.slim_tight_splats = tight_splats;
   o.set_slim_blend(blend);
   o.statistics = true;
@@ -72,6 +84,8 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   row.occluded_in_chunks = st.occluded_in_chunks;
   row.fragments = st.fragments;
   row.slim_waste = st.slim_waste();
+  row.slim_runs = st.slim_splat_fragments + st.slim_accumulate_fragments;
+  row.slim_casts = st.slim_cast_fragments;
   row.glyph_waste = st.glyph_waste();
   row.covered = std::count(g.coverage.begin(), g.coverage.end(), 1);
   row.pixel_error = pixel_error;
@@ -83,7 +97,14 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.statistics = false;
   r.draw(cam, o);  // warm-up
   std::vector<double> ms;
-  for (int f = 0; f < frames; ++f) ms.push_back(r.draw(cam, o).ms_total);
+  std::vector<double> cpu;
+  for (int f = 0; f < frames; ++f) {
+    const double c0 = cpu_ms();
+    ms.push_back(r.draw(cam, o).ms_total);
+    cpu.push_back(cpu_ms() - c0);
+  }
+  std::sort(cpu.begin(), cpu.end());
+  row.ms_cpu_median = cpu[cpu.size() / 2];
   std::sort(ms.begin(), ms.end());
   row.ms_median = ms[ms.size() / 2];
   row.ms_min = ms.front();
@@ -262,9 +283,14 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                             rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
                                                    slim_blend_of(model), true, false, false, false));
                           }
-                          if (!model.slims.empty())  // the baseline splat: the ball's screen rectangle
+                          if (!model.slims.empty()) {  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
                                                    slim_blend_of(model), false));
+                            // Each splat fragment ray-casts and writes its hit's depth (no early depth test).
+                            if (model.glyphs.empty() && model.tets.empty())  // else that row is there
+                              rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
+                                                   slim_blend_of(model), true, false, false));
+                          }
                           // SLIM level of detail: time against image error, each against full detail (row 0).
                           if (!model.slim_hierarchy.empty())
                             for (const double P : a->pixel_errors) {
@@ -311,6 +337,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                           "symmetric_difference,depth_p99_over_diagonal\n";
                         for (const auto& r : rows) {
                           j["rows"].push_back({{"configuration", r.name}, {"ms_median", r.ms_median},
+                                               {"ms_cpu_median", r.ms_cpu_median},
                                                {"ms_min", r.ms_min}, {"ms_clear", r.ms_clear},
                                                {"ms_geometry", r.ms_geometry}, {"ms_slim", r.ms_slim},
                                                {"ms_shading", r.ms_shading}, {"ms_shadows", r.ms_shadows},
@@ -319,6 +346,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                                {"covered_pixels", r.covered},
                                                {"invocations_per_covered_pixel", r.invocations_per_covered()},
                                                {"slim_splat_waste", r.slim_waste},
+                                               {"slim_runs_per_covered_pixel", r.covered ? double(r.slim_runs) / r.covered : 0.0},
+                                               {"slim_casts_per_covered_pixel", r.covered ? double(r.slim_casts) / r.covered : 0.0},
                                                {"glyph_proxy_waste", r.glyph_waste}, {"chunks", r.chunks},
                                                {"chunks_culled", r.chunks_culled},
                                                {"culled_in_chunks", r.culled_in_chunks},
@@ -334,11 +363,14 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                                              r.chunks, r.chunks_culled, r.culled_in_chunks, r.chunks_occluded,
                                              r.occluded_in_chunks, r.pixel_error, r.slim_balls, r.level_mix,
                                              r.symmetric_difference, r.depth_p99);
-                          std::printf("%-24s %8.2f ms/frame (min %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
+                          std::printf("%-24s %8.2f ms/frame (min %.2f, CPU %.2f; clear %.1f, tets+mesh %.1f, slim %.1f, "
                                       "shading %.1f, shadow map %.1f)  %7llu culled  %6.2f invocations/covered px",
-                                      r.name.c_str(), r.ms_median, r.ms_min, r.ms_clear, r.ms_geometry, r.ms_slim,
+                                      r.name.c_str(), r.ms_median, r.ms_min, r.ms_cpu_median, r.ms_clear, r.ms_geometry, r.ms_slim,
                                       r.ms_shading, r.ms_shadows, (unsigned long long)r.culled, r.invocations_per_covered());
-                          if (!model.slims.empty()) std::printf("  waste %.1f %%", 100.0 * r.slim_waste);
+                          if (!model.slims.empty())
+                            std::printf("  waste %.1f %%, SLIM shader runs %.2f, ray casts %.2f /covered px", 100.0 * r.slim_waste,
+                                        r.covered ? double(r.slim_runs) / r.covered : 0.0,
+                                        r.covered ? double(r.slim_casts) / r.covered : 0.0);
                           if (!model.glyphs.empty()) std::printf("  glyph waste %.1f %%", 100 * r.glyph_waste);
                           if (!model.slim_hierarchy.empty())
                             std::printf("  %llu balls, sym. diff %.2f %%, depth p99 %.2g", (unsigned long long)r.slim_balls,
@@ -360,7 +392,11 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         if (ball) j["ratio_ball_over_tight_splats"] = ball->ms_median / rows[0].ms_median;
                         const Row* hit_depth = row_named("quadrics, hit depth");
                         const Row* no_occ = row_named("quadrics, no occlusion");
-                        if (hit_depth) j["ratio_hit_depth_over_early_depth"] = hit_depth->ms_median / rows[0].ms_median;
+                        if (hit_depth) {
+                          j["ratio_hit_depth_over_early_depth"] = hit_depth->ms_median / rows[0].ms_median;
+                          j["ratio_hit_depth_over_early_depth_cpu"] = hit_depth->ms_cpu_median / rows[0].ms_cpu_median;
+                        }
+                        if (tri) j["ratio_quadrics_culled_over_triangles_cpu"] = rows[0].ms_cpu_median / tri->ms_cpu_median;
                         if (no_occ) j["ratio_no_occlusion_over_occlusion"] = no_occ->ms_median / rows[0].ms_median;
                         // Glyphs against the same glyphs tessellated (issue 13's target: ≤ 0.5), plain and with effects.
                         const Row* tess = row_named("tessellated glyphs");

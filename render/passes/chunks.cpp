@@ -65,6 +65,35 @@ ChunkSelection select_chunks(const Chunks& chunks, const Camera& cam) {
   return sel;
 }
 
+void PixelRect::extend(const PixelRect& o) {
+  if (o.empty()) return;
+  if (empty()) {
+    *this = o;
+    return;
+  }
+  x0 = std::min(x0, o.x0), y0 = std::min(y0, o.y0), x1 = std::max(x1, o.x1), y1 = std::max(y1, o.y1);
+}
+
+PixelRect box_pixels(const Box3& b, const Camera& cam) {
+  const PixelRect all{0, 0, cam.width, cam.height};
+  const Eigen::Matrix4d V = cam.view(), P = cam.projection();
+  const Eigen::Matrix3d R = V.topLeftCorner<3, 3>();
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d w((k & 1) ? b.max.x() : b.min.x(), (k & 2) ? b.max.y() : b.min.y(),
+                            (k & 4) ? b.max.z() : b.min.z());
+    const Eigen::Vector3d p = R * (w - cam.eye);
+    const double depth = -p.z();
+    if (!(depth > cam.near_plane)) return all;
+    const double px = (0.5 * P(0, 0) * p.x() / depth + 0.5) * cam.width;
+    const double py = (0.5 * P(1, 1) * p.y() / depth + 0.5) * cam.height;
+    x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+  }
+  const auto clamp = [](double v, int hi) { return static_cast<int>(std::clamp(v, 0.0, double(hi))); };
+  return {clamp(std::floor(x0) - 1, cam.width), clamp(std::floor(y0) - 1, cam.height),
+          clamp(std::ceil(x1) + 2, cam.width), clamp(std::ceil(y1) + 2, cam.height)};
+}
+
 DepthTiles depth_tiles(std::span<const float> depth, int width, int height, int tile) {
   DepthTiles t;
   t.width = width, t.height = height, t.tile = tile;

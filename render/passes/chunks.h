@@ -42,6 +42,17 @@ struct ChunkSelection {
 /// only when all 8 corners of its box lie outside one frustum plane.
 ChunkSelection select_chunks(const Chunks& chunks, const Camera& camera);
 
+/// A rectangle of pixels, GL's rows (row 0 at the bottom); empty when x1 ≤ x0 or y1 ≤ y0.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  ///< [x0, x1) × [y0, y1)
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  void extend(const PixelRect& o);
+};
+/// The pixels whose centres the box's projection may cover (one more on each side for
+/// rasterisation rules), clamped to the camera's image; the whole image when the box reaches
+/// the near plane or behind the eye.
+PixelRect box_pixels(const Box3& box, const Camera& camera);
+
 /// The farthest window depth (0 near … 1 far or background) per square tile of a depth image.
 struct DepthTiles {
   int width = 0, height = 0;  ///< of the image, pixels

@@ -97,6 +97,8 @@ struct Frame {
   float scene_radius = 1.0f;
   /// Whether passes after the tetrahedron pass draw into the G-buffer (and so need its depth).
   bool depth_needed_after_tets = true;
+  /// Whether the depth buffer is still clear when the SLIM pass (the last G-buffer pass) runs.
+  bool is_depth_clear_before_slim = false;
 };
 
 /// The state every opaque pass draws into the G-buffer with: its framebuffer bound, depth test

@@ -1,5 +1,7 @@
 #include "render/passes/slim_pass.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 
@@ -61,6 +63,17 @@ GpuBall pack(const SlimPatch& b, std::int32_t id, const FixedOrigin& origin) {
 
 const float kZero[4] = {0, 0, 0, 0};
 
+// Balls per spatial chunk (frustum culling and the screen bound of the early-depth path).
+constexpr std::size_t kChunkSize = 256;
+
+void scissor(const PixelRect& r) { glScissor(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0); }
+
+// A texture-level clear of the rectangle: a scissored framebuffer clear is a drawn quad on
+// llvmpipe (fragment-shader runs over the rectangle), this one is not.
+void clear_pixels(const gl::Texture& t, const PixelRect& r, GLenum format, const float* value) {
+  glClearTexSubImage(t.id(), 0, r.x0, r.y0, 0, r.x1 - r.x0, r.y1 - r.y0, 1, format, GL_FLOAT, value);
+}
+
 void set_colour_writes(GLboolean on) {
   for (GLuint i = 0; i < 3; ++i) glColorMaski(i, on, on, on, on);
 }
@@ -70,7 +83,24 @@ void set_colour_writes(GLboolean on) {
 SlimPass::SlimPass()
     : visibility_("slim pass 1", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 1\n"),
       accumulate_("slim pass 2", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 2\n"),
-      resolve_("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag")) {}
+      resolve_("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag")),
+      visibility_early_("slim pass 1, early depth", shader_source("slim.vert"), shader_source("slim.frag"),
+                        "#define SLIM_PASS 1\n#define SLIM_EARLY 1\n"),
+      accumulate_early_("slim pass 2, early depth", shader_source("slim.vert"), shader_source("slim.frag"),
+                        "#define SLIM_PASS 2\n#define SLIM_EARLY 1\n"),
+      from_depth_("slim pass-1 depth from the depth buffer", shader_source("fullscreen.vert"),
+                  shader_source("slim_depth_copy.frag")) {}
+
+void SlimPass::upload_chunked(std::span<const float> balls, std::span<const Box3> boxes) {
+  chunks_ = make_chunks(boxes, {.chunk_size = kChunkSize});
+  std::vector<float> data(balls.size());
+  for (std::size_t s = 0; s < chunks_.order.size(); ++s)
+    std::memcpy(data.data() + s * kBallFloats, balls.data() + std::size_t{chunks_.order[s]} * kBallFloats,
+                kBallFloats * sizeof(float));
+  if (!data.empty())
+    glNamedBufferSubData(balls_.id(), 0, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data());
+  count_ = boxes.size();
+}
 
 void SlimPass::upload(std::span<const SlimPatch> patches) {
   if (patches.size() > kMaxPrimitiveIndex + 1)
@@ -79,12 +109,15 @@ void SlimPass::upload(std::span<const SlimPatch> patches) {
   Box3 box;
   for (const SlimPatch& p : patches) box.extend(p.centre);
   origin_ = FixedOrigin::of(box);
-  std::vector<GpuBall> data;
-  data.reserve(patches.size());
-  for (std::size_t i = 0; i < patches.size(); ++i)
-    data.push_back(pack(patches[i], primitive_id(PrimitiveKind::slim, i), origin_));
-  balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuBall)), data.data());
-  count_ = data.size();
+  std::vector<float> data(patches.size() * kBallFloats);
+  std::vector<Box3> boxes(patches.size());
+  for (std::size_t i = 0; i < patches.size(); ++i) {
+    const GpuBall g = pack(patches[i], primitive_id(PrimitiveKind::slim, i), origin_);
+    std::memcpy(data.data() + i * kBallFloats, &g, sizeof g);
+    boxes[i] = bounds(patches[i]);
+  }
+  balls_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(float)), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  upload_chunked(data, boxes);
 }
 
 void SlimPass::upload(const Model& model) {
@@ -104,13 +137,16 @@ void SlimPass::upload(const Model& model) {
   for (std::size_t b = 0; b < n; ++b) box.extend(slim_ball(model, b).centre);
   origin_ = FixedOrigin::of(box);
   packed_.resize(n * kBallFloats);
+  boxes_.resize(n);
   for (std::size_t b = 0; b < n; ++b) {
     const GpuBall g = pack(slim_ball(model, b), 0, origin_);
     std::memcpy(packed_.data() + b * kBallFloats, &g, sizeof g);
+    boxes_[b] = bounds(slim_ball(model, b));
   }
   // Room for every ball: a cut never holds more balls than the hierarchy.
   balls_ = gl::make_buffer(static_cast<GLsizeiptr>(n * sizeof(GpuBall)), nullptr, GL_DYNAMIC_STORAGE_BIT);
   count_ = 0;
+  chunks_ = {};
 }
 
 bool SlimPass::select_cut(const Camera& camera, const SlimLodOptions& options) {
@@ -118,14 +154,14 @@ bool SlimPass::select_cut(const Camera& camera, const SlimLodOptions& options) {
   SlimLodCut c = lod_->cut(camera, options);
   if (has_cut_ && c == cut_) return false;
   std::vector<float> data(c.balls.size() * kBallFloats);
+  std::vector<Box3> boxes(c.balls.size());
   for (std::size_t i = 0; i < c.balls.size(); ++i) {
     std::memcpy(data.data() + i * kBallFloats, packed_.data() + static_cast<std::size_t>(c.balls[i]) * kBallFloats,
                 sizeof(GpuBall));
     data[i * kBallFloats + kIdFloat] = bits_float(static_cast<std::uint32_t>(primitive_id(PrimitiveKind::slim, i)));
+    boxes[i] = boxes_[c.balls[i]];
   }
-  if (!data.empty())
-    glNamedBufferSubData(balls_.id(), 0, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data());
-  count_ = c.balls.size();
+  upload_chunked(data, boxes);
   cut_ = std::move(c);
   has_cut_ = true;
   return true;
@@ -144,6 +180,17 @@ void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
   const GLenum format = half ? GL_RGBA16F : GL_RGBA32F;
   a->normal_weight = gl::make_texture_2d(format, t.width, t.height);
   a->depth_colour = gl::make_texture_2d(format, t.width, t.height);
+  a->pass1_depth = gl::make_texture_2d(GL_R32F, t.width, t.height);
+  for (const bool with_depth : {true, false}) {
+    GLuint id = 0;
+    glCreateFramebuffers(1, &id);
+    (with_depth ? a->pass1_fbo : a->copy_fbo) = gl::Framebuffer(id);
+    glNamedFramebufferTexture(id, GL_COLOR_ATTACHMENT0, a->pass1_depth.id(), 0);
+    if (with_depth) glNamedFramebufferTexture(id, GL_DEPTH_ATTACHMENT, t.depth.id(), 0);
+    glNamedFramebufferDrawBuffer(id, GL_COLOR_ATTACHMENT0);
+    if (glCheckNamedFramebufferStatus(id, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GlError("SLIM pass-1 depth framebuffer incomplete");
+  }
   GLuint fb = 0;
   glCreateFramebuffers(1, &fb);
   a->fbo = gl::Framebuffer(fb);
@@ -164,6 +211,7 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
   p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);
+  p.set("u_base", 0);
 }
 
 void SlimPass::run(const Frame& f) {
@@ -174,9 +222,78 @@ void SlimPass::run(const Frame& f) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, balls_.id());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, f.stats_buffer);
   glBindVertexArray(f.empty_vao);
+  if (f.options.slim_early_depth) {
+    run_early_depth(f);
+    return;
+  }
   visibility(f);
   accumulate(f);
   resolve(f);
+}
+
+void SlimPass::run_early_depth(const Frame& f) {
+  // The chunks in the view frustum, drawn as runs of consecutive GPU slots, and their pixels.
+  const Camera& cam = f.camera.world;
+  ChunkSelection selection = select_chunks(chunks_, cam);
+  std::sort(selection.chunks.begin(), selection.chunks.end());
+  std::vector<std::pair<GLint, GLsizei>> runs;  // first slot, count
+  PixelRect all;
+  for (const std::uint32_t c : selection.chunks) {
+    all.extend(box_pixels(chunks_.boxes[c], cam));
+    if (!runs.empty() && runs.back().first + runs.back().second == static_cast<GLint>(chunks_.first[c]))
+      runs.back().second += static_cast<GLsizei>(chunks_.count[c]);
+    else
+      runs.emplace_back(static_cast<GLint>(chunks_.first[c]), static_cast<GLsizei>(chunks_.count[c]));
+  }
+  if (all.empty()) return;
+  const auto draw = [&](const gl::Program& program) {
+    for (const auto& [first, count] : runs) {
+      program.set("u_base", first);
+      program.use();
+      glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, count);
+    }
+  };
+  const Accumulation& a = *current_;
+  glEnable(GL_SCISSOR_TEST);
+  scissor(all);
+  // The pass-1 depth target starts as the depth buffer: what the frame drew before SLIM.
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);  // clears honour the write masks
+  if (f.is_depth_clear_before_slim) {
+    const float far = 1;
+    clear_pixels(a.pass1_depth, all, GL_RED, &far);
+  } else {
+    glBindFramebuffer(GL_FRAMEBUFFER, a.copy_fbo.id());
+    glDisable(GL_DEPTH_TEST);
+    glBindTextureUnit(0, f.targets.depth.id());
+    from_depth_.use();
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glEnable(GL_DEPTH_TEST);
+  }
+
+  // Pass 1 as on the other path, its depth also kept in a colour target.
+  glBindFramebuffer(GL_FRAMEBUFFER, a.pass1_fbo.id());
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  set_uniforms(visibility_early_, f, f.options.statistics ? 1 : 0);
+  draw(visibility_early_);
+
+  // Pass 2: the depth test before the shader, each hit tested against pass 1's depth.
+  const GLuint fbo = a.fbo.id();
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  set_colour_writes(GL_TRUE);
+  clear_pixels(a.normal_weight, all, GL_RGBA, kZero);
+  clear_pixels(a.depth_colour, all, GL_RGBA, kZero);
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  glBindTextureUnit(0, a.pass1_depth.id());
+  set_uniforms(accumulate_early_, f, f.options.statistics ? 1 : 0);
+  draw(accumulate_early_);
+  glDisable(GL_BLEND);
+  resolve(f);
+  glDisable(GL_SCISSOR_TEST);
 }
 
 // Pass 1: the pushed-back depth of each ball's first hit, no colour writes.
@@ -203,7 +320,7 @@ void SlimPass::accumulate(const Frame& f) {
   glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_ADD);
   glBlendFunc(GL_ONE, GL_ONE);
-  set_uniforms(accumulate_, f, 0);
+  set_uniforms(accumulate_, f, f.options.statistics ? 1 : 0);
   accumulate_.use();
   glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
   glDisable(GL_BLEND);
@@ -237,6 +354,7 @@ void SlimOutlinePass::run(const Frame& f) {
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.set("u_tight", 0);
+  program_.set("u_base", 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());
   glBindVertexArray(f.empty_vao);

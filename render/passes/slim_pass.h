@@ -2,6 +2,14 @@
 /// SLIM patches in three passes ([Stoll06] §5.1.1, DESIGN §6): visibility (pushed-back depth of
 /// the first hit), accumulation (additive weighted normal, depth, colour), resolve (divide by Σw
 /// into the G-buffer, shaded later with everything else). And the debug overlay of their splats.
+///
+/// Early-depth path (RenderOptions::slim_early_depth): llvmpipe runs the depth test before the
+/// fragment shader only for shaders that write no depth. Pass 1 is unchanged but also keeps its
+/// depth in a colour target; pass 2's splats lie in front of every hit they can make
+/// (slim.vert) and write no depth, so fragments behind pass 1's depth fail the test before any
+/// ray work, and the shader compares each hit with the colour target. The balls sit in spatial
+/// chunks (render/passes/chunks.h): those outside the view frustum are not drawn, and the
+/// clears and the resolve cover only the visible chunks' screen bound. The same G-buffer.
 #include <array>
 #include <optional>
 #include <span>
@@ -9,6 +17,7 @@
 
 #include "core/model.h"
 #include "core/slim_lod.h"
+#include "render/passes/chunks.h"
 #include "render/passes/frame.h"
 
 namespace quadrix::render {
@@ -39,17 +48,26 @@ private:
   void visibility(const Frame& frame);
   void accumulate(const Frame& frame);
   void resolve(const Frame& frame);
+  /// The three passes on the early-depth path, within the visible chunks' screen bound.
+  void run_early_depth(const Frame& frame);
   void set_uniforms(const gl::Program& program, const Frame& frame, int count_stats) const;
   /// (Re)makes the accumulation targets; they share the G-buffer's depth texture.
   void ensure_accumulation(const FrameTargets& targets, bool half);
+  /// Packs `balls` (kBallFloats each, the cut's or the model's) into the GPU buffer in chunk order.
+  void upload_chunked(std::span<const float> balls, std::span<const Box3> boxes);
 
   gl::Program visibility_, accumulate_, resolve_;
+  gl::Program visibility_early_, accumulate_early_, from_depth_;
   gl::Buffer balls_;
   std::size_t count_ = 0;
+  Chunks chunks_;  // GPU slots in chunk order
   /// Accumulation targets for one FrameTargets (the view's, and the light's for shadows).
   struct Accumulation {
     gl::Texture normal_weight, depth_colour;
     gl::Framebuffer fbo;
+    // Early-depth path: pass 1's window depth (R32F) drawn with the G-buffer's depth, or alone.
+    gl::Texture pass1_depth;
+    gl::Framebuffer pass1_fbo, copy_fbo;
     bool half = false;
     const FrameTargets* targets = nullptr;
     unsigned generation = 0;  // the FrameTargets generation fbo was made for
@@ -60,6 +78,7 @@ private:
   // Level of detail: every ball of the hierarchy packed (kBallFloats each), the cut drawn.
   std::optional<SlimLod> lod_;
   std::vector<float> packed_;
+  std::vector<Box3> boxes_;  // per ball of the hierarchy
   SlimLodCut cut_;
   bool has_cut_ = false;
 };

@@ -8,8 +8,9 @@
 
 namespace quadrix::render {
 namespace {
-// culled, drawn, SLIM splat and hit fragments, glyph proxy and hit fragments.
-constexpr int kCounters = 6;
+// culled, drawn, SLIM splat and hit fragments, glyph proxy and hit fragments, SLIM pass-2
+// fragments and ray casts.
+constexpr int kCounters = 8;
 }  // namespace
 
 bool has_pipeline_statistics() {
@@ -58,6 +59,8 @@ void FrameStatistics::read(FrameStats& st) const {
   st.slim_hit_fragments = counts[3];
   st.glyph_proxy_fragments = counts[4];
   st.glyph_hit_fragments = counts[5];
+  st.slim_accumulate_fragments = counts[6];
+  st.slim_cast_fragments = counts[7];
 }
 
 }  // namespace quadrix::render

@@ -1,7 +1,7 @@
 #pragma once
 /// Frame statistics: occlusion and fragment-invocation queries around the G-buffer passes, and
-/// the counters their shaders add to (culled primitives, SLIM splat and hit fragments, glyph
-/// proxy and hit fragments).
+/// the counters their shaders add to (culled primitives, SLIM splat, hit, pass-2 and ray-cast
+/// fragments, glyph proxy and hit fragments).
 #include "render/gl/objects.h"
 #include "render/renderer.h"
 

@@ -2,6 +2,9 @@
 // front-facing hit inside the ball (and its clip plane), pushed away from the eye by offset·R
 // along the ray. SLIM_PASS 2 (accumulation): the same hit, tested against pass 1's depth without
 // writing it, adds (w·n, w) and (w·depth, w·colour) into float targets; w is the SLIM weight.
+// SLIM_EARLY (render/passes/slim_pass.h): pass 1 also writes its depth into a colour target;
+// pass 2 runs the depth test before this stage, against the quad's conservative depth
+// (slim.vert), writes no depth, and compares its hit with pass 1's depth read from that target.
 in vec3 v_dir;
 in vec3 v_offset;
 flat in vec3 v_centre_eye;
@@ -22,9 +25,27 @@ uniform float u_max_push;  // and at most this (eye units), unless the ball has 
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;
-layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
+// Pass 2's fragments and the ray casts of both passes are counted after the glyphs' counters.
+layout(std430, binding = 1) buffer Stats {
+  uint culled;
+  uint drawn;
+  uint splat_fragments;
+  uint hit_fragments;
+  uint glyph_proxy_fragments;
+  uint glyph_hit_fragments;
+  uint accumulate_fragments;
+  uint cast_fragments;
+} stats;
 
+#if defined(SLIM_EARLY) && SLIM_PASS == 2
+layout(early_fragment_tests) in;
+layout(binding = 0) uniform sampler2D u_pass1_depth;  // window depth after pass 1
+#else
 layout(depth_greater) out float gl_FragDepth;
+#endif
+#if defined(SLIM_EARLY) && SLIM_PASS == 1
+layout(location = 0) out float out_pass1_depth;  // = gl_FragDepth, kept where the depth test passes
+#endif
 #if SLIM_PASS == 2
 layout(location = 0) out vec4 out_normal_weight;  // Σ w·n (world), Σ w
 layout(location = 1) out vec4 out_depth_colour;   // Σ w·depth, Σ w·rgb
@@ -37,12 +58,17 @@ float slim_weight(float r) {
 }
 
 void main() {
+#if SLIM_PASS == 1
   if (u_count_stats != 0) atomicAdd(stats.splat_fragments, 1u);  // [Toledo04] A_RTA
+#else
+  if (u_count_stats != 0) atomicAdd(stats.accumulate_fragments, 1u);
+#endif
   vec3 d = normalize(v_dir);
   vec3 o = v_offset;
   // Outside the ball's projected disc: the ray misses the ball; no ray work ([Sigg06]).
   float od = dot(o, d);
   if (dot(o, o) - od * od > 1.0) discard;
+  if (u_count_stats != 0) atomicAdd(stats.cast_fragments, 1u);
   mat3 A = mat3(v_A0, v_A1, v_A2);
   vec3 Ao_b = A * o + v_bc.xyz;
   float a = dot(d, A * d);
@@ -57,12 +83,21 @@ void main() {
     if (dot(v_clip[k].xyz, x) + v_clip[k].w < 0.0) discard;
   vec3 p = v_centre_eye + v_radius * x;  // eye space
   if (-p.z < u_near) discard;           // behind the eye or in front of the near plane
-  if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
 #if SLIM_PASS == 1
+  if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
   float z_push = p.z * (1.0 + min(u_offset * v_radius, v_max_push > 0.0 ? v_max_push : u_max_push) / length(p));
-  gl_FragDepth = window_depth(z_push, u_proj);
+  float depth = window_depth(z_push, u_proj);
+  gl_FragDepth = depth;
+#ifdef SLIM_EARLY
+  out_pass1_depth = depth;
+#endif
+#else
+#ifdef SLIM_EARLY
+  // The depth test GL_LEQUAL on the hit (the clamp as for a written depth).
+  if (min(window_depth(p.z, u_proj), 1.0) > texelFetch(u_pass1_depth, ivec2(gl_FragCoord.xy), 0).x) discard;
 #else
   gl_FragDepth = window_depth(p.z, u_proj);
+#endif
   float w = slim_weight(r);
   if (w <= 0.0) discard;
   vec3 n_eye = normalize(A * x + v_bc.xyz);

@@ -8,6 +8,11 @@
 // never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
 // test for spheres ([Stoll06] eq. 18).
 //
+// The quad lies at one depth, in front of every point of the surface piece: the nearer of the
+// ball's front and the prism's nearest corner, so a depth test before the fragment stage (pass 2
+// of the early-depth path, render/passes/slim_pass.h) rejects only fragments whose hits would
+// fail it.
+//
 // With w = 1 the quad is affine in screen space, so the eye-space ray direction (x/P00, y/P11, −1)
 // and the ray's point in the plane through the centre (perpendicular to the view axis) are
 // interpolated exactly; the fragment stage re-starts each ray there (local units of R), so
@@ -24,7 +29,16 @@ struct Ball {
   vec4 extra;      // x: the ball's own blend push bound (world units), ≤ 0: the model's; yzw unused
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
-layout(std430, binding = 1) buffer Stats { uint culled; uint drawn; uint splat_fragments; uint hit_fragments; } stats;
+layout(std430, binding = 1) buffer Stats {  // as in slim.frag
+  uint culled;
+  uint drawn;
+  uint splat_fragments;
+  uint hit_fragments;
+  uint glyph_proxy_fragments;
+  uint glyph_hit_fragments;
+  uint accumulate_fragments;
+  uint cast_fragments;
+} stats;
 
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
@@ -33,6 +47,7 @@ uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
 uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
+uniform int u_base;   // the first ball of this draw
 
 const float kOctagonOut = 1.0823922;  // 1/cos(22.5°): the octagon about a unit circle
 
@@ -53,7 +68,7 @@ flat out int v_culled;  // debug overlay ([Stoll06] Fig. 3): culled balls drawn 
 #endif
 
 void main() {
-  Ball ball = balls[gl_InstanceID];
+  Ball ball = balls[u_base + gl_InstanceID];
   float R = ball.centre_hi.w;
   vec3 C = u_view_rot * from_fixed_origin(ball.centre_hi.xyz, ball.centre_lo.xyz) +
            vec3(0.0, 0.0, -u_target_distance);
@@ -68,7 +83,12 @@ void main() {
   // patch faces away everywhere in its ball when c − yᵀb < −‖b − A y‖, y = C/R.
   vec3 y = C / R;
   bool culled = u_cull != 0 && c - dot(y, be) < -length(be - Ae * y);
-  if (u_count_stats != 0 && gl_VertexID == 0) {
+#if SLIM_PASS == 1
+  bool count_balls = u_count_stats != 0 && gl_VertexID == 0;  // once per ball and frame
+#else
+  bool count_balls = false;
+#endif
+  if (count_balls) {
     if (culled) atomicAdd(stats.culled, 1u); else atomicAdd(stats.drawn, 1u);
   }
 #ifdef SLIM_OUTLINE
@@ -93,11 +113,10 @@ void main() {
   vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
   vec2 corner;
   float ndc_z = -1.0;
+  float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
   if (inside_or_near) {
     corner = vec2((vid & 1) != 0 ? 1.0 : -1.0, (vid & 2) != 0 ? 1.0 : -1.0);
   } else {
-    float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
-    ndc_z = (u_proj[2][2] * zn + u_proj[3][2]) / -zn;
     if (tight) {
       // Screen slopes k = xy/(−z) of the 16 corners, extents along the projected axis a and a⊥.
       vec3 axis = u_view_rot * ball.slab.xyz;
@@ -109,6 +128,7 @@ void main() {
       a = dot(a, a) > 1e-20 * dot(kc, kc) + 1e-30 ? normalize(a) : vec2(1.0, 0.0);
       vec2 ap = vec2(-a.y, a.x);
       vec2 lo = vec2(1e30), hi = vec2(-1e30);
+      float z_prism = -1e30;  // the prism's nearest corner
       for (int k = 0; k < 8; ++k) {
         float angle = (float(k) + 0.5) * 0.78539816;
         vec3 ring = rho * kOctagonOut * (cos(angle) * t1 + sin(angle) * t2);
@@ -118,8 +138,10 @@ void main() {
           vec2 e = vec2(dot(kp, a), dot(kp, ap));
           lo = min(lo, e);
           hi = max(hi, e);
+          z_prism = max(z_prism, p.z);
         }
       }
+      zn = min(zn, z_prism);
       // Widen by a float ulp of the slopes so rounding never trims a covered pixel.
       vec2 pad = vec2(2e-6 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
       lo -= pad;
@@ -141,6 +163,10 @@ void main() {
       vec2 lo = clamp(k_lo * scale, -1.0, 1.0), hi = clamp(k_hi * scale, -1.0, 1.0);
       corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
     }
+  }
+  if (!inside_or_near) {
+    // A margin of 16 float steps of window depth, so rounding never puts the quad behind a hit.
+    ndc_z = max((u_proj[2][2] * zn + u_proj[3][2]) / -zn - 4e-6, -1.0);
   }
   gl_Position = vec4(corner, ndc_z, 1.0);
   vec2 k = corner / scale;
