@@ -366,7 +366,7 @@ TEST_F(GlSlim, FacePrismPatchesJoinWithoutCracks) {
   for (const auto& v : mesh.vertices) cloud.normals.push_back(v.normalized());
   const SlimFitResult fit = fit_slim(cloud, mesh, {.max_error = 1e-4});
   std::size_t prisms = 0;
-  for (const auto& p : fit.model.slims) prisms += p.clips.size() == 3;
+  for (const auto& p : fit.model.slims) prisms += p.clips.size() >= 3;  // three walls, and a plane across a sharp corner
   EXPECT_GT(prisms, fit.model.slims.size() / 2) << "the case no longer fits with face patches";
   for (const double az : {10.0, 75.0}) {
     SCOPED_TRACE(az);

@@ -168,7 +168,9 @@ TEST(SlimLod, EachBallPassesItsOwnProjectedTestAndEachRefinedOneFailsIt) {
         EXPECT_LE(px, P) << "ball " << b;
         ++coarse;
       }
-      if (refined[b]) EXPECT_GT(px, P) << "ball " << b;
+      if (refined[b]) {
+        EXPECT_GT(px, P) << "ball " << b;
+      }
       if (chosen[b] && b < m.slims.size()) ((ball.centre.dot(cam.eye) > 0) ? near_leaves : far_leaves) += 1;
     }
     // Per ball, not one global error: at these distances the cut mixes levels, the near side finer.
@@ -338,7 +340,9 @@ TEST_F(GlSlimLod, ACoarseCutOfFittedLevelsMatchesTheReferenceAndStaysCloseToFull
   const render::GBuffer coarse = renderer_->read_gbuffer();
   const Model cut_model = slim_cut_model(m, cut.balls);
   const ReferenceScene scene(cut_model);
-  const auto c = testing_gl::compare(render_reference(scene, cam, {.trace = {.slim = slim_blend_of(m)}}), coarse);
+  ReferenceRenderOptions rro;
+  rro.trace.slim = slim_blend_of(m);
+  const auto c = testing_gl::compare(render_reference(scene, cam, rro), coarse);
   EXPECT_GT(c.covered, 4000);
   EXPECT_GE(c.coverage_agreement, 0.995);
   EXPECT_LE(c.depth_p99, 2e-3);
