@@ -74,7 +74,8 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.statistics = true;
   const auto st = r.draw(cam, o);
   const auto g = r.read_gbuffer();
-  Row row{name};
+  Row row;
+  row.name = name;
   row.primitives = st.primitives;
   row.culled = st.culled;
   row.chunks = st.chunks;

@@ -383,8 +383,10 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     for (std::size_t k = 0; k < cameras.size(); ++k) {
       const Camera& c = cameras[k];
       const ReferenceImage img = render_reference(k == 0 ? *scene : scene_for(magnified(c)), magnified(c), ro);
-      finish(shade_phong(img, magnified(c), {.background = background, .outlines = a.outlines}), magnified(c),
-             img.coverage, img.depth, img.normal);
+      ShadeOptions so;
+      so.background = background;
+      so.outlines = a.outlines;
+      finish(shade_phong(img, magnified(c), so), magnified(c), img.coverage, img.depth, img.normal);
       if (!a.depth_out.empty()) write_pfm(depth_image(img), a.depth_out);
       if (!a.normal_out.empty()) write_pfm(normal_image(img), a.normal_out);
     }

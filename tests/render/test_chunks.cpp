@@ -105,7 +105,9 @@ TEST(Chunks, FrustumKeepsEveryChunkWithAPointInViewNearestFirst) {
         in_view = clip.w() > 0 && (clip.head<3>().array().abs() <= clip.w()).all();
       }
       visible += in_view;
-      if (in_view) EXPECT_TRUE(kept[k]) << "view " << view << " chunk " << k;
+      if (in_view) {
+        EXPECT_TRUE(kept[k]) << "view " << view << " chunk " << k;
+      }
     }
     EXPECT_GT(visible, 0);
     EXPECT_GT(sel.culled_chunks, 0u);  // not vacuous

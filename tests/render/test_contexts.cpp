@@ -71,7 +71,9 @@ protected:
   }
   Result run(const Model& m, const Camera& cam, bool cull) {
     renderer_->set_model(m);
-    renderer_->draw(cam, {.cull = cull});
+    render::RenderOptions options;
+    options.cull = cull;
+    renderer_->draw(cam, options);
     ReferenceRenderOptions ro;
     ro.trace.cull_backfaces = cull;
     const ReferenceImage ref = render_reference(ReferenceScene(m), cam, ro);

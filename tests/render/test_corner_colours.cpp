@@ -69,7 +69,9 @@ TEST(CornerColours, ReferenceInterpolatesInsideTheTetrahedron) {
     for (int x = 0; x < img.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * img.width + x;
       if (!img.coverage[i]) continue;
-      const auto hit = scene.trace(cam.pixel_ray(x + 0.5, y + 0.5), 0, INFINITY, {.cull_backfaces = false});
+      TraceOptions both_sides;
+      both_sides.cull_backfaces = false;
+      const auto hit = scene.trace(cam.pixel_ray(x + 0.5, y + 0.5), 0, INFINITY, both_sides);
       ASSERT_TRUE(hit);
       const Rgb want = colour_at(hit->point);
       for (int c = 0; c < 3; ++c) EXPECT_LE(std::abs(int(img.albedo[i][c]) - int(want[c])), 2) << x << "," << y;

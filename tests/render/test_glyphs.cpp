@@ -278,7 +278,9 @@ TEST_F(GlGlyphs, MoleculesInEveryStyleMatchTheCpuReference) {
   const Molecule mol = read_molecule(path);
   for (const auto style : {MoleculeStyle::spacefill, MoleculeStyle::balls_sticks, MoleculeStyle::licorice}) {
     SCOPED_TRACE(int(style));
-    const Model m = molecule_glyphs(mol, {.style = style}).model;
+    MoleculeGlyphOptions options;
+    options.style = style;
+    const Model m = molecule_glyphs(mol, options).model;
     const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 256, .height = 256});
     const Comparison c = run(m, cam, true);
     expect_accurate(c, 4000);
@@ -291,7 +293,9 @@ TEST_F(GlGlyphs, EarlyDepthRayCastsOnlyNearTheSurface) {
   // ray-cast far fewer proxy fragments; both against the CPU reference.
   const auto path = std::filesystem::path(QUADRIX_DATASETS) / "molecules" / "4lfq.pdb";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "dataset missing: " << path;
-  const Model m = molecule_glyphs(read_molecule(path), {.style = MoleculeStyle::spacefill}).model;
+  MoleculeGlyphOptions options;
+  options.style = MoleculeStyle::spacefill;
+  const Model m = molecule_glyphs(read_molecule(path), options).model;
   const Camera cam = frame_box(bounds(m), {.azimuth_deg = 60, .elevation_deg = 10, .width = 320, .height = 320});
   const ReferenceImage ref = reference(m, cam);
   std::uint64_t fragments[2] = {};

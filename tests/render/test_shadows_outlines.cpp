@@ -119,13 +119,18 @@ protected:
   ShadowAgreement shadows(const Model& m, int size = kSize, int map_size = 1024) {
     const Camera cam = camera_for(m, size);
     const ReferenceScene scene(m);
-    const ReferenceImage ref = render_reference(scene, cam, {.shadows = true});
+    ReferenceRenderOptions with_shadows;
+    with_shadows.shadows = true;
+    const ReferenceImage ref = render_reference(scene, cam, with_shadows);
     // What the key light adds where lit: the reference shaded fully lit and fully dark.
     ReferenceImage lit = ref, dark = ref;
     std::fill(lit.key_light.begin(), lit.key_light.end(), 1.0f);
     std::fill(dark.key_light.begin(), dark.key_light.end(), 0.0f);
     const Image8 cpu_lit = shade_phong(lit, cam), cpu_dark = shade_phong(dark, cam);
-    const Image8 gl_plain = draw(m, cam, {}), gl_shadow = draw(m, cam, {.shadows = true, .shadow_map_size = map_size});
+    render::RenderOptions shadowed;
+    shadowed.shadows = true;
+    shadowed.shadow_map_size = map_size;
+    const Image8 gl_plain = draw(m, cam, {}), gl_shadow = draw(m, cam, shadowed);
     const int w = ref.width, h = ref.height;
     std::vector<std::uint8_t> boundary(ref.coverage.size(), 0);
     for (int y = 0; y < h; ++y)
@@ -163,7 +168,10 @@ protected:
                          .depth = ref.depth.data(), .normal = ref.normal.data(), .fov_y_deg = cam.fov_y_deg,
                          .scene_radius = ref.scene_radius});
     const Image8 plain = draw(m, cam, {});  // Phong, no lines (NPR draws them always)
-    const Image8 lined = draw(m, cam, {.shading = shading, .outlines = true});
+    render::RenderOptions outlined;
+    outlined.shading = shading;
+    outlined.outlines = true;
+    const Image8 lined = draw(m, cam, outlined);
     const int w = ref.width, h = ref.height;
     std::vector<std::uint8_t> gl(cpu.size(), 0);
     OutlineAgreement a;
