@@ -28,7 +28,7 @@ struct MoleculeGlyphOptions {
   double ball_scale = 0.25;     ///< balls-sticks: ball radius = ball_scale · van der Waals radius
   double stick_radius = 0.15;   ///< Å, balls-sticks sticks
   double licorice_radius = 0.3; ///< Å, licorice sticks and the spheres that round their joints
-  BondOptions bonds;            ///< bond inference
+  BondOptions bonds{};          ///< bond inference
 };
 
 struct MoleculeGlyphs {

@@ -72,10 +72,10 @@ struct SlimPatch {
   double radius = 1.0;                               ///< support radius R, world units, > 0
   Quadric local;                                     ///< g(u), u = (x − centre)/R
   ClipPlanes clips;  ///< sharp features, open edges, a face's prism: in local u coordinates
-  std::optional<Rgb> colour;
+  std::optional<Rgb> colour{};
   /// Measured error (fit/patch_error.h): the largest distance from the data points this patch
   /// serves (weight > 0 in their probe's blend) to the blended surface, world units, ≥ 0.
-  std::optional<double> measured_error;
+  std::optional<double> measured_error{};
   /// The blend's push bound for this ball, world units (core/slim.h SlimBlendOptions::push): a
   /// coarser level of a hierarchy, fitted at a larger bound, blends with its own; none: the
   /// model's (`slim_max_push`).
@@ -90,7 +90,7 @@ struct SlimPatch {
 struct TetPatch {
   std::array<Eigen::Vector3d, 4> corners;  ///< world units
   Quadric quadric;                         ///< f(y), y = x − centroid()
-  std::optional<Rgb> colour;
+  std::optional<Rgb> colour{};
   /// Colour at each corner, interpolated barycentrically inside; takes precedence over colour.
   std::optional<std::array<Rgb, 4>> corner_colours = std::nullopt;
 
@@ -116,7 +116,7 @@ struct Glyph {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double radius = 1.0;
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
-  std::optional<Rgb> colour;
+  std::optional<Rgb> colour{};
 };
 
 /// Axis-aligned box; empty when min > max.
@@ -137,7 +137,7 @@ struct ImplicitSurface {
   std::string expression;
   std::map<std::string, double> parameters;
   Box3 bounds;  ///< world units, not empty
-  std::optional<Rgb> colour;
+  std::optional<Rgb> colour{};
 };
 
 /// A SLIM hierarchy beside the drawn patches (Ohtake et al. 2005 §4, Kanai's .slim2t): a forest

@@ -29,7 +29,7 @@ struct TraceOptions {
   /// Per-fragment culling: front-facing roots only ([Stoll06] eq. 14). render_reference applies
   /// it only where it cannot change the image (core/culling.h); trace() applies it as asked.
   bool cull_backfaces = true;
-  SlimBlendOptions slim;
+  SlimBlendOptions slim{};
 };
 
 /// A model prepared for ray queries (BVH built once; thread-safe const queries).
@@ -83,12 +83,12 @@ struct ReferenceImage {
 };
 
 struct ReferenceRenderOptions {
-  TraceOptions trace;
+  TraceOptions trace{};
   /// A shadow ray per covered pixel towards the key light's point (core/lighting.h), filling
   /// ReferenceImage::key_light.
   bool shadows = false;
   /// Called with the fraction done (0..1) from worker threads at most every few rows.
-  std::function<void(double)> progress;
+  std::function<void(double)> progress{};
 };
 
 /// Renders every pixel of the camera (TBB-parallel over rows).

@@ -15,7 +15,7 @@ struct ShadeOptions {
   double shininess = 40.0;
   /// Black silhouette and crease lines (core/outlines.h) over the shading.
   bool outlines = false;
-  OutlineOptions outline;
+  OutlineOptions outline{};
 };
 
 /// Shaded RGBA image; background pixels get the opaque background colour. Where the image has

@@ -88,7 +88,7 @@ struct RenderOptions {
   /// Black silhouette and crease lines (core/outlines.h, the CPU reference's detector); NPR
   /// shading draws them too.
   bool outlines = false;
-  OutlineOptions outline;
+  OutlineOptions outline{};
 };
 
 /// Measured figures of one frame.

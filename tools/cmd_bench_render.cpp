@@ -43,11 +43,11 @@ struct Row {
   // SLIM level of detail (models with a hierarchy): the bound, the cut, its image error.
   double pixel_error = 0;
   std::uint64_t slim_balls = 0;
-  std::string level_mix;             // "level:balls …", level 0 the leaves
+  std::string level_mix{};            // "level:balls …", level 0 the leaves
   double symmetric_difference = 0;   // covered pixels differing from full detail / those covered there
   double depth_p99 = 0;              // |depth − full detail's| where both covered, p99, / model diagonal
-  std::vector<std::uint8_t> coverage;
-  std::vector<float> depth;
+  std::vector<std::uint8_t> coverage{};
+  std::vector<float> depth{};
   double invocations_per_covered() const { return covered ? double(fragments) / covered : 0; }
 };
 

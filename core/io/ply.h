@@ -80,7 +80,7 @@ struct Request {
   std::string element;
   std::vector<std::string> properties;
   std::string list;  ///< optional: one list property whose entries are returned too
-  std::vector<std::string> more_lists;  ///< optional: further list properties (Table::more_lists)
+  std::vector<std::string> more_lists{};  ///< optional: further list properties (Table::more_lists)
 };
 
 /// A PLY file read into memory and its parsed header.

@@ -101,14 +101,14 @@ void expect_agree(const Agreement& a, int min_covered) {
   EXPECT_GE(a.depth, 0.995);
 }
 
-std::string fmt_sphere(const Eigen::Vector3d& c, double r) {
+[[maybe_unused]] std::string fmt_sphere(const Eigen::Vector3d& c, double r) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "(x - %.17g)^2 + (y - %.17g)^2 + (z - %.17g)^2 - %.17g", c.x(), c.y(), c.z(), r * r);
   return buf;
 }
 
 // The expression with x, y, z replaced by (x − cx), (y − cy), (z − cz).
-std::string moved(const std::string& e) {
+[[maybe_unused]] std::string moved(const std::string& e) {
   std::string out;
   for (std::size_t i = 0; i < e.size();) {
     if (std::isalpha(static_cast<unsigned char>(e[i])) || e[i] == '_') {

@@ -28,7 +28,7 @@ Eigen::Vector3d vec(const nlohmann::json& v) { return {v.at(0).get<double>(), v.
 
 struct Mask {
   int w = 0, h = 0, x0 = 1 << 30, x1 = -1, y0 = 1 << 30, y1 = -1, covered = 0;
-  std::vector<bool> on;
+  std::vector<bool> on{};
 };
 Mask alpha_mask(const Image8& img) {
   Mask m{img.width, img.height};
