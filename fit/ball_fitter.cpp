@@ -170,57 +170,48 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
   // that distance from v; at any other such corner the two margins shrink until p is that close.
   // The cross-section then lies within the largest of these distances of the triangle.
   const bool triangle = sides.size() == 3 && faces->mesh->face(f).size() == 3;
-  const auto corner = [&](std::size_t i) {
-    const FaceSet::Side &sa = sides[i], &sb = sides[(i + 1) % 3];
-    const double k = sa.inward.dot(sb.inward), det = 1.0 - k * k;
+  // Where two lines meet that lie ma and mb outside v along unit normals a and b (a·(q − v) = −ma,
+  // b·(q − v) = −mb): |q − v|, infinite for parallel lines.
+  const auto meet = [](const Eigen::Vector3d& a, double ma, const Eigen::Vector3d& b, double mb) {
+    const double k = a.dot(b), det = 1.0 - k * k;
     if (!(det > 1e-12)) return std::numeric_limits<double>::infinity();
-    const double ma = m[i], mb = m[(i + 1) % 3];
     const double x = (-ma + k * mb) / det, y = (-mb + k * ma) / det;
     return std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k));
   };
+  const auto corner = [&](std::size_t i) { return meet(sides[i].inward, m[i], sides[(i + 1) % 3].inward, m[(i + 1) % 3]); };
   const double most = 2.0 * opt.face_patch_margin * E;
-  std::optional<ClipPlane> tip;  // the fourth plane, across the sharpest corner
-  double tip_reach = 0;
-  std::size_t worst_tip = 3;
+  std::optional<ClipPlane> cut;  // the fourth plane, across the sharpest corner
   if (triangle) {
+    std::size_t tip = 3;  // the corner cut (none: 3)
+    double tip_reach = 0;
     std::size_t worst = 0;
     for (std::size_t i = 1; i < 3; ++i)
       if (corner(i) > corner(worst)) worst = i;
     const FaceSet::Side &sa = sides[worst], &sb = sides[(worst + 1) % 3];
     const Eigen::Vector3d bis = sa.inward + sb.inward;
-    const double p = corner(worst);
-    if (p > most && std::isfinite(p) && bis.norm() > 1e-9) {
+    if (const double p = corner(worst); p > most && std::isfinite(p) && bis.norm() > 1e-9) {
       const Eigen::Vector3d n = bis.normalized();
       const int v = faces->mesh->face(f)[(worst + 1) % 3];
       const Eigen::Vector3d vl = (faces->mesh->vertices[v] - P[c]) / R;
-      tip = ClipPlane{n, -n.dot(vl) + most / R};
-      worst_tip = worst;
-      // Where the cut meets the two walls: a·(q − v) = −m_a, n·(q − v) = −most.
-      for (const auto* sd : {&sa, &sb}) {
-        const double ma = sd == &sa ? m[worst] : m[(worst + 1) % 3];
-        const double k = sd->inward.dot(n), det = 1.0 - k * k;
-        if (!(det > 1e-12)) continue;
-        const double x = (-ma + k * most) / det, y = (-most + k * ma) / det;
-        tip_reach = std::max(tip_reach, std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k)));
-      }
+      cut = ClipPlane{n, -n.dot(vl) + most / R};
+      tip = worst;
+      // Where the cut meets the two walls.
+      for (const double q : {meet(sa.inward, m[worst], n, most), meet(sb.inward, m[(worst + 1) % 3], n, most)})
+        if (std::isfinite(q)) tip_reach = std::max(tip_reach, q);
     }
-  }
-  if (triangle) {
     for (int pass = 0; pass < 2; ++pass)
       for (std::size_t i = 0; i < 3; ++i)
-        if (const double p = corner(i); p > most && std::isfinite(p) && !(tip && i == worst_tip)) {
+        if (const double p = corner(i); p > most && std::isfinite(p) && i != tip) {
           m[i] = std::max(1e-3 * E, m[i] * most / p);
           m[(i + 1) % 3] = std::max(1e-3 * E, m[(i + 1) % 3] * most / p);
         }
-  }
-  for (std::size_t i = 0; i < sides.size(); ++i) b.clips.add(ClipPlane{sides[i].inward, (sides[i].offset + m[i]) / R});
-  if (tip) b.clips.add(*tip);
-  if (triangle) {
     double reach = tip_reach;
     for (std::size_t i = 0; i < 3; ++i)
-      if (!(tip && i == worst_tip)) reach = std::max(reach, corner(i));
+      if (i != tip) reach = std::max(reach, corner(i));
     b.on_data = reach <= opt.local_surface_factor * E;
   }
+  for (std::size_t i = 0; i < sides.size(); ++i) b.clips.add(ClipPlane{sides[i].inward, (sides[i].offset + m[i]) / R});
+  if (cut) b.clips.add(*cut);
   if (!b.clips.empty()) b.sheet = N[c], b.other = -N[c];
   b.face = f;
   b.settled = true;
