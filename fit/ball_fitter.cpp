@@ -165,10 +165,11 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
   // cross-section's corner p beyond v has a·(p − v) = −m_a and b·(p − v) = −m_b for the two
   // walls' inward normals a, b, so |p − v| = m / sin(θ/2) for a corner angle θ and equal
   // margins: far past a sharp corner (happy_buddha_10k at 1e-3: face patches on needle
-  // triangles reached 8E past them, and the fit ended with 11 surface samples beyond 2E). The
-  // sharpest corner beyond 2·face_patch_margin·E gets the fourth plane, across its bisector at
-  // that distance from v; at any other such corner the two margins shrink until p is that close.
-  // The cross-section then lies within the largest of these distances of the triangle.
+  // triangles reached 8E past them, and the fit ended with 11 surface samples beyond 2E). At a
+  // corner beyond local_surface_factor·E the two margins shrink until p is that close, down to a
+  // floor of a fifth of the margin; a needle still beyond then gets a fourth plane across its
+  // bisector (a fourth plane is four more columns for every patch of the file, so only there).
+  // The cross-section then lies within local_surface_factor·E of the triangle.
   const bool triangle = sides.size() == 3 && faces->mesh->face(f).size() == 3;
   // Where two lines meet that lie ma and mb outside v along unit normals a and b (a·(q − v) = −ma,
   // b·(q − v) = −mb): |q − v|, infinite for parallel lines.
@@ -179,9 +180,18 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
     return std::sqrt(std::max(0.0, x * x + y * y + 2.0 * x * y * k));
   };
   const auto corner = [&](std::size_t i) { return meet(sides[i].inward, m[i], sides[(i + 1) % 3].inward, m[(i + 1) % 3]); };
-  const double most = 2.0 * opt.face_patch_margin * E;
+  // Past a corner, the plane runs at most local_surface_factor·E from the data, as any patch's
+  // zero set may (surface_ok).
+  const double most = opt.local_surface_factor * E;
+  const double least = 0.2 * opt.face_patch_margin * E;  // a margin's floor: still an overlap
   std::optional<ClipPlane> cut;  // the fourth plane, across the sharpest corner
   if (triangle) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t i = 0; i < 3; ++i)
+        if (const double p = corner(i); p > most && std::isfinite(p)) {
+          m[i] = std::max(least, m[i] * most / p);
+          m[(i + 1) % 3] = std::max(least, m[(i + 1) % 3] * most / p);
+        }
     std::size_t tip = 3;  // the corner cut (none: 3)
     double tip_reach = 0;
     std::size_t worst = 0;
@@ -189,22 +199,19 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
       if (corner(i) > corner(worst)) worst = i;
     const FaceSet::Side &sa = sides[worst], &sb = sides[(worst + 1) % 3];
     const Eigen::Vector3d bis = sa.inward + sb.inward;
-    if (const double p = corner(worst); p > most && std::isfinite(p) && bis.norm() > 1e-9) {
+    // A needle the floor keeps beyond: the fourth plane, where the two shrunk walls are
+    // 2·least apart.
+    if (const double p = corner(worst); p > most * (1 + 1e-9) && std::isfinite(p) && bis.norm() > 1e-9) {
       const Eigen::Vector3d n = bis.normalized();
       const int v = faces->mesh->face(f)[(worst + 1) % 3];
       const Eigen::Vector3d vl = (faces->mesh->vertices[v] - P[c]) / R;
-      cut = ClipPlane{n, -n.dot(vl) + most / R};
+      const double at = most - 2.0 * least;
+      cut = ClipPlane{n, -n.dot(vl) + at / R};
       tip = worst;
       // Where the cut meets the two walls.
-      for (const double q : {meet(sa.inward, m[worst], n, most), meet(sb.inward, m[(worst + 1) % 3], n, most)})
+      for (const double q : {meet(sa.inward, m[worst], n, at), meet(sb.inward, m[(worst + 1) % 3], n, at)})
         if (std::isfinite(q)) tip_reach = std::max(tip_reach, q);
     }
-    for (int pass = 0; pass < 2; ++pass)
-      for (std::size_t i = 0; i < 3; ++i)
-        if (const double p = corner(i); p > most && std::isfinite(p) && i != tip) {
-          m[i] = std::max(1e-3 * E, m[i] * most / p);
-          m[(i + 1) % 3] = std::max(1e-3 * E, m[(i + 1) % 3] * most / p);
-        }
     double reach = tip_reach;
     for (std::size_t i = 0; i < 3; ++i)
       if (i != tip) reach = std::max(reach, corner(i));

@@ -138,8 +138,9 @@ struct SlimFitOptions {
   /// perpendicular to the face; ClipPlanes), face_patch_margin·E outside an inner edge and a hair
   /// outside an open one: its plane, the data itself inside, runs on no farther than that into
   /// its neighbours' territory, where the blend would mix it with their planes. A triangle's
-  /// walls meet far past a sharp corner (m / sin(θ/2)): its sharpest corner is cut by a fourth
-  /// plane 2·face_patch_margin·E past it, and the margins of any other such corner shrink.
+  /// walls meet far past a sharp corner (m / sin(θ/2)): the margins there shrink until they meet
+  /// within local_surface_factor·E of it (not below face_patch_margin/5); a needle sharper than
+  /// that floor allows gets a fourth plane across that corner.
   /// Without face_prisms, only its longest open edge clips it.
   bool face_patches = true;
   double face_patch_reach = 1.0;
