@@ -301,10 +301,10 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
   return best;
 }
 
-std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* front) const {
+std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* front, double tmax) const {
   const auto& m = *impl_;
   if (m.triangles.empty()) return std::nullopt;
-  double best = kInf;
+  double best = tmax;
   bool best_front = false;
   m.bvh.traverse(ray, tmin, [&] { return best; }, [&](std::uint32_t i) {
     // Möller–Trumbore in double, both sides.
@@ -323,7 +323,7 @@ std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* 
     const double d = e2.dot(q) * inv;
     if (d > tmin && d < best) best = d, best_front = det > 0.0;
   });
-  if (best == kInf) return std::nullopt;
+  if (!(best < tmax)) return std::nullopt;
   if (front) *front = best_front != m.wound_inward;
   return best;
 }

@@ -53,10 +53,11 @@ public:
   /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions).
   double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
                   double good = 0) const;
-  /// Nearest intersection of the ray with the triangles (either side); nothing for points.
-  /// front: whether that triangle faces the ray: counter-clockwise seen from the ray's origin, or
-  /// clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).
-  std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr) const;
+  /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax); nothing
+  /// for points. front: whether that triangle faces the ray: counter-clockwise seen from the
+  /// ray's origin, or clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).
+  std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr,
+                                  double tmax = std::numeric_limits<double>::infinity()) const;
   bool has_faces() const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;

@@ -166,9 +166,9 @@ struct SlimFitOptions {
   /// lattice check above is view-independent: a patch met edge-on, or a hit just outside its
   /// ball's rim, leaves a slit it cannot see; dragon_10k at 1e-3: 249 hole pixels of 8 views at
   /// 1024², 103 with this). Each round, each fan triangle is split in four down to
-  /// view_hole_depth levels until one patch meets every view of a piece at its three corners
-  /// (inside its ball and planes with room for the hit, its normal within 85° −
-  /// view_hole_angle_deg of the face's); a smallest piece left is seen through its centroid along
+  /// view_hole_depth levels until one patch provably meets every view of a piece (its zero set
+  /// crosses every such ray, front-facing, inside its ball and planes: bounds of the quadric
+  /// along the ray over the whole piece); a smallest piece left is seen through its centroid along
   /// the normal and 2 × view_hole_rays directions on two cones up to view_hole_angle_deg, each ray
   /// traced through the blend where the data is seen away from its silhouette. A face some ray
   /// sees through gets a face patch. 0 rays: off (`fit --no-view-holes`).

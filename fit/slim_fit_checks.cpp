@@ -6,6 +6,7 @@
 #include <numbers>
 #include <numeric>
 
+#include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -128,7 +129,7 @@ bool SlimFitter::seen_through(const ReferenceScene& scene, const TraceOptions& t
                   double L) const {
   const Eigen::Vector3d o = x - L * d;
   bool front = false;
-  const auto t = data_->intersect(Ray{o, d}, 0.0, &front);
+  const auto t = data_->intersect(Ray{o, d}, 0.0, &front, L + 1e-3 * E_);  // farther fails anyway
   if (!t || !front || std::abs(*t - L) > 1e-3 * E_) return false;
   const Eigen::Vector3d u = d.unitOrthogonal(), v = d.cross(u);
   const double r = opt_.surface_factor * E_;
@@ -143,6 +144,34 @@ bool SlimFitter::seen_through(const ReferenceScene& scene, const TraceOptions& t
   return !scene.trace(Ray{o, d}, 0.0, kInf, trace);
 }
 
+double patch_bend(const SlimPatch& patch) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(patch.local.A, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+}
+
+// Along a ray u + σd (local units, d a unit view direction), g is exactly g0 + a1·σ + a2·σ² with
+// a1 = ∇g(u)·d and |a2| = |dᵀAd| ≤ bend; a view within `widest` of −n has A1 = −a1 ≥
+// cos(widest)·(∇g·n) − sin(widest)·|∇g − (∇g·n)n|. With A1 > 0, g falls strictly through zero
+// within |σ| ≤ ρ, the smaller root of bend·ρ² − A1·ρ + |g0| (g' = a1 + 2a2σ < 0 there): one
+// front-facing crossing, the patch's only one on the line. So every such ray meets the patch
+// within ρR of x if the ball and the planes hold ρ of room around x and ρR ≤ reach.
+bool meets_every_view(const SlimPatch& patch, double bend, const Eigen::Vector3d& x, const Eigen::Vector3d& n, double widest,
+                      double reach) {
+  const Eigen::Vector3d u = (x - patch.centre) / patch.radius;
+  const double r = u.norm();
+  if (!(r < 1.0)) return false;
+  const Eigen::Vector3d g = patch.local.gradient(u);
+  const double gn = g.dot(n);
+  const double A1 = std::cos(widest) * gn - std::sin(widest) * (g - gn * n).norm();
+  const double g0 = std::abs(patch.local.eval(u));
+  const double disc = A1 * A1 - 4.0 * bend * g0;
+  if (!(A1 > 0) || !(disc > 0)) return false;
+  const double rho = 2.0 * g0 / (A1 + std::sqrt(disc)) * (1.0 + 1e-6) + 1e-9;
+  if (!(rho * patch.radius <= reach) || !(r + rho < 1.0)) return false;
+  for (const ClipPlane& c : patch.clips)
+    if (!(c.n.dot(u) + c.d > rho * c.n.norm())) return false;
+  return true;
+}
+
 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(const ReferenceScene& scene, const PointIndex& index,
                                                                   const Changed* changed) {
   const auto& slims = result_.model.slims;
@@ -152,8 +181,8 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
   const PolygonMesh& m = *faces_->mesh;
   const double widest = std::clamp(opt_.view_hole_angle_deg, 0.0, 85.0) * std::numbers::pi / 180.0;
   const double L = 2.0 * opt_.surface_factor * E_ / std::cos(widest);
-  // meets_every_view: normals within `lean` of the face's (views then meet them at most 85° off).
-  const double lean = std::max(0.0, 85.0 * std::numbers::pi / 180.0 - widest);
+  std::vector<double> bend(slims.size());
+  for (std::size_t i = 0; i < slims.size(); ++i) bend[i] = patch_bend(slims[i]);
   if (!changed) view_clear_.assign(m.face_count(), 0);
   view_clear_.resize(m.face_count(), 0);
   face_patched_.resize(m.face_count(), 0);
@@ -191,58 +220,46 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
         // the blend hit it (each patch's own first hit, as the blend's first pass takes it), so
         // only a ray none of them meets is traced through the scene.
         balls_near_triangle(index, max_radius, a, b, c, nb, near);
-        // A patch that meets every view of x without tracing: x well inside its ball and
-        // planes, its zero set δ from x (to first order) and its normal within
-        // 85° − view_hole_angle_deg of the face's, so every ray up to that angle meets it
-        // front-facing within s = δ / cos 85° of x; twice that room is asked inside the ball and
-        // the planes (the zero set's bending over s).
-        const double steepest = std::cos(widest + lean);  // least |cos| of a view against such a normal
+        // A patch that provably meets every view of a spot spares its rays.
         const auto meets_every_view = [&](std::uint32_t i, const Eigen::Vector3d& x) {
-          const SlimPatch& sp = slims[i];
-          const Eigen::Vector3d u = (x - sp.centre) / sp.radius;
-          const double r = u.norm();
-          if (!(r < 1.0)) return false;
-          const Eigen::Vector3d g = sp.local.gradient(u);
-          const double gn = g.norm();
-          if (!(gn > 0) || g.dot(n) < std::cos(lean) * gn) return false;
-          const double room = 2.0 * std::abs(sp.local.eval(u)) / (gn * steepest) + 1e-3;
-          if (1.0 - r <= room) return false;
-          for (const ClipPlane& c : sp.clips)
-            if (!(c.n.dot(u) + c.d > room * c.n.norm())) return false;
+          return fit_detail::meets_every_view(slims[i], bend[i], x, n, widest, L);
+        };
+        // The patch that last met a view is asked first (neighbouring spots share patches).
+        const auto met_by = [&](std::size_t k) {
+          if (k > 0) std::swap(near[0], near[k]);
           return true;
         };
         const auto local_hit = [&](const Ray& ray) {
           Hit h;
-          for (const std::uint32_t i : near)
-            if (intersect_slim_patch(slims[i], ray, 0.0, 2.0 * L, h) && (h.point - slims[i].centre).norm() < slims[i].radius) return true;
+          for (std::size_t k = 0; k < near.size(); ++k)
+            if (const std::uint32_t i = near[k];
+                intersect_slim_patch(slims[i], ray, 0.0, 2.0 * L, h) && (h.point - slims[i].centre).norm() < slims[i].radius)
+              return met_by(k);
           return false;
         };
-        const auto sees_through = [&](const Eigen::Vector3d& x) {
-          for (const Eigen::Vector3d& c : cone) {
-            const Eigen::Vector3d d = -(c[0] * n + c[1] * t1 + c[2] * t2).normalized();
-            if (!local_hit(Ray{x - L * d, d}) && seen_through(scene, trace, x, d, L)) return true;
-          }
-          return false;
-        };
-        // A piece one patch meets from every view at its three corners is clear (ball, planes
-        // and the room they leave are convex); else it is split in four, down to
-        // view_hole_depth levels, and a smallest piece's centroid is seen along the rays.
+        // The spots: the centroids of the face's pieces split in four view_hole_depth times.
         const auto check = [&](const auto& self, const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
                                int depth) -> void {
           if (!clear) return;
-          if (lean > 0)
-            for (const std::uint32_t i : near)
-              if (meets_every_view(i, p) && meets_every_view(i, q) && meets_every_view(i, s)) return;
-          if (depth >= opt_.view_hole_depth) {
-            const Eigen::Vector3d x = (p + q + s) / 3.0;
-            if (lean > 0 && std::any_of(near.begin(), near.end(), [&](std::uint32_t i) { return meets_every_view(i, x); })) return;
-            if (sees_through(x)) {
-              out.push_back({std::uint32_t(f), x});
-              clear = false;
-            }
+          if (depth < opt_.view_hole_depth) {
+            split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
             return;
           }
-          split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
+          const Eigen::Vector3d x = (p + q + s) / 3.0;
+          for (std::size_t k = 0; k < near.size(); ++k)
+            if (meets_every_view(near[k], x)) {
+              met_by(k);
+              return;
+            }
+          for (const Eigen::Vector3d& v : cone) {
+            const Eigen::Vector3d d = -(v[0] * n + v[1] * t1 + v[2] * t2).normalized();
+            if (local_hit(Ray{x - L * d, d})) continue;
+            if (seen_through(scene, trace, x, d, L)) {
+              out.push_back({std::uint32_t(f), x});
+              clear = false;
+              return;
+            }
+          }
         };
         check(check, a, b, c, 0);
       }

@@ -18,6 +18,14 @@
 
 namespace quadrix::fit_detail {
 
+/// The spectral norm of a patch's quadratic part: |dᵀAd| for any unit d, local units.
+double patch_bend(const SlimPatch& patch);
+/// Whether every ray through x within `widest` (radians) of −n meets the patch's zero set
+/// front-facing, inside its ball and clip planes, within `reach` (world units) of x — proven from
+/// g's exact quadratic along each such ray (view_holes' shortcut; bend = patch_bend(patch)).
+bool meets_every_view(const SlimPatch& patch, double bend, const Eigen::Vector3d& x, const Eigen::Vector3d& n, double widest,
+                      double reach);
+
 class SlimFitter {
 public:
   SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)

@@ -15,6 +15,7 @@
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/slim_fit.h"
+#include "fit/slim_fitter.h"
 #include "fit/slim_hierarchy.h"
 
 namespace quadrix {
@@ -556,6 +557,65 @@ TEST(EvaluateSlim, FitterVerifiesWithTheMeasureItReports) {
   EXPECT_NEAR(e.rms, r.stats.rms_blend, 1e-12);
   EXPECT_GT(r.stats.surface_samples, 10 * r.stats.patches);
   EXPECT_LE(r.stats.surface_max, 2 * r.stats.max_error_abs);
+}
+
+// view_holes' shortcut: where fit_detail::meets_every_view vouches for a patch at a spot, every
+// view of the spot within the widest angle meets that patch (intersect_slim_patch, the renderer's
+// maths) inside its ball and planes, within the reach of the spot. Random quadrics from planes
+// to tight curvature and saddles, clipped or not, spots near and off their zero sets, normals
+// tilted from the patch's; dense random rays in each cone and on its rim.
+TEST(ViewHoles, EveryViewTheShortcutVouchesForMeetsThePatch) {
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const auto unit = [&] {
+    for (;;)
+      if (const Eigen::Vector3d v(U(rng), U(rng), U(rng)); v.norm() > 0.1 && v.norm() <= 1.0) return Eigen::Vector3d(v.normalized());
+  };
+  const double widest = 75.0 * std::numbers::pi / 180.0;
+  int vouched = 0, rays = 0, misses = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    SlimPatch p;
+    p.centre = 0.3 * unit();
+    p.radius = 0.05 + 0.1 * std::abs(U(rng));
+    const double curve = std::array{0.0, 0.05, 0.3, 1.0, 3.0}[trial % 5];
+    Eigen::Matrix3d A;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j) A(i, j) = A(j, i) = curve * U(rng);
+    p.local.A = A;
+    p.local.b = 0.5 * unit();
+    p.local.c = 0.1 * U(rng);
+    if (trial % 3 == 0) p.clips.add(ClipPlane{unit(), 0.2 + 0.4 * U(rng)});
+    // A spot: a random point in the ball moved onto the zero set (Newton along the gradient),
+    // then off it by up to 2 % of the radius.
+    Eigen::Vector3d u = 0.7 * std::abs(U(rng)) * unit();
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d g = p.local.gradient(u);
+      if (!(g.squaredNorm() > 1e-12)) break;
+      u -= p.local.eval(u) * g / g.squaredNorm();
+    }
+    const Eigen::Vector3d g = p.local.gradient(u);
+    if (!(u.norm() < 1.0) || !(g.norm() > 1e-6)) continue;
+    u += 0.02 * U(rng) * g.normalized();
+    const Eigen::Vector3d x = p.centre + p.radius * u;
+    // The face's normal: the patch's, tilted by up to 20°.
+    const Eigen::Vector3d n = (g.normalized() + std::tan(20.0 * std::numbers::pi / 180.0) * std::abs(U(rng)) * unit()).normalized();
+    const double reach = p.radius * (0.1 + std::abs(U(rng)));
+    if (!fit_detail::meets_every_view(p, fit_detail::patch_bend(p), x, n, widest, reach)) continue;
+    ++vouched;
+    const Eigen::Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    for (int k = 0; k < 400; ++k) {
+      // Uniform in the cone; every fourth on its rim.
+      const double ct = k % 4 == 0 ? std::cos(widest) : 1.0 - (1.0 - std::cos(widest)) * std::abs(U(rng));
+      const double st = std::sqrt(1.0 - ct * ct), phi = std::numbers::pi * U(rng);
+      const Eigen::Vector3d d = -(ct * n + st * (std::cos(phi) * t1 + std::sin(phi) * t2));
+      Hit h;
+      ++rays;
+      if (!(intersect_slim_patch(p, Ray{x - reach * d, d}, 0.0, 2.0 * reach, h) && (h.point - p.centre).norm() < p.radius)) ++misses;
+    }
+  }
+  std::printf("meets_every_view vouched for %d spots; %d rays, %d missed\n", vouched, rays, misses);
+  EXPECT_GT(vouched, 300);  // the shortcut holds often enough to be tested
+  EXPECT_EQ(misses, 0);
 }
 
 }  // namespace
