@@ -32,6 +32,7 @@
 #include "fit/evaluate.h"
 #include "fit/local_fit.h"
 #include "fit/normals.h"
+#include "fit/patch_colour.h"
 #include "fit/point_index.h"
 
 namespace quadrix {
@@ -718,15 +719,22 @@ using fit_detail::SlimFitter;
 
 
 SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
-  return SlimFitter(cloud, options, nullptr).run();
+  SlimFitResult r = SlimFitter(cloud, options, nullptr).run();
+  set_patch_colours(r.model, cloud);
+  return r;
 }
 
 SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options) {
-  if (!options.cover_faces || !cloud.has_normals()) return SlimFitter(cloud, options, &surface).run();
+  if (!options.cover_faces || !cloud.has_normals()) {
+    SlimFitResult r = SlimFitter(cloud, options, &surface).run();
+    set_patch_colours(r.model, cloud);
+    return r;
+  }
   // Each face's centroid (and a lattice on faces much larger than their neighbours, core/io/io.h
   // face_samples) joins the points with the face's normal, so coverage and the points side hold
   // between the vertices too.
   PointCloud all = cloud;
+  all.colours.clear();  // the face samples have none; the patches take the cloud's at the end
   std::vector<std::uint32_t> face_of(cloud.points.size(), FaceSet::kNone);
   // The lattice on large faces only when E is finer than the mesh's spacing: coarser balls span
   // many faces, held by their vertices and centroids (bunny at 1e-2, where E is 1.7 median
@@ -740,6 +748,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, cons
   const std::size_t added = all.points.size() - cloud.points.size();
   SlimFitResult r = SlimFitter(std::move(all), options, &surface, std::move(face_of)).run();
   r.model.metadata["face_samples"] = std::to_string(added);
+  set_patch_colours(r.model, cloud);
   return r;
 }
 

@@ -16,6 +16,7 @@
 #include "core/slim.h"
 #include "fit/data_surface.h"
 #include "fit/local_fit.h"
+#include "fit/patch_colour.h"
 #include "fit/patch_error.h"
 #include "fit/point_index.h"
 #include "fit/slim_fit.h"
@@ -331,6 +332,7 @@ SlimLevelsStats add_slim_hierarchy(SlimFitResult& fine, const PointCloud& cloud,
   fine.model.metadata["slim_hierarchy_error"] = "distance";
   fine.model.metadata["slim_levels"] = std::to_string(L);
   fine.model.metadata["slim_level_rule"] = options.rule == SlimLevelRule::fits ? "fits" : "merge";
+  set_patch_colours(fine.model, cloud);  // merged parents too
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return st;
 }

@@ -101,6 +101,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                             PointCloud& dst = out(rng) ? held : kept;
                             dst.points.push_back(cloud.points[i]);
                             if (cloud.has_normals()) dst.normals.push_back(cloud.normals[i]);
+                            if (cloud.has_colours()) dst.colours.push_back(cloud.colours[i]);
                           }
                           cloud = std::move(kept);
                         }

@@ -167,6 +167,7 @@ PointCloud read_points(const fs::path& path) {
     io::Surface s = read_surface(path, format);
     cloud.points = std::move(s.mesh.vertices);
     cloud.normals = std::move(s.normals);
+    cloud.colours = std::move(s.mesh.colours);
   }
   if (cloud.points.empty()) throw FormatError(fmt::format("{}: no points", path.string()));
   return cloud;
@@ -178,7 +179,7 @@ PointCloud read_surface_points(const fs::path& path) {
   io::Surface s = read_surface(path, format);
   if (s.mesh.face_count() == 0) {
     if (s.mesh.vertices.empty()) throw FormatError(fmt::format("{}: no points", path.string()));
-    return {std::move(s.mesh.vertices), std::move(s.normals)};
+    return {std::move(s.mesh.vertices), std::move(s.normals), std::move(s.mesh.colours)};
   }
   PointCloud cloud = points_from_mesh(s.mesh);
   if (cloud.points.empty()) throw FormatError(fmt::format("{}: no face has a non-zero area", path.string()));
@@ -238,6 +239,7 @@ PointCloud points_from_mesh(const PolygonMesh& mesh) {
     if (!(len > 0) || !std::isfinite(len)) continue;
     cloud.points.push_back(mesh.vertices[v]);
     cloud.normals.push_back(sign * sum[v] / len);
+    if (mesh.colours.size() == mesh.vertices.size()) cloud.colours.push_back(mesh.colours[v]);
   }
   return cloud;
 }

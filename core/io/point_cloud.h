@@ -1,5 +1,7 @@
 #pragma once
-/// A point cloud: positions and, optionally, one unit normal per point.
+/// A point cloud: positions and, optionally, one unit normal and one colour per point.
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -9,7 +11,11 @@ namespace quadrix {
 struct PointCloud {
   std::vector<Eigen::Vector3d> points;   ///< world units
   std::vector<Eigen::Vector3d> normals;  ///< empty, or one unit normal per point
+  /// Empty, or one 8-bit sRGB colour per point (a coloured scan: PLY red/green/blue, XYZ's
+  /// nine-column form); fit_slim gives its patches their points' blended colour.
+  std::vector<std::array<std::uint8_t, 3>> colours;
   bool has_normals() const { return !normals.empty(); }
+  bool has_colours() const { return !colours.empty(); }
 };
 
 }  // namespace quadrix

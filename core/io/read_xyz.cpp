@@ -18,7 +18,7 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
   PointCloud cloud;
   std::size_t columns = 0, first_line = 0;
   long long declared = -1;
-  std::array<double, 6> v{};
+  std::array<double, 9> v{};
   while (r.next_line()) {
     std::size_t n = 0;
     for (std::string_view tok = r.token(); !tok.empty(); tok = r.token(), ++n) {
@@ -33,7 +33,7 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
       declared = static_cast<long long>(v[0]);
       continue;
     }
-    if (n != 3 && n != 6) r.fail("{} values (expected 3: x y z, or 6: x y z nx ny nz)", n);
+    if (n != 3 && n != 6 && n != 9) r.fail("{} values (expected 3: x y z, 6: x y z nx ny nz, or 9: x y z nx ny nz r g b)", n);
     if (columns == 0) {
       columns = n;
       first_line = r.line_number();
@@ -43,11 +43,20 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
     const Eigen::Vector3d p(v[0], v[1], v[2]);
     if (!is_world_point(p)) r.fail("point ({} {} {}) {}", v[0], v[1], v[2], world_fault(p));
     cloud.points.push_back(p);
-    if (n == 6) {
+    if (n >= 6) {
       const Eigen::Vector3d nn(v[3], v[4], v[5]);
       if (!nn.allFinite()) r.fail("normal ({} {} {}) is not finite", v[3], v[4], v[5]);
       if (!(nn.norm() > 0)) r.fail("zero normal");
       cloud.normals.push_back(nn.normalized());
+    }
+    if (n == 9) {
+      std::array<std::uint8_t, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        const double x = v[6 + k];
+        if (!(x >= 0 && x <= 255 && x == std::floor(x))) r.fail("colour value {} is not an integer in 0..255", x);
+        c[k] = static_cast<std::uint8_t>(x);
+      }
+      cloud.colours.push_back(c);
     }
   }
   if (declared >= 0 && static_cast<std::size_t>(declared) != cloud.points.size())
@@ -60,13 +69,18 @@ void write_xyz(const PointCloud& cloud, const std::filesystem::path& path) {
   if (cloud.has_normals() && cloud.normals.size() != cloud.points.size())
     throw InvalidInput(
         fmt::format("{}: {} normals for {} points", path.string(), cloud.normals.size(), cloud.points.size()));
+  if (cloud.has_colours() && (cloud.colours.size() != cloud.points.size() || !cloud.has_normals()))
+    throw InvalidInput(fmt::format("{}: {} colours for {} points{} (XYZ holds colours after normals)", path.string(),
+                                   cloud.colours.size(), cloud.points.size(), cloud.has_normals() ? "" : " without normals"));
   fmt::memory_buffer buf;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     const auto& p = cloud.points[i];
     if (cloud.has_normals()) {
       const auto& n = cloud.normals[i];
-      fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n", p.x(), p.y(), p.z(),
+      fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}", p.x(), p.y(), p.z(),
                      n.x(), n.y(), n.z());
+      if (cloud.has_colours()) fmt::format_to(std::back_inserter(buf), " {} {} {}", cloud.colours[i][0], cloud.colours[i][1], cloud.colours[i][2]);
+      buf.push_back('\n');
     } else {
       fmt::format_to(std::back_inserter(buf), "{:.17g} {:.17g} {:.17g}\n", p.x(), p.y(), p.z());
     }

@@ -131,6 +131,31 @@ TEST(PointsXyz, WriteReadRoundTripIsExact) {
   EXPECT_FALSE(p.has_normals());
 }
 
+// Coloured scans: XYZ's nine-column form (x y z nx ny nz r g b) and PLY's red/green/blue reach
+// PointCloud::colours, one per point; the XYZ writer writes them back.
+TEST(PointsColours, XyzNineColumnsAndPlyRgb) {
+  ScratchDir dir("points-io");
+  write_bytes(dir / "c.xyz", "1 2 3 0 0 1 255 0 7\n4 5 6 0 1 0 10 20 30\n");
+  PointCloud c = read_points(dir / "c.xyz");
+  ASSERT_EQ(c.colours.size(), 2u);
+  EXPECT_EQ(c.colours[0], (std::array<std::uint8_t, 3>{255, 0, 7}));
+  EXPECT_EQ(c.colours[1], (std::array<std::uint8_t, 3>{10, 20, 30}));
+  write_points_xyz(c, dir / "out.xyz");
+  EXPECT_EQ(read_points(dir / "out.xyz").colours, c.colours);
+  write_bytes(dir / "bad.xyz", "1 2 3 0 0 1 255 0 7\n4 5 6 0 1 0 10 256 30\n");
+  expect_format_error(dir / "bad.xyz", ":2:");
+  write_bytes(dir / "frac.xyz", "1 2 3 0 0 1 0.5 0 7\n");
+  expect_format_error(dir / "frac.xyz", "colour value 0.5");
+  write_bytes(dir / "c.ply",
+              "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+              "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n0 0 0 1 2 3\n1 0 0 4 5 6\n");
+  c = read_points(dir / "c.ply");
+  ASSERT_EQ(c.colours.size(), 2u);
+  EXPECT_EQ(c.colours[1], (std::array<std::uint8_t, 3>{4, 5, 6}));
+  write_bytes(dir / "plain.xyz", "1 2 3\n");
+  EXPECT_FALSE(read_points(dir / "plain.xyz").has_colours());
+}
+
 test::PlyDoc vertex_doc(bool normals) {
   test::PlyDoc d;
   test::PlyElem v{
