@@ -119,14 +119,14 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
 // planes). The lattice check above is view-independent and cannot see these (buddha at 1e-2:
 // hole pixels inside balls whose zero sets pass 0.002–0.15E from the data). Each fan triangle's
 // centroid is seen along its normal and along two cones of view_hole_rays directions about it,
-// from L before it (L the surface band at the widest angle) on (seen_through). Faces covered at the last check and far from every changed ball are
+// from L before it (L the surface band at the widest angle) on (data_seen, then the blend). Faces covered at the last check and far from every changed ball are
 // skipped; faces that hold a face patch already are not checked (their prism holds the spot).
 // Whether the view along d sees the data at x (the first data hit from L before it is x, from
-// its front, and the data covers the view's neighbourhood: rays surface_factor·E to each side
-// meet it from the front too, so x is not on the data's silhouette), but the model shows nothing
-// anywhere on that ray: a hole as bench fit counts them (fit/surface_error.h).
-bool SlimFitter::seen_through(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
-                  double L) const {
+// its front) and the data covers the view's neighbourhood (rays surface_factor·E to each side
+// meet it from the front too, so x is not on the data's silhouette): where the model then shows
+// nothing anywhere on that ray, it is a hole as bench fit counts them (fit/surface_error.h).
+// Data only: the same answer every round.
+bool SlimFitter::data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const {
   const Eigen::Vector3d o = x - L * d;
   bool front = false;
   const auto t = data_->intersect(Ray{o, d}, 0.0, &front, L + 1e-3 * E_);  // farther fails anyway
@@ -140,8 +140,7 @@ bool SlimFitter::seen_through(const ReferenceScene& scene, const TraceOptions& t
   }();
   for (const Eigen::Vector2d& a : kAround)
     if (!data_->intersect(Ray{o + r * (a[0] * u + a[1] * v), d}, 0.0, &front) || !front) return false;
-  // Last, as the dearest: the whole ray through the blend.
-  return !scene.trace(Ray{o, d}, 0.0, kInf, trace);
+  return true;
 }
 
 double patch_bend(const SlimPatch& patch) {
@@ -183,8 +182,9 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
   const double L = 2.0 * opt_.surface_factor * E_ / std::cos(widest);
   std::vector<double> bend(slims.size());
   for (std::size_t i = 0; i < slims.size(); ++i) bend[i] = patch_bend(slims[i]);
-  if (!changed) view_clear_.assign(m.face_count(), 0);
+  if (!changed) view_clear_.assign(m.face_count(), 0), view_data_.assign(m.face_count(), {});
   view_clear_.resize(m.face_count(), 0);
+  view_data_.resize(m.face_count());
   face_patched_.resize(m.face_count(), 0);
   TraceOptions trace;
   trace.slim = blend();
@@ -209,7 +209,13 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
       if (view_clear_[f] && changed && !changed->near_ball(o, faces_->reach[f] + 2.0 * opt_.surface_factor * E_, nb)) continue;
       const auto vs = m.face(f);
       bool clear = true;
+      // data_seen's answers for this face's rays (fan triangle, spot, direction): 0 not asked
+      // yet, 1 seen away from a silhouette, 2 not.
+      std::vector<std::uint8_t>& seen = view_data_[f];
+      const std::size_t spots = std::size_t(1) << (2 * opt_.view_hole_depth);
+      seen.resize((std::max<std::size_t>(vs.size(), 2) - 2) * spots * cone.size(), 0);
       for (std::size_t k = 1; k + 1 < vs.size() && clear; ++k) {
+        std::size_t spot = (k - 1) * spots;
         const Eigen::Vector3d &a = m.vertices[vs[0]], &b = m.vertices[vs[k]], &c = m.vertices[vs[k + 1]];
         Eigen::Vector3d n = (b - a).cross(c - a);
         if (!(n.norm() > 0)) continue;
@@ -246,15 +252,18 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
             return;
           }
           const Eigen::Vector3d x = (p + q + s) / 3.0;
+          std::uint8_t* asked = &seen[spot++ * cone.size()];
           for (std::size_t k = 0; k < near.size(); ++k)
             if (meets_every_view(near[k], x)) {
               met_by(k);
               return;
             }
-          for (const Eigen::Vector3d& v : cone) {
-            const Eigen::Vector3d d = -(v[0] * n + v[1] * t1 + v[2] * t2).normalized();
+          for (std::size_t j = 0; j < cone.size(); ++j) {
+            const Eigen::Vector3d d = -(cone[j][0] * n + cone[j][1] * t1 + cone[j][2] * t2).normalized();
             if (local_hit(Ray{x - L * d, d})) continue;
-            if (seen_through(scene, trace, x, d, L)) {
+            if (asked[j] == 0) asked[j] = data_seen(x, d, L) ? 1 : 2;
+            // Last, as the dearest: the whole ray through the blend.
+            if (asked[j] == 1 && !scene.trace(Ray{x - L * d, d}, 0.0, kInf, trace)) {
               out.push_back({std::uint32_t(f), x});
               clear = false;
               return;

@@ -71,8 +71,7 @@ private:
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index, const Changed* changed);
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> view_holes(const ReferenceScene& scene, const PointIndex& index,
                                                                     const Changed* changed);
-  bool seen_through(const ReferenceScene& scene, const TraceOptions& trace, const Eigen::Vector3d& x, const Eigen::Vector3d& d,
-                    double L) const;
+  bool data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
   void balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
   std::size_t add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
@@ -177,6 +176,7 @@ private:
   std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
+  std::vector<std::vector<std::uint8_t>> view_data_;  // per face: data_seen's answers so far (view_holes)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
   std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
   std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches
