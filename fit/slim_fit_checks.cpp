@@ -138,8 +138,15 @@ bool SlimFitter::data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, d
     for (int k = 0; k < 6; ++k) a[k] = {std::cos(std::numbers::pi * k / 3.0), std::sin(std::numbers::pi * k / 3.0)};
     return a;
   }();
+  // Each side ray's first hit, asked within 2L first (where it nearly always lies: the walk
+  // prunes the far boxes from the start), else anywhere.
+  const auto front_first = [&](const Ray& ray) {
+    bool f = false;
+    if (data_->intersect(ray, 0.0, &f, 2.0 * L)) return f;
+    return data_->intersect(ray, 0.0, &f).has_value() && f;
+  };
   for (const Eigen::Vector2d& a : kAround)
-    if (!data_->intersect(Ray{o + r * (a[0] * u + a[1] * v), d}, 0.0, &front) || !front) return false;
+    if (!front_first(Ray{o + r * (a[0] * u + a[1] * v), d})) return false;
   return true;
 }
 
