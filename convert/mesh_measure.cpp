@@ -59,11 +59,13 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   };
   std::vector<Sample> samples;
   std::vector<std::int64_t> owner;  // face index, or −1 − vertex index
+  std::vector<std::uint8_t> part;   // of a face: 0 its centroid, 1 + i the midpoint of its edge i
   samples.reserve(m.vertices.size() + 4 * m.face_count());
   for (std::size_t v = 0; v < m.vertices.size(); ++v)
     if (vn[v].norm() > 0) {
       samples.push_back({m.vertices[v], vn[v]});
       owner.push_back(-1 - static_cast<std::int64_t>(v));
+      part.push_back(0);
     }
   for (std::size_t f = 0; f < m.face_count(); ++f) {
     const auto v = m.face(f);
@@ -76,6 +78,7 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
     samples.push_back({0.5 * (b + c), n});
     samples.push_back({0.5 * (c + a), n});
     owner.insert(owner.end(), 4, static_cast<std::int64_t>(f));
+    part.insert(part.end(), {0, 1, 2, 3});
   }
   // A sample on a crease or on the surface's boundary (a cylinder's rim, where an open sheet leaves
   // its tetrahedra) may see its normal line graze past the edge; then parallel lines offset by
@@ -118,12 +121,14 @@ MeshDistance mesh_to_surface(const ReferenceScene& scene, const TraceOptions& tr
   }
   if (where) {
     where->faces.assign(m.face_count(), 0.0);
+    where->edges.assign(m.face_count(), 0);
     where->vertices.assign(m.vertices.size(), 0);
     std::vector<double> at_vertex(m.vertices.size(), 0.0);
     for (std::size_t i = 0; i < d.size(); ++i) {
       const double x = d[i] < 0 ? std::numeric_limits<double>::infinity() : d[i];
       if (owner[i] >= 0) {
         where->faces[owner[i]] = std::max(where->faces[owner[i]], x);
+        if (part[i] > 0 && x > bound) where->edges[owner[i]] |= static_cast<std::uint8_t>(1u << (part[i] - 1));
       } else {
         at_vertex[-1 - owner[i]] = x;
         where->vertices[-1 - owner[i]] = x > bound;

@@ -21,9 +21,11 @@ namespace quadrix {
 std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m);
 
 /// Where samples lie beyond the bound: per face, its samples' largest distance (its vertices'
-/// included; +inf where one met no surface); per vertex, whether it is beyond.
+/// included; +inf where one met no surface) and which of its edges' midpoints are beyond (bit i:
+/// the edge from its vertex i to vertex i + 1 mod 3); per vertex, whether it is beyond.
 struct BeyondSamples {
   std::vector<double> faces;
+  std::vector<std::uint8_t> edges;
   std::vector<std::uint8_t> vertices;
 };
 

@@ -635,15 +635,18 @@ std::uint64_t edge_key(int a, int b) {
 
 /// Longest-edge bisection (Rivara) of the marked faces among those from first_face on, closed so
 /// no T-junction remains: a face with an edge to split has its longest edge split too, and every
-/// edge is split at one shared midpoint in both its faces (so a closed mesh stays closed). A face
-/// is bisected at its longest edge, then each half at the other split edge it holds. Returns, per
-/// face of the new mesh, the face it was cut from or is, and whether it is new; the midpoints are
-/// appended as vertices.
+/// edge is split at one shared midpoint in both its faces (so a closed mesh stays closed). A marked
+/// face is also split at the edges `beyond_edges` names (per face, bit i: its edge from vertex i to
+/// i + 1 mod 3; an edge whose midpoint is beyond the bound: cutting only the longest edge would
+/// leave that sample where it is, in one of the halves). A face is bisected at its longest edge,
+/// then each half at the other split edge it holds. Returns, per face of the new mesh, the face it
+/// was cut from or is, and whether it is new; the midpoints are appended as vertices.
 struct Bisected {
   std::vector<std::size_t> from;
   std::vector<std::uint8_t> fresh;
 };
-Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<std::uint8_t>& marked) {
+Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<std::uint8_t>& marked,
+                       const std::vector<std::uint8_t>& beyond_edges) {
   const PolygonMesh& m = out.mesh;
   const std::vector<Eigen::Vector3d>* V = &m.vertices;  // moves to the new mesh below
   const auto longer = [&](int a, int b, int c, int d) {  // edge (a, b) longer than (c, d), ties by key
@@ -674,16 +677,20 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
   }
   std::unordered_map<std::uint64_t, int> midpoint;  // edge → its midpoint vertex (−1 until made)
   std::vector<std::uint64_t> to_close;              // split edges whose faces are not yet closed
-  const auto split_longest = [&](std::span<const int> t) {
-    const std::uint64_t e = longest(t);
+  const auto split_edge = [&](std::uint64_t e) {
     if (edges.at(e).uses == 2 && midpoint.emplace(e, -1).second) to_close.push_back(e);
   };
-  for (std::size_t f = first_face; f < m.face_count(); ++f)
-    if (marked[f]) split_longest(m.face(f));
+  for (std::size_t f = first_face; f < m.face_count(); ++f) {
+    if (!marked[f]) continue;
+    const auto t = m.face(f);
+    split_edge(longest(t));
+    for (int i = 0; i < 3; ++i)
+      if (beyond_edges[f] >> i & 1u) split_edge(edge_key(t[i], t[(i + 1) % 3]));
+  }
   while (!to_close.empty()) {  // the closure: a split edge forces its faces' longest ones
     const EdgeFaces e = edges.at(to_close.back());
     to_close.pop_back();
-    for (int k = 0; k < 2; ++k) split_longest(m.face(e.face[k]));
+    for (int k = 0; k < 2; ++k) split_edge(longest(m.face(e.face[k])));
   }
   // Midpoints numbered in edge order, whatever order the closure reached them in.
   std::vector<std::uint64_t> split_edges;
@@ -793,7 +800,7 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
       out.before_where = part_beyond;
       out.measured = true;
     }
-    std::vector<std::uint8_t> marked(b.mesh.face_count(), 0);
+    std::vector<std::uint8_t> marked(b.mesh.face_count(), 0), beyond_edges(b.mesh.face_count(), 0);
     for (std::size_t k = 0; k < of_part.size(); ++k) {
       const std::size_t f = of_part[k];
       if (!fresh[f]) continue;
@@ -801,6 +808,7 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
       if (e > bound && !(e < 0.75 * worst[f])) ++stalls[f];
       worst[f] = e;
       marked[f] = e > bound && stalls[f] < kMaxStalls;
+      beyond_edges[f] = part_beyond.edges[k];
     }
     resnapped.resize(b.mesh.vertices.size(), 0);
     // A vertex beyond the bound (a crossing the blend shows along its grid edge but not along its
@@ -855,7 +863,7 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
       if (n_marked == 0 && !any_vertex) break;
     }
     const std::size_t first_vertex = b.mesh.vertices.size();
-    Bisected cut = bisect_marked(b, first_face, marked);
+    Bisected cut = bisect_marked(b, first_face, marked, beyond_edges);
     std::vector<double> next_worst(cut.from.size());
     std::vector<std::uint8_t> next_stalls(cut.from.size());
     for (std::size_t f = 0; f < cut.from.size(); ++f) {

@@ -11,8 +11,8 @@
 /// centroid (distance along the sample's normal line, both ways, to what the CPU reference ray
 /// caster draws, core/reference.h, and along 13 more lines where that is beyond the bound; an
 /// upper bound of the Euclidean distance: see mesh_distance), and surface → mesh from rendered
-/// views (fit/surface_error.h). SLIM meshes are first refined locally (longest-edge bisection
-/// without T-junctions where samples exceed the bound, new vertices moved onto the blend; open
+/// views (fit/surface_error.h). SLIM meshes are first refined locally (longest-edge bisection,
+/// and at edges whose midpoint exceeds the bound, without T-junctions where samples exceed it, new vertices moved onto the blend; open
 /// edges never cut), then, where samples stay beyond it (parts or gaps thinner than the grid),
 /// the grid cells there are cut finer by conforming bisection of their tetrahedra
 /// (convert/kuhn_bisection.h: no crack at the seam with the coarse cells) and the SLIM mesh made

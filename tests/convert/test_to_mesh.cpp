@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 
+#include "convert/mesh_measure.h"
 #include "convert/to_mesh.h"
 #include "core/error.h"
 #include "core/io/io.h"
@@ -357,6 +358,33 @@ TEST(ToMesh, LocalGridRefinementFindsAPartBetweenGridNodes) {
     if ((p - Eigen::Vector3d(1.45, 0.31, -0.17)).norm() < 0.016 + grid.bound) ++on_speck;
   EXPECT_GT(on_speck, 20u);
   EXPECT_LT(grid.mesh.face_count(), first.mesh.face_count() * 5 / 4) << "grid refinement should stay local";
+}
+
+// Local refinement cuts a face at the edge whose midpoint is beyond the bound (longest-edge
+// bisection alone can leave that sample where it was, on a shorter edge): the measure names those
+// edges. One triangle on the unit sphere: its long edge's midpoint sinks about 0.042 below the
+// sphere, the short edges' about 0.014.
+TEST(ToMesh, BeyondSamplesNameTheEdgesWhoseMidpointsAreBeyond) {
+  Model m;
+  m.glyphs.push_back({.kind = GlyphKind::sphere, .centre = Eigen::Vector3d::Zero(), .radius = 1.0});
+  PolygonMesh tri;
+  tri.vertices = {Eigen::Vector3d(-0.3, 0, 1).normalized(), Eigen::Vector3d(0.3, 0, 1).normalized(),
+                  Eigen::Vector3d(0, 0.15, 1).normalized()};
+  const int f[3] = {0, 1, 2};
+  tri.add_face(f);
+  const ReferenceScene scene(m);
+  BeyondSamples where;
+  const MeshDistance d = mesh_to_surface(scene, TraceOptions{}, tri, 0.1, 0.025, &where);
+  ASSERT_EQ(where.edges.size(), 1u);
+  EXPECT_EQ(where.edges[0], 0b001) << "only the edge from vertex 0 to vertex 1 has its midpoint beyond";
+  EXPECT_NEAR(where.faces[0], 1.0 - std::cos(std::atan(0.3)), 2e-3);
+  EXPECT_EQ(d.misses, 0u);
+  const BeyondSamples tighter = [&] {
+    BeyondSamples w;
+    mesh_to_surface(scene, TraceOptions{}, tri, 0.1, 0.005, &w);
+    return w;
+  }();
+  EXPECT_EQ(tighter.edges[0], 0b111);
 }
 
 TEST(ToMesh, EmptyModelRefused) { EXPECT_THROW(mesh_model(Model{}), InvalidInput); }
