@@ -10,6 +10,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -282,6 +283,50 @@ TEST_F(CliSee, FitStoresEachPatchsMeasuredError) {
   EXPECT_NEAR(max, j["measured_max_abs"].get<double>(), 1e-12);
   EXPECT_LE(max, j["max_error_abs"].get<double>());
   EXPECT_GT(max, 0);
+}
+
+// A coloured scan through the command line: a PLY with red/green/blue on its vertices (a bumpy
+// sphere, red on its upper half, blue on its lower; normals estimated), every patch of the model
+// coloured by the points in its ball, the colours in the file.
+TEST_F(CliSee, FitCarriesAScansColoursIntoItsPatches) {
+  const auto pts = dir_ / "c.ply";
+  {
+    std::mt19937 rng(9);
+    std::normal_distribution<double> g;
+    std::ostringstream body;
+    const int n = 6000;
+    for (int i = 0; i < n; ++i) {
+      Eigen::Vector3d p(g(rng), g(rng), g(rng));
+      p.normalize();
+      p *= 1.0 + 0.08 * std::sin(7 * p.x()) * std::sin(7 * p.y()) * std::sin(7 * p.z());
+      body << p.x() << ' ' << p.y() << ' ' << p.z() << (p.z() > 0 ? " 220 30 30\n" : " 30 30 220\n");
+    }
+    std::ofstream out(pts);
+    out << "ply\nformat ascii 1.0\nelement vertex " << n
+        << "\nproperty double x\nproperty double y\nproperty double z\nproperty uchar red\nproperty uchar green\n"
+           "property uchar blue\nend_header\n"
+        << body.str();
+  }
+  const auto model = dir_ / "c.qxm";
+  const CmdResult r = quadrix_run("fit " + q(pts) + " -o " + q(model) + " --max-error 2e-3 --allow-exceed --quiet");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const Model m = read_model(model);
+  ASSERT_GT(m.slims.size(), 20u);
+  int upper = 0, lower = 0;
+  for (const auto& s : m.slims) {
+    ASSERT_TRUE(s.colour.has_value());
+    const Rgb c = *s.colour;
+    if (s.centre.z() > 0.5) {
+      ++upper;
+      EXPECT_GT(c[0], 200) << s.centre.transpose();
+    }
+    if (s.centre.z() < -0.5) {
+      ++lower;
+      EXPECT_GT(c[2], 200) << s.centre.transpose();
+    }
+  }
+  EXPECT_GT(upper, 5);
+  EXPECT_GT(lower, 5);
 }
 
 TEST_F(CliSee, InfoOnAVolumeSuggestsOtsusThreshold) {
