@@ -1186,12 +1186,24 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         se = std::move(next_se);
       }
     }
-    // A refinement that leaves more than a quarter of the previous share of samples beyond the
-    // bound is not converging there (cracks or gaps of the blend itself, which no resolution
-    // closes): the previous, smaller mesh is kept.
-    if (have_best && share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface)) {
+    // A doubling is not converging where it leaves more than a quarter of the previous share of
+    // samples beyond the bound (cracks or gaps of the blend itself, which no resolution closes),
+    // or does not halve the larger of the two maxima (parts of the drawn surface that no closed
+    // inside/outside labelling holds, at any resolution: a patch's rim drawn alone, running on as
+    // an open fin past where its neighbours' surface turns): the previous, smaller mesh is kept.
+    if (have_best) {
+      if (!surface_measured) measure_surface_side(r);
+      surface_measured = true;
       if (best.surface_to_mesh.samples == 0) measure_surface_side(best);
-      break;
+      const bool share_stays = share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface);
+      const bool max_stays = r.max_error() > 0.5 * best.max_error();
+      if (!r.within && (share_stays || max_stays)) {
+        log::info("mesh: doubling {} not converging (max {:.3g} after {:.3g}, {} of {} samples beyond the bound after {} of {}): "
+                  "the previous mesh kept",
+                  level, r.max_error(), best.max_error(), r.mesh_to_surface.beyond, r.mesh_to_surface.samples,
+                  best.mesh_to_surface.beyond, best.mesh_to_surface.samples);
+        break;
+      }
     }
     const bool last = level == o.max_refinements || r.mesh.face_count() * 4 > o.max_triangles;
     const bool close = r.mesh_to_surface.max <= bound && r.mesh_to_surface.misses == 0;

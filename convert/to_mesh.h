@@ -21,7 +21,9 @@
 /// because grazing views see the per-ray blend off where head-on views do, the vertices there move
 /// part of the way towards them (convert/between_views.h). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
-/// itself, which no resolution closes); then the smaller mesh is kept.
+/// itself, which no resolution closes) or the larger of the two maxima by half (parts of the
+/// drawn surface no closed labelling holds at any resolution: a patch's rim drawn alone, running
+/// on as a fin); then the smaller mesh is kept.
 #include <cstddef>
 #include <functional>
 
