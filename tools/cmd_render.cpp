@@ -221,8 +221,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
                                    std::initializer_list<const char*> exts, const char* format) {
     const std::string e = extension_of(file);
     if (!file.empty() && std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; }))
-      throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a {} name", file,
-                                                     format, *exts.begin()));
+      throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a name ending in {}",
+                                                     file, format, fmt::join(exts, ", ")));
   };
   expect_extension("--out", a.out, {".png", ".jpg", ".jpeg"}, "PNG or JPEG");
   expect_extension("--depth-out", a.depth_out, {".pfm"}, "PFM");
@@ -515,7 +515,7 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 16384}))
       ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
-  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY/STL), depth-correct");
   app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");

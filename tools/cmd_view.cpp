@@ -152,7 +152,7 @@ void add_view(CLI::App& root, Commands& commands) {
   app->add_option("--animate", a->animate,
                   "Sweep a parameter of the implicit surfaces, NAME=FROM:TO:SECONDS, there and back (repeat)")
       ->default_str("");
-  app->add_option("--mesh", a->mesh, "Also draw this mesh");
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY/STL), depth-correct");
   app->add_option("--size", a->size, "Window size WxH")->capture_default_str();
   add_view_options(*app, a->view);
   app->add_option("--shading", a->shading, "phong, envmap or npr")
