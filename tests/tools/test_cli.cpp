@@ -627,6 +627,9 @@ TEST(Cli, HelpNamesTheFormatsTheOptionsRead) {
     const std::string mesh = line_of(command, "--mesh");
     for (const char* format : {"OBJ", "OFF", "PLY", "STL"})
       EXPECT_NE(mesh.find(format), std::string::npos) << command << " --mesh: " << mesh;
+    const std::string model = line_of(command, "MODEL");
+    for (const char* format : {".qxm", ".slim2t", ".pdb", ".cif", ".ply", ".obj", ".off", ".stl"})
+      EXPECT_NE(model.find(format), std::string::npos) << command << " MODEL: " << model;
   }
   const std::string skin = line_of("convert skin", "INPUT");
   for (const char* format : {".pdb", ".cif", ".cin", ".xyzr"})
