@@ -96,9 +96,10 @@ MoleculeGlyphs molecule_glyphs(const Molecule& mol, const MoleculeGlyphOptions& 
   return out;
 }
 
-Model read_molecule_glyphs(const std::filesystem::path& path) {
+Model read_molecule_glyphs(const std::filesystem::path& path, std::optional<MoleculeStyle> style, ColourBy colour_by) {
   const Molecule mol = read_molecule(path);
-  return molecule_glyphs(mol, {.style = default_molecule_style(mol.atoms.size())}).model;
+  return molecule_glyphs(mol, {.style = style.value_or(default_molecule_style(mol.atoms.size())), .colour_by = colour_by})
+      .model;
 }
 
 }  // namespace quadrix

@@ -3,6 +3,7 @@
 /// licorice; atoms coloured by element (CPK), chain or residue.
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 
 #include "convert/molecule.h"
@@ -40,8 +41,10 @@ struct MoleculeGlyphs {
 /// cylinders per bond (one half in each atom's colour); metadata names the style and counts.
 MoleculeGlyphs molecule_glyphs(const Molecule& molecule, const MoleculeGlyphOptions& options = {});
 
-/// A molecule file (is_molecule_file) as glyphs in default_molecule_style, coloured by element:
-/// what `render` and `view` draw when given one. \throws as read_molecule.
-Model read_molecule_glyphs(const std::filesystem::path& path);
+/// A molecule file (is_molecule_file) as glyphs: what `render` and `view` draw when given one.
+/// style: default_molecule_style of the atom count when unset.
+/// \throws as read_molecule.
+Model read_molecule_glyphs(const std::filesystem::path& path, std::optional<MoleculeStyle> style = std::nullopt,
+                           ColourBy colour_by = ColourBy::element);
 
 }  // namespace quadrix

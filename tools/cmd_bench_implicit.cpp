@@ -392,7 +392,8 @@ void add_bench_implicit(CLI::App& bench, Commands& commands) {
   auto a = std::make_shared<Args>();
   app->add_option("--surfaces", a->surfaces,
                   "Gallery surfaces (default: the algebraic ones of order <= 8 and barth-decic)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->default_str("");
   app->add_option("--divisions", a->divisions, "Base steps b = bounds diagonal / each of these")
       ->delimiter(',')
       ->check(number({.lo = 1, .hi = 1e6}))

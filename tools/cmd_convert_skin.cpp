@@ -16,7 +16,7 @@ namespace quadrix::cli {
 
 void add_convert_skin(CLI::App& convert, Commands& commands) {
   auto* app = convert.add_subcommand(
-      "skin", "Skin surface of a ball set (.pdb, .cin, .xyzr) to tetrahedron-clipped quadrics (CGAL + TetGen)");
+      "skin", "Skin surface of a ball set (.pdb, .cif, .cin, .xyzr) to tetrahedron-clipped quadrics (CGAL + TetGen)");
   struct Args {
     WriteModelOptions write;  // --encoding
     std::string input, out, radii = "vdw", tetrahedra = "regular";
@@ -24,17 +24,18 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
     bool no_water = false;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("INPUT", a->input, "Balls: PDB atoms (.pdb, .ent), weighted points (.cin: x y z r²) or .xyzr")
+  app->add_option("INPUT", a->input, "Balls: a molecule's atoms (PDB .pdb/.ent or mmCIF .cif/.mmcif, optionally .gz), "
+                                    "weighted points (.cin: x y z r²) or .xyzr (x y z r)")
       ->required();
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
   add_encoding_option(*app, a->write);
   app->add_option("--shrink", a->shrink, "Skin shrink factor s in (0, 1) (default 0.5)")
       ->check(number({.lo = 0, .hi = 1, .open_lo = true, .open_hi = true}));
-  app->add_option("--radii", a->radii, "PDB atom radii: vdw (default), covalent or unit")
+  app->add_option("--radii", a->radii, "Atom radii of a molecule: vdw (default), covalent or unit")
       ->check(CLI::IsMember({"vdw", "covalent", "unit"}));
   app->add_option("--radius-scale", a->radius_scale, "Multiply every radius by this factor (default 1)")
       ->check(positive());
-  app->add_flag("--no-water", a->no_water, "PDB: leave out water molecules (residues HOH, WAT, DOD, H2O)");
+  app->add_flag("--no-water", a->no_water, "Molecule: leave out water molecules (residues HOH, WAT, DOD, H2O)");
   app->add_option("--tetrahedra", a->tetrahedra,
                   "Mixed cells and their tetrahedra: regular (our mixed complex over CGAL's regular "
                   "triangulation, each cell split directly; default), cgal (CGAL Skin_surface_3's triangulated "

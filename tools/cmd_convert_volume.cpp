@@ -142,7 +142,9 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
   auto a = std::make_shared<Args>();
   app->add_option("VOLUME", a->volume, "Input volume: .nhdr/.nrrd, .inr/.inr.gz, or raw with --dims and --type");
   app->add_option("--iso", a->iso, "Iso-value V (strictly inside the data range; default: Otsu's threshold of the data, "
-                                  "as quadrix info suggests)")->check(finite());
+                                  "as quadrix info suggests)")
+      ->check(finite())
+      ->default_str("");
   app->add_option("-o,--out", a->out, "Output .qxm file")->required();
   add_encoding_option(*app, a->write);
   app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest), each in [1, 2^30]");

@@ -12,8 +12,6 @@
 
 #include <fmt/format.h>
 
-#include "convert/molecule.h"
-#include "convert/molecule_glyphs.h"
 #include "core/colour_map.h"
 #include "core/culling.h"
 #include "core/error.h"
@@ -34,6 +32,7 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
+#include "tools/scene_input.h"
 #include "tools/view_options.h"
 
 namespace quadrix::cli {
@@ -42,6 +41,7 @@ namespace {
 struct RenderArgs {
   std::string model, out, depth_out, normal_out, backend = "auto", context = "auto", size = "512x512";
   std::string shading = "phong", mesh, background = "255,255,255";
+  std::string style;  // a molecule MODEL's glyph style (empty: by atom count)
   ViewArgs view;  // camera options shared with `view`
   bool no_cull = false, contact_sheet = false, shadows = false, outlines = false;
   int frames = 1, supersample = 1, turntable = 0, shadow_map = 0;
@@ -221,8 +221,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
                                    std::initializer_list<const char*> exts, const char* format) {
     const std::string e = extension_of(file);
     if (!file.empty() && std::none_of(exts.begin(), exts.end(), [&](const char* x) { return e == x; }))
-      throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a {} name", file,
-                                                     format, *exts.begin()));
+      throw CLI::ValidationError(option, fmt::format("'{}': this output is written as {}; give a name ending in {}",
+                                                     file, format, fmt::join(exts, ", ")));
   };
   expect_extension("--out", a.out, {".png", ".jpg", ".jpeg"}, "PNG or JPEG");
   expect_extension("--depth-out", a.depth_out, {".pfm"}, "PFM");
@@ -239,27 +239,22 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   const auto [w, h] = parse_size(a.size);
   const auto implicit_surface = implicit_from_options(a);
   if (a.model.empty() && !implicit_surface) throw CLI::ValidationError("MODEL", "give a MODEL, --implicit or --surface");
-  // A mesh file as MODEL draws just that mesh as flat triangles (the baseline of the benchmarks).
-  // A molecule file (PDB, mmCIF) is converted to glyphs on the fly (convert/molecule_glyphs.h).
-  const bool model_is_molecule = !a.model.empty() && is_molecule_file(a.model);
-  const bool model_is_mesh = !a.model.empty() && !model_is_molecule && detect_file_kind(a.model) == FileKind::mesh;
-  Model model = model_is_mesh || a.model.empty() ? Model{}
-                : model_is_molecule             ? read_molecule_glyphs(a.model)
-                                                : read_model(a.model);
+  // MODEL and --mesh as `view` reads them (tools/scene_input.h): a mesh file as MODEL draws just
+  // that mesh as flat triangles (the baseline of the benchmarks); a molecule file is converted to
+  // glyphs on the fly in --style and an atom --colour-by.
+  const bool colours_atoms = is_atom_colouring(a.colour_by);
+  Scene scene = read_scene({.model = a.model, .mesh = a.mesh, .style = a.style, .colour_by = colours_atoms ? a.colour_by : ""});
+  Model model = std::move(scene.model);
+  std::optional<PolygonMesh> mesh = std::move(scene.mesh);
+  const bool model_is_mesh = scene.kind == SceneInputKind::mesh;
   if (implicit_surface) model.implicits.push_back(implicit_surface->first);
   else set_model_parameters(a, model);
-  std::optional<PolygonMesh> mesh;
-  if (!a.mesh.empty()) mesh = read_mesh(a.mesh);
-  if (model_is_mesh) {
-    if (mesh) throw InvalidInput("give either a mesh as MODEL or --mesh, not both");
-    mesh = read_mesh(a.model);
-  }
   if (model.empty() && !mesh) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
   if (!model.empty()) {
     const Box3 box = bounds(model);
     check_drawable_extent(box.min, box.max, a.model.empty() ? std::string("the implicit surface") : std::string(a.model));
   }
-  const ColourMode colour_by = parse_colour_mode(a.colour_by);
+  const ColourMode colour_by = colours_atoms ? ColourMode::none : parse_colour_mode(a.colour_by);
   if (!a.colour_range.empty() && colour_by != ColourMode::error && colour_by != ColourMode::depth)
     throw CLI::ValidationError("--colour-range", "applies to --colour-by error or depth");
   std::optional<PointCloud> points;
@@ -295,7 +290,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
        {"framing", {{"up", a.view.up}, {"view", a.view.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.view)},
                     {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.view.fill}, {"zoom", a.view.zoom},
                     {"camera_file", a.view.camera_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.camera_file)}}},
-       {"background", a.background}, {"supersample", ss}};
+       {"background", a.background}, {"supersample", ss}, {"input", scene_input_name(scene.kind)}};
+  if (scene.kind == SceneInputKind::molecule) j["molecule"] = molecule_json(model);
 
   std::string backend = a.backend;
   if (backend == "auto") backend = "gl";
@@ -478,7 +474,9 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 void add_render(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("render", "Ray-cast a model into a PNG (and depth/normal PFM)");
   auto a = std::make_shared<RenderArgs>();
-  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles; optional with --implicit/--surface");
+  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), a molecule (.pdb/.ent/.cif/.mmcif, optionally .gz) "
+                                    "drawn as glyphs, or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles; optional "
+                                    "with --implicit/--surface");
   app->add_option("-o,--out", a->out, "Output PNG (required, except for --surface list)");
   app->add_option("--backend", a->backend, "auto (gl), gl, or cpu (the reference)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
@@ -499,8 +497,9 @@ void add_render(CLI::App& root, Commands& commands) {
   app->add_option("--colour-by", a->colour_by, "Colour the surface by: none (the model's colours), error (each patch's "
                                              "measured error, or measured against --points; with a colour bar), patch "
                                              "(a colour per primitive), normal (world normal as RGB), depth (eye depth; "
-                                             "with a colour bar)")
-      ->check(CLI::IsMember({"none", "error", "patch", "normal", "depth"}))
+                                             "with a colour bar); a molecule MODEL's atoms by element (CPK), chain or "
+                                             "residue, as convert glyphs")
+      ->check(CLI::IsMember({"none", "error", "patch", "normal", "depth", "element", "chain", "residue"}))
       ->capture_default_str();
   app->add_option("--colour-range", a->colour_range, "LO,HI of the colour bar for error or depth (default: the values' "
                                                      "min and max)");
@@ -515,7 +514,8 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 16384}))
       ->capture_default_str();
   app->add_flag("--outlines", a->outlines, "Black silhouette and crease lines (depth and normal discontinuities)");
-  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY), depth-correct");
+  add_molecule_style_option(*app, a->style);
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY/STL), depth-correct");
   app->add_option("--frames", a->frames, "Frames to time (GL); the report holds medians")->check(number({.lo = 1, .hi = 10000}));
   app->add_option("--depth-out", a->depth_out, "Eye-space depth as PFM (+inf background)");
   app->add_option("--normal-out", a->normal_out, "World-space normals as 3-channel PFM");

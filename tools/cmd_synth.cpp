@@ -38,8 +38,10 @@ void add_synth(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 50e6}))
       ->default_str("");
   app->add_option("--resolution", a->options.resolution,
-                  "Grid cells per axis (hyperboloids)->default_str(""); samples per axis for marschner-lobb (default 41)")
-      ->check(number({.lo = 0, .hi = 512}));
+                  "Grid cells per axis for hyperboloid1 and hyperboloid2 (default 10); samples per axis for "
+                  "marschner-lobb (default 41)")
+      ->check(number({.lo = 0, .hi = 512}))
+      ->default_str("");
   app->add_option("--seed", a->options.seed, "Random seed (glyphs)")->check(non_negative());
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         if (a->kind == kMarschnerLobb) {

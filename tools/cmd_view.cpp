@@ -18,8 +18,6 @@
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
 
-#include "convert/molecule.h"
-#include "convert/molecule_glyphs.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/implicit/expression.h"
@@ -31,6 +29,7 @@
 #include "render/context.h"
 #include "render/renderer.h"
 #include "tools/cli.h"
+#include "tools/scene_input.h"
 #include "tools/view_options.h"
 
 namespace quadrix::cli {
@@ -137,6 +136,7 @@ void add_view(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("view", "Open an interactive window (GLFW) on a model");
   struct Args {
     std::string model, mesh, size = "960x720", screenshot, shading = "phong", press;
+    std::string style, colour_by;  // a molecule MODEL's glyphs (empty: as render's defaults)
     ViewArgs view;  // camera options shared with `render`
     int frames = 0;
     std::string surface;
@@ -147,12 +147,19 @@ void add_view(CLI::App& root, Commands& commands) {
     double pixel_error = render::RenderOptions{}.slim_pixel_error;
   };
   auto a = std::make_shared<Args>();
-  app->add_option("MODEL", a->model, "Model file (.qxm), or a molecule (.pdb, .cif); optional with --surface");
+  app->add_option("MODEL", a->model, "What render draws: a model (.qxm, .slim2t), a molecule (.pdb/.ent/.cif/.mmcif, "
+                                    "optionally .gz) as glyphs, or a mesh (.ply/.obj/.off/.stl) as flat triangles; "
+                                    "optional with --surface");
   app->add_option("--surface", a->surface, "Also draw this built-in implicit surface (render --surface list)");
   app->add_option("--animate", a->animate,
                   "Sweep a parameter of the implicit surfaces, NAME=FROM:TO:SECONDS, there and back (repeat)")
       ->default_str("");
-  app->add_option("--mesh", a->mesh, "Also draw this mesh");
+  app->add_option("--mesh", a->mesh, "Also draw this triangle/polygon mesh (OBJ/OFF/PLY/STL), depth-correct");
+  add_molecule_style_option(*app, a->style);
+  app->add_option("--colour-by", a->colour_by, "A molecule MODEL's atoms by element (CPK), chain or residue, as "
+                                              "convert glyphs (default: element)")
+      ->check(CLI::IsMember({"element", "chain", "residue"}))
+      ->default_str("");
   app->add_option("--size", a->size, "Window size WxH")->capture_default_str();
   add_view_options(*app, a->view);
   app->add_option("--shading", a->shading, "phong, envmap or npr")
@@ -177,9 +184,11 @@ void add_view(CLI::App& root, Commands& commands) {
                         const auto [w, h] = parse_size(a->size);
                         if (a->model.empty() && a->surface.empty())
                           throw CLI::ValidationError("MODEL", "give a MODEL or --surface");
-                        Model model = a->model.empty()              ? Model{}
-                                      : is_molecule_file(a->model) ? read_molecule_glyphs(a->model)
-                                                                   : read_model(a->model);
+                        // What render reads from the same arguments (tools/scene_input.h).
+                        Scene scene = read_scene(
+                            {.model = a->model, .mesh = a->mesh, .style = a->style, .colour_by = a->colour_by});
+                        Model model = std::move(scene.model);
+                        const std::optional<PolygonMesh> mesh = std::move(scene.mesh);
                         if (!a->surface.empty()) {
                           try {
                             model.implicits.push_back(implicit::gallery_surface(a->surface).surface);
@@ -205,8 +214,6 @@ void add_view(CLI::App& root, Commands& commands) {
                             model.implicits[i].parameters[animations.back().name] = animations.back().from;
                         }
                         const std::string title = a->model.empty() ? a->surface : a->model;
-                        std::optional<PolygonMesh> mesh;
-                        if (!a->mesh.empty()) mesh = read_mesh(a->mesh);
                         Box3 box = bounds(model);
                         if (mesh)
                           for (const auto& v : mesh->vertices) box.extend(v);
@@ -304,7 +311,9 @@ void add_view(CLI::App& root, Commands& commands) {
                         if (!a->screenshot.empty()) write_png(renderer.read_colour(), a->screenshot);
                         if (!a->view.save_camera.empty()) write_camera(st.at_size(fw, fh), a->view.save_camera);
                         report.json["view"] = {{"frames", frame}, {"ms_last_frame", ms}, {"context", context->description()},
-                                               {"camera", camera_json(st.at_size(fw, fh))}};
+                                               {"camera", camera_json(st.at_size(fw, fh))},
+                                               {"input", scene_input_name(scene.kind)}};
+                        if (scene.kind == SceneInputKind::molecule) report.json["view"]["molecule"] = molecule_json(model);
                         if (!values.empty()) report.json["view"]["parameters_last_frame"] = values;
                         if (!model.slim_hierarchy.empty())
                           report.json["view"]["slim_lod"] = {{"pixel_error", a->pixel_error},

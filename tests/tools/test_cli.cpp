@@ -149,6 +149,7 @@ TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
     const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / out) + " --size 32x32");
     EXPECT_EQ(r.code, 2) << out << ": " << r.out;
     EXPECT_NE(r.out.find("PNG"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(".jpg"), std::string::npos) << "the message names every accepted extension: " << r.out;
     EXPECT_FALSE(std::filesystem::exists(dir / out)) << out;
   }
   CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir / "b.png") + " --size 32x32 --depth-out " +
@@ -564,15 +565,22 @@ TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
   for (const std::string& command : commands) {
     const CmdResult help = quadrix_run(command + " --help");
     ASSERT_EQ(help.code, 0) << command;
+    // No source text in a help text (a chained call typed inside a description's string).
+    for (const char* leak : {"->", "default_str", "capture_default"})
+      EXPECT_EQ(help.out.find(leak), std::string::npos) << command << " --help shows '" << leak << "':\n" << help.out;
     std::vector<std::string> lines;
     std::istringstream in(help.out);
     for (std::string line; std::getline(in, line);) lines.push_back(line);
     for (std::size_t i = 0; i < lines.size(); ++i) {
       const std::string& line = lines[i];
       const auto start = line.find_first_not_of(' ');
-      if (start == std::string::npos || line[start] != '-') continue;
+      if (start == std::string::npos || start > 8 || line[start] != '-') continue;  // not an option's first line
       const std::string body = line.substr(start);
-      const std::string opts = body.substr(0, body.find("  "));
+      // CLI11 pads the option column to 30 characters (a name of 29 is followed by one space), or
+      // puts the description on the next line when the name does not fit.
+      constexpr std::size_t kColumn = 30;
+      const bool wrapped = i + 1 < lines.size() && lines[i + 1].starts_with(std::string(kColumn, ' '));
+      const std::string opts = wrapped || line.size() <= kColumn ? body : line.substr(start, kColumn - start);
       std::istringstream words(opts);
       std::string name, type;
       words >> name >> type;
@@ -588,6 +596,9 @@ TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
       const bool shown = opts.find('=') != std::string::npos || opts.find("REQUIRED") != std::string::npos ||
                          description.find("default") != std::string::npos || no_default.count(name) > 0;
       EXPECT_TRUE(shown) << command << " " << name << ": no default shown: " << line;
+      // A default chosen at run time ("default: …") is not also shown as a value ("=0").
+      EXPECT_FALSE(opts.find('=') != std::string::npos && description.find("default: ") != std::string::npos)
+          << command << " " << name << ": shows a value and says the default is another: " << opts << " |" << description;
       // A default shown must be one the option accepts: not a sentinel outside its range.
       if (const auto eq = opts.find('='); eq != std::string::npos && opts[eq + 1] != '[')
         for (const NumericOption& o : numeric_options(opts)) {
@@ -598,4 +609,29 @@ TEST(Cli, EveryOptionOfEveryCommandShowsItsDefault) {
     }
   }
   EXPECT_GE(checked, 60u);
+  for (const std::string group : {"", "convert", "bench"}) {
+    const CmdResult help = quadrix_run(group + " --help");
+    for (const char* leak : {"->", "default_str", "capture_default"})
+      EXPECT_EQ(help.out.find(leak), std::string::npos) << "quadrix " << group << " --help shows '" << leak << "'";
+  }
+}
+
+// The help names every format the readers behind an option take.
+TEST(Cli, HelpNamesTheFormatsTheOptionsRead) {
+  const auto line_of = [](const std::string& command, const std::string& option) {
+    const std::string help = quadrix_run(command + " --help").out;
+    const auto at = help.find("  " + option + " ");
+    return at == std::string::npos ? std::string() : help.substr(at, help.find("\n  -", at + 1) - at);
+  };
+  for (const std::string command : {"render", "view"}) {
+    const std::string mesh = line_of(command, "--mesh");
+    for (const char* format : {"OBJ", "OFF", "PLY", "STL"})
+      EXPECT_NE(mesh.find(format), std::string::npos) << command << " --mesh: " << mesh;
+    const std::string model = line_of(command, "MODEL");
+    for (const char* format : {".qxm", ".slim2t", ".pdb", ".cif", ".ply", ".obj", ".off", ".stl"})
+      EXPECT_NE(model.find(format), std::string::npos) << command << " MODEL: " << model;
+  }
+  const std::string skin = line_of("convert skin", "INPUT");
+  for (const char* format : {".pdb", ".cif", ".cin", ".xyzr"})
+    EXPECT_NE(skin.find(format), std::string::npos) << "convert skin INPUT: " << skin;
 }

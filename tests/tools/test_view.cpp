@@ -150,3 +150,40 @@ TEST(View, ShadowAndLineKeysMatchRender) {
   EXPECT_GE(same_share(shot, quadrix::read_png(dir / "effects.png")), 0.999);
   EXPECT_LT(same_share(shot, quadrix::read_png(dir / "plain.png")), 0.98);
 }
+
+// view opens what render opens, through the same loader: a mesh file as MODEL (flat triangles)
+// and a molecule file in the given --style and --colour-by; the window shows what render draws
+// for the same arguments, and the molecule options change it (the comparison can fail).
+TEST(View, MeshAndMoleculeInputsMatchRender) {
+  if (sh("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run is not installed (apt-get install xvfb)";
+  ScratchDir dir("view-inputs");
+  const std::string q = QUADRIX_BINARY, d = dir.path().string();
+  ASSERT_EQ(sh(q + " synth ellipsoid -o " + d + "/e.qxm --quiet"), 0);
+  ASSERT_EQ(sh(q + " mesh " + d + "/e.qxm -o " + d + "/e.stl --quiet"), 0);
+  std::ofstream(dir / "m.pdb")
+      << "ATOM      1  N   GLY A   1       0.000   0.000   0.000  1.00  0.00           N\n"
+         "ATOM      2  CA  GLY A   1       1.458   0.000   0.000  1.00  0.00           C\n"
+         "ATOM      3  O   GLY A   1       2.009   1.420   0.000  1.00  0.00           O\n"
+         "ATOM      4  N   ALA B   2       0.000   0.000   4.000  1.00  0.00           N\n"
+         "ATOM      5  CA  ALA B   2       1.458   0.000   4.000  1.00  0.00           C\n"
+         "ATOM      6  O   ALA B   2       2.009   1.420   4.000  1.00  0.00           O\n"
+         "END\n";
+  const std::string view_args = " --size 160x120 --azimuth 30 --elevation 25";
+  const auto window = [&](const std::string& input, const std::string& png) {
+    return sh("xvfb-run -a -s '-screen 0 640x480x24' " + q + " view " + input + view_args + " --frames 3 --screenshot " +
+              d + "/" + png + " --quiet");
+  };
+  const int rc = window(d + "/e.stl", "mesh-window.png");
+  if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
+  ASSERT_EQ(rc, 0);
+  ASSERT_EQ(sh(q + " render " + d + "/e.stl -o " + d + "/mesh.png" + view_args + " --quiet"), 0);
+  EXPECT_GE(same_share(quadrix::read_png(dir / "mesh-window.png"), quadrix::read_png(dir / "mesh.png")), 0.999);
+
+  const std::string molecule = d + "/m.pdb --style spacefill --colour-by chain";
+  ASSERT_EQ(window(molecule, "molecule-window.png"), 0);
+  ASSERT_EQ(sh(q + " render " + molecule + " -o " + d + "/molecule.png" + view_args + " --quiet"), 0);
+  ASSERT_EQ(sh(q + " render " + d + "/m.pdb -o " + d + "/default.png" + view_args + " --quiet"), 0);
+  const auto shot = quadrix::read_png(dir / "molecule-window.png");
+  EXPECT_GE(same_share(shot, quadrix::read_png(dir / "molecule.png")), 0.999);
+  EXPECT_LT(same_share(shot, quadrix::read_png(dir / "default.png")), 0.95);
+}
