@@ -323,6 +323,9 @@ SlimGrid slim_grid(const Model& model, double h) {
 /// Finest SLIM grid refinement: cells of h / 2^kGridLevels.
 constexpr int kGridLevels = 3;
 
+/// Rounds of open sheets on patches' rims drawn alone (fin_sheets).
+constexpr int kFinRounds = 3;
+
 using LatticeEdge = std::pair<std::uint64_t, std::uint64_t>;
 struct LatticeEdgeHash {
   std::size_t operator()(const LatticeEdge& e) const {
@@ -895,6 +898,126 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
   return out;
 }
 
+// ---- fins (SLIM) ------------------------------------------------------------------------------
+
+/// Open sheets for what a closed inside/outside labelling cannot hold: where the drawn surface's
+/// points beyond the bound lie on one patch's own zero set (a patch's rim drawn alone, running on
+/// as a fin past where its neighbours' surface turns), that patch's surface there as a grid of
+/// triangles over its tangent plane (step grid_step, at least R/128): nodes on the quadric (along
+/// the plane's normal), inside the ball and clip planes, and drawn (within half the bound of the
+/// blend along the node's normal or its 13 lines, as mesh → surface measures it); cells with three
+/// or four nodes so and one farther than the bound from `mesh`. The triangles come with their own
+/// vertices (their edges open), facing the patch's outside.
+struct FinSheets {
+  PolygonMesh mesh;
+  std::vector<Rgb> colours;  ///< per vertex: its patch's colour
+  std::size_t patches = 0;
+};
+FinSheets fin_sheets(const Model& model, const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& mesh,
+                     std::span<const SurfaceError::Beyond> beyond, double bound, double grid_step) {
+  FinSheets fins;
+  PolygonMesh& out = fins.mesh;
+  std::vector<int> patch_of(beyond.size(), -1);
+  tbb::parallel_for(std::size_t{0}, beyond.size(), [&](std::size_t k) {
+    double best_d = 0.05 * bound;
+    for (std::size_t i = 0; i < model.slims.size(); ++i) {
+      const SlimPatch& s = model.slims[i];
+      if ((beyond[k].point - s.centre).squaredNorm() >= s.radius * s.radius) continue;
+      const Eigen::Vector3d u = (beyond[k].point - s.centre) / s.radius;
+      if (!s.clips.keeps(u)) continue;
+      const double gn = s.local.gradient(u).norm();
+      if (!(gn > 1e-12)) continue;
+      const double d = std::abs(s.radius * s.local.eval(u) / gn);
+      if (d <= best_d) patch_of[k] = static_cast<int>(i), best_d = d;
+    }
+  });
+  std::map<int, std::vector<Eigen::Vector3d>> on_patch;  // patch → the points beyond on its zero set
+  for (std::size_t k = 0; k < beyond.size(); ++k)
+    if (patch_of[k] >= 0) on_patch[patch_of[k]].push_back(beyond[k].point);
+  if (on_patch.empty()) return fins;
+  const DataSurface near_mesh = DataSurface::from_mesh(mesh);
+  for (const auto& [index, points] : on_patch) {
+    const SlimPatch& s = model.slims[index];
+    const double step = std::max(grid_step, s.radius / 128.0);  // at most 257² nodes per patch
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const auto& p : points) c += p / static_cast<double>(points.size());
+    const Eigen::Vector3d n0 = s.local.gradient((c - s.centre) / s.radius).normalized();
+    if (!n0.allFinite()) continue;
+    const Eigen::Vector3d e1 = n0.unitOrthogonal(), e2 = n0.cross(e1);
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const auto& p : points) {
+      const Eigen::Vector2d q((p - c).dot(e1), (p - c).dot(e2));
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+    lo = (lo.array() - 2.0 * step).max(-s.radius);
+    hi = (hi.array() + 2.0 * step).min(s.radius);
+    const int ni = static_cast<int>(std::ceil((hi.x() - lo.x()) / step)) + 1, nj = static_cast<int>(std::ceil((hi.y() - lo.y()) / step)) + 1;
+    struct Node {
+      Eigen::Vector3d x, n;
+      bool drawn = false, far = false;
+    };
+    std::vector<Node> nodes(static_cast<std::size_t>(ni) * nj);
+    tbb::parallel_for(0, ni * nj, [&](int k) {
+      Node& node = nodes[k];
+      const Eigen::Vector3d x0 = c + (lo.x() + (k % ni) * step) * e1 + (lo.y() + (k / ni) * step) * e2;
+      // The quadric along x0 + t·n0, local units: the root nearest x0.
+      const Eigen::Vector3d u0 = (x0 - s.centre) / s.radius;
+      const double qa = n0.dot(s.local.A * n0), qb = 2.0 * n0.dot(s.local.A * u0 + s.local.b), qc = s.local.eval(u0);
+      double t = std::numeric_limits<double>::infinity();
+      if (std::abs(qa) <= 1e-14 * (std::abs(qb) + std::abs(qc))) {
+        if (qb != 0.0) t = -qc / qb;
+      } else if (const double disc = qb * qb - 4.0 * qa * qc; disc >= 0.0) {
+        const double qq = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+        for (const double r : {qq / qa, qq != 0.0 ? qc / qq : std::numeric_limits<double>::infinity()})
+          if (std::abs(r) < std::abs(t)) t = r;
+      }
+      if (!(std::abs(t) <= 1.0)) return;
+      const Eigen::Vector3d u = u0 + t * n0;
+      if (u.squaredNorm() >= 1.0 || !s.clips.keeps(u)) return;
+      node.x = s.centre + s.radius * u;
+      node.n = s.local.gradient(u).normalized();
+      if (!node.n.allFinite()) return;
+      const double d = nearest_along_lines(scene, trace, node.x, node.n, 2.0 * bound, 0.25 * bound);
+      node.drawn = d >= 0 && d <= 0.5 * bound;
+      node.far = node.drawn && near_mesh.distance(node.x, 2.0 * bound) > bound;
+    });
+    std::vector<int> vertex(nodes.size(), -1);
+    const auto vertex_of = [&](int k) {
+      if (vertex[k] < 0) {
+        vertex[k] = static_cast<int>(out.vertices.size());
+        out.vertices.push_back(nodes[k].x);
+        fins.colours.push_back(s.colour.value_or(Rgb{200, 200, 200}));
+      }
+      return vertex[k];
+    };
+    const auto add = [&](int a, int b, int d) {
+      const Eigen::Vector3d normal = nodes[a].n + nodes[b].n + nodes[d].n;
+      if ((nodes[b].x - nodes[a].x).cross(nodes[d].x - nodes[a].x).dot(normal) < 0) std::swap(b, d);
+      const int f[3] = {vertex_of(a), vertex_of(b), vertex_of(d)};
+      out.add_face(f);
+    };
+    const std::size_t faces_before = out.face_count();
+    for (int j = 0; j + 1 < nj; ++j)
+      for (int i = 0; i + 1 < ni; ++i) {
+        const int k[4] = {j * ni + i, j * ni + i + 1, (j + 1) * ni + i + 1, (j + 1) * ni + i};
+        if (!std::any_of(k, k + 4, [&](int x) { return nodes[x].far; })) continue;
+        const int drawn = static_cast<int>(std::count_if(k, k + 4, [&](int x) { return nodes[x].drawn; }));
+        if (drawn == 4) {
+          add(k[0], k[1], k[2]);
+          add(k[0], k[2], k[3]);
+        } else if (drawn == 3) {  // at the rim: the three drawn corners
+          int t[3], n = 0;
+          for (const int x : k)
+            if (nodes[x].drawn) t[n++] = x;
+          add(t[0], t[1], t[2]);
+        }
+      }
+    fins.patches += out.face_count() > faces_before;
+  }
+  return fins;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -1185,6 +1308,41 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         offset = std::move(next_offset);
         se = std::move(next_se);
       }
+    }
+    // Where the drawn surface's points beyond the bound lie on one patch's zero set, seen alone (a
+    // rim running on as a fin past where its neighbours' surface turns, which no closed labelling
+    // holds), that patch's surface there is added as an open sheet, in rounds (each round's points
+    // beyond the bound may lie on the last one's rims); a round kept only if it leaves fewer
+    // samples beyond the bound (both ways) and no larger maximum.
+    for (int round = 0; round < kFinRounds && !model.slims.empty() && !r.within && o.fins; ++round) {
+      const SurfaceError se = surface_error(r.mesh, kKeepBeyond);
+      set_surface_side(r, se);
+      surface_measured = true;
+      if (se.beyond_points.empty()) break;
+      const FinSheets fins = fin_sheets(model, scene, trace, r.mesh, se.beyond_points, bound,
+                                        std::min(0.5 * slim_h0 / (1 << level), 2.0 * bound));
+      if (fins.mesh.face_count() == 0) break;
+      ToMeshResult next = r;
+      const int base = static_cast<int>(next.mesh.vertices.size());
+      next.mesh.vertices.insert(next.mesh.vertices.end(), fins.mesh.vertices.begin(), fins.mesh.vertices.end());
+      if (!next.mesh.colours.empty()) next.mesh.colours.insert(next.mesh.colours.end(), fins.colours.begin(), fins.colours.end());
+      for (std::size_t f = 0; f < fins.mesh.face_count(); ++f) {
+        const auto t = fins.mesh.face(f);
+        const int tri[3] = {base + t[0], base + t[1], base + t[2]};
+        next.mesh.add_face(tri);
+      }
+      next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+      set_surface_side(next, surface_error(next.mesh, 0));
+      next.open_edges = count_open_edges(next.mesh);
+      log::info("mesh: fin round {}: {} triangles on {} patches' rims; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
+                round + 1, fins.mesh.face_count(), fins.patches, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
+                r.mesh_to_surface.beyond, r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+      if (!next.within && (total_beyond(next) >= total_beyond(r) || next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
+                           next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
+        break;
+      next.fin_rounds = round + 1;
+      next.fin_triangles = r.fin_triangles + fins.mesh.face_count();
+      r = std::move(next);
     }
     // A doubling is not converging where it leaves more than a quarter of the previous share of
     // samples beyond the bound (cracks or gaps of the blend itself, which no resolution closes),

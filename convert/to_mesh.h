@@ -19,7 +19,9 @@
 /// again, one level per round, while that helps (samples unchanged since an earlier round are not
 /// traced again: convert/mesh_measure.h). Where the drawn surface's pixels stay beyond the bound
 /// because grazing views see the per-ray blend off where head-on views do, the vertices there move
-/// part of the way towards them (convert/between_views.h). The resolution doubles until both are within the bound, or
+/// part of the way towards them (convert/between_views.h). Where they lie on one patch's zero
+/// set seen alone (its rim running on as a fin, which no closed labelling holds), that patch's
+/// surface there is added as an open sheet. The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes) or the larger of the two maxima by half (parts of the
 /// drawn surface no closed labelling holds at any resolution: a patch's rim drawn alone, running
@@ -47,6 +49,11 @@ struct ToMeshOptions {
   /// per-ray blend shows them the surface off where a head-on view does (convert/between_views.h);
   /// a round kept only if it leaves fewer samples beyond the bound and no larger maximum; 0: off
   int view_rounds = 3;
+  /// SLIM: where the drawn surface's points beyond the bound lie on one patch's rim drawn alone (a
+  /// fin running on past where its neighbours' surface turns, which no closed labelling holds),
+  /// that patch's surface there is added as an open sheet (kept only if it leaves fewer samples
+  /// beyond the bound and no larger maximum)
+  bool fins = true;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -73,6 +80,8 @@ struct ToMeshResult {
   int grid_rounds = 0;              ///< local grid refinement rounds kept on the last grid
   std::size_t refined_cells = 0;    ///< grid cells asked to be cut finer (the closure cuts some neighbours too)
   int view_rounds = 0;              ///< rounds of moves towards what grazing views see, kept
+  int fin_rounds = 0;               ///< rounds of open sheets added on patches' rims drawn alone, kept
+  std::size_t fin_triangles = 0;    ///< triangles of those sheets
   bool within = false;              ///< both maxima ≤ bound and no misses
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
