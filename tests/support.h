@@ -55,4 +55,15 @@ inline CmdResult run_command(const std::string& binary, const std::string& args)
   return r;
 }
 
+/// A tiny PDB file: two chains of three atoms each (A: GLY, B: ALA; bonds left to inference),
+/// different elements in each chain.
+inline constexpr const char* kTwoChainPdb =
+    "ATOM      1  N   GLY A   1       0.000   0.000   0.000  1.00  0.00           N\n"
+    "ATOM      2  CA  GLY A   1       1.458   0.000   0.000  1.00  0.00           C\n"
+    "ATOM      3  O   GLY A   1       2.009   1.420   0.000  1.00  0.00           O\n"
+    "ATOM      4  N   ALA B   2       0.000   0.000   4.000  1.00  0.00           N\n"
+    "ATOM      5  CA  ALA B   2       1.458   0.000   4.000  1.00  0.00           C\n"
+    "ATOM      6  O   ALA B   2       2.009   1.420   4.000  1.00  0.00           O\n"
+    "END\n";
+
 }  // namespace quadrix::test_support

@@ -21,15 +21,7 @@ using test_support::read_json;
 
 namespace {
 
-// Two chains of three atoms each (bonds inferred), different elements in each chain.
-const char* kTwoChains =
-    "ATOM      1  N   GLY A   1       0.000   0.000   0.000  1.00  0.00           N\n"
-    "ATOM      2  CA  GLY A   1       1.458   0.000   0.000  1.00  0.00           C\n"
-    "ATOM      3  O   GLY A   1       2.009   1.420   0.000  1.00  0.00           O\n"
-    "ATOM      4  N   ALA B   2       0.000   0.000   4.000  1.00  0.00           N\n"
-    "ATOM      5  CA  ALA B   2       1.458   0.000   4.000  1.00  0.00           C\n"
-    "ATOM      6  O   ALA B   2       2.009   1.420   4.000  1.00  0.00           O\n"
-    "END\n";
+const char* const kTwoChains = test_support::kTwoChainPdb;
 
 // `view` with no display: it reads its input and frames it, then fails to open the window (exit
 // 6). Reaching that failure means the input was read; a file it cannot read exits 3 before it.

@@ -10,6 +10,7 @@
 
 #include "core/image.h"
 #include "tests/core/malformed_corpus.h"
+#include "tests/support.h"
 
 using quadrix::test::ScratchDir;
 
@@ -160,14 +161,7 @@ TEST(View, MeshAndMoleculeInputsMatchRender) {
   const std::string q = QUADRIX_BINARY, d = dir.path().string();
   ASSERT_EQ(sh(q + " synth ellipsoid -o " + d + "/e.qxm --quiet"), 0);
   ASSERT_EQ(sh(q + " mesh " + d + "/e.qxm -o " + d + "/e.stl --quiet"), 0);
-  std::ofstream(dir / "m.pdb")
-      << "ATOM      1  N   GLY A   1       0.000   0.000   0.000  1.00  0.00           N\n"
-         "ATOM      2  CA  GLY A   1       1.458   0.000   0.000  1.00  0.00           C\n"
-         "ATOM      3  O   GLY A   1       2.009   1.420   0.000  1.00  0.00           O\n"
-         "ATOM      4  N   ALA B   2       0.000   0.000   4.000  1.00  0.00           N\n"
-         "ATOM      5  CA  ALA B   2       1.458   0.000   4.000  1.00  0.00           C\n"
-         "ATOM      6  O   ALA B   2       2.009   1.420   4.000  1.00  0.00           O\n"
-         "END\n";
+  std::ofstream(dir / "m.pdb") << quadrix::test_support::kTwoChainPdb;
   const std::string view_args = " --size 160x120 --azimuth 30 --elevation 25";
   const auto window = [&](const std::string& input, const std::string& png) {
     return sh("xvfb-run -a -s '-screen 0 640x480x24' " + q + " view " + input + view_args + " --frames 3 --screenshot " +
