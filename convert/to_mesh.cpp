@@ -1309,12 +1309,51 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         se = std::move(next_se);
       }
     }
+    // Faces over cracks of the blend (a sample beyond the bound, its centroid or an edge's midpoint
+    // in no patch's ball, so nothing is drawn there) are left out; kept only if that leaves fewer
+    // samples beyond the bound (both ways) and no larger maximum of the two (the drawn surface
+    // they covered at the crack's rims may move away from the mesh: the fins below may hold it).
+    if (!model.slims.empty() && !r.within && o.open_parts && r.mesh_to_surface.beyond > 0) {
+      set_surface_side(r, surface_error(r.mesh, 0));
+      surface_measured = true;
+      BeyondSamples where;
+      mesh_to_surface(scene, trace, r.mesh, mesh_reach, bound, &where, &memo);
+      std::vector<std::uint8_t> over_crack(r.mesh.face_count(), 0);
+      tbb::parallel_for(slim_first_face, r.mesh.face_count(), [&](std::size_t f) {
+        if (!(where.faces[f] > bound)) return;
+        const auto t = r.mesh.face(f);
+        const auto& V = r.mesh.vertices;
+        const Eigen::Vector3d samples[4] = {(V[t[0]] + V[t[1]] + V[t[2]]) / 3.0, 0.5 * (V[t[0]] + V[t[1]]),
+                                            0.5 * (V[t[1]] + V[t[2]]), 0.5 * (V[t[2]] + V[t[0]])};
+        for (const Eigen::Vector3d& c : samples)
+          if (std::none_of(model.slims.begin(), model.slims.end(), [&](const SlimPatch& s) {
+                return (c - s.centre).squaredNorm() < s.radius * s.radius && s.clips.keeps((c - s.centre) / s.radius);
+              }))
+            over_crack[f] = 1;
+      });
+      const std::size_t n_crack = static_cast<std::size_t>(std::count(over_crack.begin(), over_crack.end(), 1));
+      if (n_crack > 0) {
+        ToMeshResult next = r;
+        next.mesh = PolygonMesh{};
+        next.mesh.vertices = r.mesh.vertices;
+        next.mesh.colours = r.mesh.colours;
+        for (std::size_t f = 0; f < r.mesh.face_count(); ++f)
+          if (!over_crack[f]) next.mesh.add_face(r.mesh.face(f));
+        next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+        set_surface_side(next, surface_error(next.mesh, 0));
+        next.open_edges = count_open_edges(next.mesh);
+        log::info("mesh: {} faces over cracks of the blend left out; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
+                  n_crack, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
+                  r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+        if (next.within || (total_beyond(next) < total_beyond(r) && next.max_error() <= r.max_error())) r = std::move(next);
+      }
+    }
     // Where the drawn surface's points beyond the bound lie on one patch's zero set, seen alone (a
     // rim running on as a fin past where its neighbours' surface turns, which no closed labelling
     // holds), that patch's surface there is added as an open sheet, in rounds (each round's points
     // beyond the bound may lie on the last one's rims); a round kept only if it leaves fewer
     // samples beyond the bound (both ways) and no larger maximum.
-    for (int round = 0; round < kFinRounds && !model.slims.empty() && !r.within && o.fins; ++round) {
+    for (int round = 0; round < kFinRounds && !model.slims.empty() && !r.within && o.open_parts; ++round) {
       const SurfaceError se = surface_error(r.mesh, kKeepBeyond);
       set_surface_side(r, se);
       surface_measured = true;
@@ -1347,8 +1386,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     // A doubling is not converging where it leaves more than a quarter of the previous share of
     // samples beyond the bound (cracks or gaps of the blend itself, which no resolution closes),
     // or does not halve the larger of the two maxima (parts of the drawn surface that no closed
-    // inside/outside labelling holds, at any resolution: a patch's rim drawn alone, running on as
-    // an open fin past where its neighbours' surface turns): the previous, smaller mesh is kept.
+    // inside/outside labelling holds, at any resolution): the previous, smaller mesh is kept, or,
+    // where only the maximum stays, the one nearer the surface.
     if (have_best) {
       if (!surface_measured) measure_surface_side(r);
       surface_measured = true;
@@ -1356,10 +1395,13 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       const bool share_stays = share_beyond(r.mesh_to_surface) > 0.25 * share_beyond(best.mesh_to_surface);
       const bool max_stays = r.max_error() > 0.5 * best.max_error();
       if (!r.within && (share_stays || max_stays)) {
+        // Where only the maximum stays, the finer mesh is kept if it is nearer (its cost is paid).
+        const bool keep_finer = !share_stays && r.max_error() < best.max_error();
         log::info("mesh: doubling {} not converging (max {:.3g} after {:.3g}, {} of {} samples beyond the bound after {} of {}): "
-                  "the previous mesh kept",
+                  "the {} mesh kept",
                   level, r.max_error(), best.max_error(), r.mesh_to_surface.beyond, r.mesh_to_surface.samples,
-                  best.mesh_to_surface.beyond, best.mesh_to_surface.samples);
+                  best.mesh_to_surface.beyond, best.mesh_to_surface.samples, keep_finer ? "finer" : "previous");
+        if (keep_finer) best = std::move(r);
         break;
       }
     }

@@ -19,13 +19,14 @@
 /// again, one level per round, while that helps (samples unchanged since an earlier round are not
 /// traced again: convert/mesh_measure.h). Where the drawn surface's pixels stay beyond the bound
 /// because grazing views see the per-ray blend off where head-on views do, the vertices there move
-/// part of the way towards them (convert/between_views.h). Where they lie on one patch's zero
-/// set seen alone (its rim running on as a fin, which no closed labelling holds), that patch's
-/// surface there is added as an open sheet. The resolution doubles until both are within the bound, or
+/// part of the way towards them (convert/between_views.h). Faces over cracks of the blend are left
+/// out, and where the drawn surface's points lie on one patch's zero set seen alone (its rim
+/// running on as a fin, which no closed labelling holds), that patch's surface there is added as
+/// an open sheet. The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes) or the larger of the two maxima by half (parts of the
 /// drawn surface no closed labelling holds at any resolution: a patch's rim drawn alone, running
-/// on as a fin); then the smaller mesh is kept.
+/// on as a fin); then the smaller mesh is kept (where only the maximum stayed, the nearer one).
 #include <cstddef>
 #include <functional>
 
@@ -49,11 +50,12 @@ struct ToMeshOptions {
   /// per-ray blend shows them the surface off where a head-on view does (convert/between_views.h);
   /// a round kept only if it leaves fewer samples beyond the bound and no larger maximum; 0: off
   int view_rounds = 3;
-  /// SLIM: where the drawn surface's points beyond the bound lie on one patch's rim drawn alone (a
-  /// fin running on past where its neighbours' surface turns, which no closed labelling holds),
-  /// that patch's surface there is added as an open sheet (kept only if it leaves fewer samples
-  /// beyond the bound and no larger maximum)
-  bool fins = true;
+  /// SLIM: parts of the drawn surface no closed inside/outside labelling holds are made open: the
+  /// faces over cracks of the blend (a sample beyond the bound in no patch's ball) left out, and
+  /// where the drawn surface's points beyond the bound lie on one patch's rim seen alone (a fin
+  /// running on past where its neighbours' surface turns), that patch's surface there added as an
+  /// open sheet; each step kept only if it leaves fewer samples beyond the bound and no larger maximum
+  bool open_parts = true;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)

@@ -331,7 +331,7 @@ TEST(ToMesh, LocalGridRefinementFindsAPartBetweenGridNodes) {
   add_slim_sphere(m, Eigen::Vector3d(1.45, 0.31, -0.17), 0.016, 40);
   const ToMeshResult grid = mesh_model(m, {.max_refinements = 0, .progress = {}});
   // The first grid alone: neither its cells cut finer nor open sheets on what it misses.
-  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .grid_refinements = 0, .fins = false, .progress = {}});
+  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .grid_refinements = 0, .open_parts = false, .progress = {}});
   std::cout << "sphere and a speck, bound " << grid.bound << ": first grid " << first.mesh.face_count()
             << " triangles, max " << first.mesh_to_surface.max << " / " << first.surface_to_mesh.max << ", beyond "
             << first.mesh_to_surface.beyond << " / " << first.surface_to_mesh.beyond << "; grid refined ("
@@ -441,13 +441,13 @@ TEST(ToMesh, DoublingsStopWhereTheyDoNotBringTheMaximumDown) {
 }
 
 // The same kitten's fins (a patch's rim drawn alone, 6 bounds from the closed mesh) get open
-// sheets of their own: the drawn surface comes within 2 bounds of the mesh (6.3 without them),
-// and the mesh's own samples stay where they were.
-TEST(ToMesh, OpenSheetsOnRimsDrawnAlone) {
+// sheets of their own: the drawn surface comes within 2.1 bounds of the mesh (6.3 without them);
+// the faces over its cracks (nothing drawn, 6.6 bounds from the mesh's samples) are left out.
+TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
   const Model* kitten = kitten_points_fit();
   if (!kitten) GTEST_SKIP() << "kitten.xyz not found";
   const ToMeshResult with = mesh_model(*kitten, {.max_refinements = 0, .progress = {}});
-  const ToMeshResult without = mesh_model(*kitten, {.max_refinements = 0, .fins = false, .progress = {}});
+  const ToMeshResult without = mesh_model(*kitten, {.max_refinements = 0, .open_parts = false, .progress = {}});
   std::cout << "kitten: with fin sheets (" << with.fin_rounds << " rounds, " << with.fin_triangles << " triangles) max "
             << with.mesh_to_surface.max << " / " << with.surface_to_mesh.max << ", beyond " << with.mesh_to_surface.beyond
             << " / " << with.surface_to_mesh.beyond << "; without " << without.mesh_to_surface.max << " / "
@@ -455,8 +455,9 @@ TEST(ToMesh, OpenSheetsOnRimsDrawnAlone) {
             << without.surface_to_mesh.beyond << "; bound " << with.bound << "\n";
   if (without.surface_to_mesh.max <= 2 * without.bound) GTEST_SKIP() << "this fit draws no fin beyond 2 bounds";
   EXPECT_GT(with.fin_rounds, 0);
-  EXPECT_LE(with.surface_to_mesh.max, 2 * with.bound);
+  EXPECT_LE(with.surface_to_mesh.max, 2.5 * with.bound);
   EXPECT_LT(with.surface_to_mesh.beyond * 4, without.surface_to_mesh.beyond);
-  EXPECT_LE(with.mesh_to_surface.max, without.mesh_to_surface.max);
-  EXPECT_LE(with.mesh_to_surface.beyond, without.mesh_to_surface.beyond + without.mesh_to_surface.beyond / 50);
+  // Its faces over cracks between balls left out: the mesh's own samples no farther, fewer beyond.
+  EXPECT_LT(with.mesh_to_surface.max, 0.75 * without.mesh_to_surface.max);
+  EXPECT_LT(with.mesh_to_surface.beyond, without.mesh_to_surface.beyond);
 }
