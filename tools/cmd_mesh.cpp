@@ -55,6 +55,8 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"grid_rounds", r.grid_rounds},
                          {"refined_cells", r.refined_cells},
                          {"view_rounds", r.view_rounds},
+                         {"fin_rounds", r.fin_rounds},
+                         {"fin_triangles", r.fin_triangles},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
@@ -110,6 +112,9 @@ void add_mesh(CLI::App& root, Commands& commands) {
                   "kept while it leaves fewer samples beyond and no larger maximum; 0: off")
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
+  app->add_flag("!--no-open-parts", a->options.open_parts,
+                "SLIM: keep the mesh closed: do not leave out faces over cracks of the blend, nor add open sheets "
+                "where a patch's rim is drawn alone (a fin no closed surface holds)");
   app->add_option("--slim-offset", a->options.slim_offset,
                   "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
       ->check(number({.lo = 0.0, .hi = 10.0}))->default_str("");

@@ -35,6 +35,8 @@ TEST_F(CliMesh, EveryFormatReadsBackWithinTheReportedError) {
     EXPECT_TRUE(j["within_bound"].get<bool>());
     EXPECT_LE(j["max_error"].get<double>(), 1e-3);
     EXPECT_EQ(j["open_edges"].get<int>(), 0);
+    EXPECT_EQ(j["fin_rounds"].get<int>(), 0);  // a sphere glyph: nothing open
+    EXPECT_EQ(j["fin_triangles"].get<std::size_t>(), 0u);
     const PolygonMesh m = read_mesh(out);
     if (!triangles) triangles = m.face_count();
     EXPECT_EQ(m.face_count(), triangles) << ext;
