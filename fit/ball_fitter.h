@@ -38,6 +38,8 @@ struct Ball {
   // than local_surface_factor·E past the triangle: its zero set is the data by construction, so
   // neither its lattice nor its rim needs checking on its own.
   bool on_data = false;
+  // A disc patch (SlimFitOptions::cover_point_holes): a point's tangent plane, kept through repair.
+  bool disc = false;
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));

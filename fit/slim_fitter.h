@@ -69,6 +69,18 @@ private:
   std::size_t verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
                              std::vector<std::uint8_t>& at_fault);
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index, const Changed* changed);
+  // Whether chosen patch k holds x: inside its ball and clip planes, its zero set within band.
+  bool holds(std::uint32_t k, const Eigen::Vector3d& x, double band) const;
+  // The triangle pqs against the patches `near`: covered when one holds its three corners (ball,
+  // planes and band are convex), else split in four down to max_depth; a smallest piece no one
+  // patch holds whole gives emit() its centroid or first corner that none holds.
+  template <class Emit>
+  void uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
+                 const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit) const;
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> point_holes(const PointIndex& index, const Changed* changed);
+  std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
+                              std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
+  std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> view_holes(const ReferenceScene& scene, const PointIndex& index,
                                                                     const Changed* changed);
   bool data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
@@ -129,6 +141,7 @@ private:
     std::size_t blend_failures = 0, surface_failures = 0, face_holes = 0, view_holes = 0;
     int round = -1;  // -1: none
     double score = 0;  // failures() of that model
+    std::size_t point_holes = 0;
   };
   double failures() const;
   Verified snapshot(int round, double score) const;
@@ -177,6 +190,11 @@ private:
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
   std::vector<std::vector<std::uint8_t>> view_data_;  // per face: data_seen's answers so far (view_holes)
+  std::vector<std::uint8_t> point_covered_;           // per point: its coverage disc held at the last check (point_holes)
+  std::vector<std::uint8_t> point_tried_;             // per point: a ball was added on its hole once
+  std::vector<std::uint8_t> corner_mask_;             // per point: coverage-disc corners with its sheet beyond (point_holes)
+  bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
+  std::vector<double> disc_cap_;                      // per point: its disc patch's largest radius (repair shrinks it)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
   std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
   std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches

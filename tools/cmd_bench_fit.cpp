@@ -44,6 +44,9 @@ struct Dataset {
   std::optional<PolygonMesh> mesh;
   std::string normals;  // where the normals come from
   double diagonal = 0;
+  // The cloud was drawn from the mesh's faces (--sample): fitted as points only, measured
+  // against the mesh (the truth the points came from), no decimation row.
+  bool sampled = false;
 };
 
 // Area-weighted vertex normals of a mesh, turned outward by the sign of the enclosed volume;
@@ -206,6 +209,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     bool face_prisms = true;
     bool view_holes = true;
     int view_resolution = 512;
+    std::size_t sample = 0;
+    bool fill_point_holes = false;
   };
   auto a = std::make_shared<Args>();
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
@@ -225,8 +230,15 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->capture_default_str();
   app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
   app->add_flag("!--no-view-holes", a->view_holes, "Fit as `fit --no-view-holes` does (for comparison)");
+  app->add_option("--sample", a->sample,
+                  "Fit each mesh model from this many points drawn uniformly over its faces (points only, the "
+                  "faces' normals) and measure the surface side against the mesh they came from; 0: the mesh itself")
+      ->check(number({.lo = 0, .hi = 1e8}))
+      ->capture_default_str();
+  app->add_flag("--fill-point-holes", a->fill_point_holes, "Fit as `fit --fill-point-holes` does");
   app->add_flag("--keep-models", a->keep_models,
-                "Also write each SLIM model (NAME_E.qxm) and decimated mesh (NAME_E_decimated.off) into --out, "
+                "Also write each SLIM model (NAME_E.qxm), decimated mesh (NAME_E_decimated.off) and --sample cloud "
+                "(NAME.xyz) into --out, "
                 "e.g. for bench render --baseline-mesh");
   commands.push_back({app, [a](const CommonOptions& common, Report& report) {
     const fs::path out_dir(a->out);
@@ -234,7 +246,16 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     fs::create_directories(out_dir, ec);
     if (ec) throw IoError(fmt::format("bench fit: cannot create {}: {}", out_dir.string(), ec.message()));
     std::vector<Dataset> data;
-    for (const auto& m : a->models) data.push_back(load_dataset(m, a->datasets));
+    for (const auto& m : a->models) {
+      data.push_back(load_dataset(m, a->datasets));
+      Dataset& d = data.back();
+      if (a->sample > 0 && d.mesh) {
+        d.cloud = sample_faces_uniformly(*d.mesh, a->sample);
+        d.name += fmt::format("_{}pts", a->sample);
+        d.normals = "the faces the points were drawn from";
+        d.sampled = true;
+      }
+    }
 
     nlohmann::json j = {{"threads", std::thread::hardware_concurrency()},
                         {"load_average_start", load_average()},
@@ -254,16 +275,25 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                            {"normals", d.normals},
                            {"diagonal", d.diagonal},
                            {"mesh_triangles", nullptr},
+                           {"sampled_from_faces", d.sampled},
                            {"runs", nlohmann::json::array()}};
       std::optional<Row> poisson;
       // The data's surface for the surface side: the mesh, else the points' tangent discs. With a
-      // mesh, SLIM is fitted to the vertices on its faces, bounded against its triangles.
+      // mesh, SLIM is fitted to the vertices on its faces, bounded against its triangles; with
+      // points drawn from a mesh, SLIM is fitted to the points alone and measured against the mesh
+      // (and against the points' tangent discs, the fit's own promise).
       const DataSurface data =
           d.mesh ? DataSurface::from_mesh(*d.mesh) : DataSurface::from_points(d.cloud.points, d.cloud.normals);
+      std::optional<DataSurface> discs;
+      if (d.sampled) {
+        discs = DataSurface::from_points(d.cloud.points, d.cloud.normals);
+        if (a->keep_models) write_points_xyz(d.cloud, out_dir / fmt::format("{}.xyz", d.name));
+      }
+      const PolygonMesh* fit_mesh = d.mesh && !d.sampled ? &*d.mesh : nullptr;
       Box3 data_box;
       for (const auto& p : d.cloud.points) data_box.extend(p);
-      const PointCloud on_faces = d.mesh ? points_from_mesh(*d.mesh) : PointCloud{};
-      const PointCloud& fit_cloud = d.mesh ? on_faces : d.cloud;
+      const PointCloud on_faces = fit_mesh ? points_from_mesh(*fit_mesh) : PointCloud{};
+      const PointCloud& fit_cloud = fit_mesh ? on_faces : d.cloud;
       if (d.mesh) {
         std::size_t t = 0;
         for (std::size_t f = 0; f < d.mesh->face_count(); ++f) t += d.mesh->face(f).size() - 2;
@@ -289,9 +319,10 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
         SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
         if (!a->view_holes) fo.view_hole_rays = 0;
-        const SlimFitResult fit = d.mesh ? fit_slim(fit_cloud, *d.mesh, fo) : fit_slim(fit_cloud, fo);
+        fo.cover_point_holes = a->fill_point_holes;
+        const SlimFitResult fit = fit_mesh ? fit_slim(fit_cloud, *fit_mesh, fo) : fit_slim(fit_cloud, fo);
         const SlimError se =
-            evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = d.mesh ? &data : nullptr});
+            evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = fit_mesh ? &data : nullptr});
         if (a->keep_models) write_model(fit.model, out_dir / fmt::format("{}_{:g}.qxm", d.name, E));
         const double Eabs = fit.stats.max_error_abs;
         Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
@@ -320,7 +351,14 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"fitted_points", fit_cloud.points.size()},
                                 {"fitter_surface_samples_beyond_2e", fit.stats.surface_failures},
                                 {"surface", surface_json(slim)}}}};
-        if (a->peers && d.mesh) {
+        if (discs) {
+          const SurfaceError e =
+              measure_surface_error(fit.model, *discs, data_box, {.views = 8, .resolution = a->view_resolution, .bound = 2 * Eabs});
+          run["slim"]["surface_vs_tangent_discs"] = {{"max_rel", e.max / d.diagonal},
+                                                     {"p999_rel", e.p999 / d.diagonal},
+                                                     {"share_beyond_2e", e.share_beyond}};
+        }
+        if (a->peers && fit_mesh) {
           log::info("bench fit: {}: OpenMesh decimation to {:g}", d.name, E);
           const peers::Decimation dec = peers::decimate_quadric(*d.mesh, Eabs);
           if (a->keep_models) write_mesh(dec.mesh, out_dir / fmt::format("{}_{:g}_decimated.off", d.name, E));

@@ -60,6 +60,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                   "Rounds of verification and repair of the patches at fault")
       ->check(number({.lo = 0, .hi = 100}))
       ->capture_default_str();
+  app->add_flag("--fill-point-holes", a->options.cover_point_holes,
+                "Point clouds: close the holes between the points that every ball misses (E near or below the points' "
+                "spacing) with the balls at those points, else with disc patches (their neighbours' height quadric)");
   app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)")->check(non_negative());
   app->add_flag("--sharp", a->options.sharp,
                 "Sharp features: a clip plane per patch whose normals split into two clusters");
@@ -146,6 +149,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"view_face_patches", s.view_face_patches},
                                             {"view_balls", s.view_balls},
                                             {"view_holes", s.view_holes},
+                                            {"point_holes", s.point_holes},
+                                            {"point_hole_balls", s.point_hole_balls},
+                                            {"disc_patches", s.disc_patches},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},

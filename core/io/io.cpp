@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <random>
 
 #include <Eigen/Geometry>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
@@ -270,6 +271,41 @@ PointCloud centroids(const PolygonMesh& mesh, double sign, std::vector<std::uint
 
 PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_of) {
   return centroids(mesh, mesh_wound_inward(mesh) ? -1.0 : 1.0, face_of);
+}
+
+PointCloud sample_faces_uniformly(const PolygonMesh& mesh, std::size_t count, std::uint64_t seed) {
+  const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
+  struct Tri {
+    Eigen::Vector3d a, b, c, n;
+  };
+  std::vector<Tri> tris;
+  std::vector<double> area;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+      if (is_sliver(n.norm(), L * L)) continue;
+      tris.push_back({a, b, c, sign * n.normalized()});
+      area.push_back(0.5 * n.norm());
+    }
+  }
+  PointCloud cloud;
+  if (tris.empty()) return cloud;
+  std::mt19937_64 rng(seed);
+  std::discrete_distribution<std::size_t> pick(area.begin(), area.end());
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  cloud.points.reserve(count);
+  cloud.normals.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Tri& t = tris[pick(rng)];
+    double s = u(rng), r = u(rng);
+    if (s + r > 1.0) s = 1.0 - s, r = 1.0 - r;  // the reflected half: uniform over the triangle
+    cloud.points.push_back(t.a + s * (t.b - t.a) + r * (t.c - t.a));
+    cloud.normals.push_back(t.n);
+  }
+  return cloud;
 }
 
 PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vector<std::uint32_t>* face_of,

@@ -99,6 +99,11 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
 PointCloud face_samples(const PolygonMesh& mesh, double large_factor = 2.0, std::vector<std::uint32_t>* face_of = nullptr,
                         double min_spacing = 0.0);
 
+/// count points drawn uniformly by area over the faces (fans of triangles; slivers left out),
+/// each with its face's unit normal oriented as face_centroids orients them: a scan-like cloud of
+/// a mesh whose truth is known (bench fit --sample). Deterministic for a seed.
+PointCloud sample_faces_uniformly(const PolygonMesh& mesh, std::size_t count, std::uint64_t seed = 1);
+
 /// Writes x y z [nx ny nz] lines (temporary file + rename).
 void write_points_xyz(const PointCloud& cloud, const std::filesystem::path& path);
 
