@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/log.h"
+#include "core/morton.h"
 #include "fit/evaluate.h"
 
 // The fitter's checks (fit/slim_fitter.h): the points and the drawn surface against their bounds,
@@ -115,9 +116,10 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
 
 // Holes between the points of a cloud without faces (SlimFitOptions::cover_point_holes): each
 // point's coverage disc, a hexagon in its tangent plane point_hole_factor × its spacing wide,
-// checked as six fan triangles the way face_holes checks a face. A corner towards which none of
-// its 12 nearest points on its sheet (normals within 60°) lies within 60° is pulled back to the
-// point: past an open boundary, or across a crease, the plane leaves the data. At most one spot per point; points held at the last check and
+// checked as six fan triangles the way face_holes checks a face. A corner is pulled back to the
+// point unless one of its 12 nearest points on its sheet (normals within 60°) lies within 60°
+// of its direction and another one's tangent disc holds it within the band: past an open
+// boundary, or across a crease (where an estimated normal tilts), the plane leaves the data. At most one spot per point; points held at the last check and
 // far from every changed ball are held still.
 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(const PointIndex& index, const Changed* changed) {
   const auto& slims = result_.model.slims;
@@ -127,41 +129,56 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
   const double band = 2.0 * opt_.surface_factor * E_;
   const std::size_t n = P_.size();
   if (!changed) point_covered_.assign(n, 0);
-  if (corner_mask_.size() != n) {
-    corner_mask_.assign(n, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-      std::vector<Neighbour> nb;
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
-        index_->nearest(P_[i], 13, nb);
-        for (const auto& [j, d2] : nb) {
-          if (j == i || N_[j].dot(N_[i]) < 0.5) continue;
-          const Eigen::Vector3d w = P_[j] - P_[i];
-          const double a = std::atan2(w.dot(v), w.dot(u));  // its direction in the tangent plane
-          for (int k = 0; k < 6; ++k) {
-            double d = std::abs(a - std::numbers::pi * k / 3.0);
-            d = std::min(d, 2.0 * std::numbers::pi - d);
-            if (d <= std::numbers::pi / 3.0 + 1e-9) corner_mask_[i] |= std::uint8_t(1u << k);
-          }
-        }
+  // Visited in Morton order, each thread asking the patch that last held a disc first: on 1M
+  // points nearly every disc lies whole in that one ball.
+  if (point_order_.size() != n) point_order_ = morton_order(P_);
+  corner_mask_.resize(n, 0);
+  corner_known_.resize(n, 0);
+  // Which corners stay (computed for the points whose full hexagon no one patch holds).
+  const auto mask_of = [&](std::size_t i, double rho, std::vector<Neighbour>& nb) {
+    const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
+    index_->nearest(P_[i], 13, nb);
+    std::uint8_t towards = 0, supported = 0;
+    for (int k = 0; k < 6; ++k) {
+      const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v;
+      const Eigen::Vector3d x = P_[i] + rho * t;
+      for (const auto& [j, d2] : nb) {
+        if (j == i || N_[j].dot(N_[i]) < 0.5) continue;
+        const Eigen::Vector3d w = P_[j] - P_[i];
+        if (w.dot(t) >= 0.5 * (w - w.dot(N_[i]) * N_[i]).norm()) towards |= std::uint8_t(1u << k);
+        // Another point's tangent disc holds the corner (within the band): the plane is the
+        // data there, not a tilted normal's plane across a crease.
+        const Eigen::Vector3d y = x - P_[j];
+        if (std::abs(y.dot(N_[j])) <= band && (y - y.dot(N_[j]) * N_[j]).norm() <= data_->disc_radius(j))
+          supported |= std::uint8_t(1u << k);
       }
-    });
-  }
+    }
+    return std::uint8_t(towards & supported);
+  };
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     auto& out = found.local();
     std::vector<Neighbour> nb;
-    std::vector<std::uint32_t> near;
+    std::vector<std::uint32_t> near, last;
     std::array<Eigen::Vector3d, 6> corner;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    for (std::size_t o = r.begin(); o != r.end(); ++o) {
+      const std::size_t i = point_order_[o];
       const double rho = opt_.point_hole_factor * data_->spacing(i);
       if (!(rho > 0)) continue;
       if (point_covered_[i] && changed && !changed->near_ball(P_[i], rho, nb)) continue;
       const Eigen::Vector3d& p = P_[i];
       const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
-      for (int k = 0; k < 6; ++k) {
-        const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v;
-        corner[k] = corner_mask_[i] >> k & 1u ? Eigen::Vector3d(p + rho * t) : p;
+      for (int k = 0; k < 6; ++k)
+        corner[k] = p + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
+      const auto whole = [&](std::uint32_t k) {
+        if (k >= slims.size() || !holds(k, p, band)) return false;
+        for (const auto& x : corner)
+          if (!holds(k, x, band)) return false;
+        return true;
+      };
+      if (!last.empty() && whole(last[0])) {
+        point_covered_[i] = 1;
+        continue;
       }
       // The patches near the disc, nearest centres first: usually the first holds it whole.
       index.radius(p, max_radius + rho, nb);
@@ -169,6 +186,15 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
       near.clear();
       for (const auto& [k, d2] : nb)
         if (std::sqrt(d2) < slims[k].radius + rho) near.push_back(std::uint32_t(k));
+      const auto it = std::find_if(near.begin(), near.end(), whole);
+      if (it != near.end()) {
+        last.assign(1, *it);
+        point_covered_[i] = 1;
+        continue;
+      }
+      if (!corner_known_[i]) corner_mask_[i] = mask_of(i, rho, nb), corner_known_[i] = 1;
+      for (int k = 0; k < 6; ++k)
+        if (!(corner_mask_[i] >> k & 1u)) corner[k] = p;
       bool spot = false;
       for (int k = 0; k < 6 && !spot; ++k)
         uncovered(p, corner[k], corner[(k + 1) % 6], near, band, 0, opt_.point_hole_depth, [&](const Eigen::Vector3d& x) {

@@ -193,6 +193,8 @@ private:
   std::vector<std::uint8_t> point_covered_;           // per point: its coverage disc held at the last check (point_holes)
   std::vector<std::uint8_t> point_tried_;             // per point: a ball was added on its hole once
   std::vector<std::uint8_t> corner_mask_;             // per point: coverage-disc corners with its sheet beyond (point_holes)
+  std::vector<std::uint8_t> corner_known_;            // per point: corner_mask_ computed
+  std::vector<std::uint32_t> point_order_;            // the points in Morton order (point_holes)
   bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
   std::vector<double> disc_cap_;                      // per point: its disc patch's largest radius (repair shrinks it)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)

@@ -210,7 +210,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     bool view_holes = true;
     int view_resolution = 512;
     std::size_t sample = 0;
-    bool fill_point_holes = false;
+    bool fill_point_holes = true;
   };
   auto a = std::make_shared<Args>();
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
@@ -235,7 +235,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                   "faces' normals) and measure the surface side against the mesh they came from; 0: the mesh itself")
       ->check(number({.lo = 0, .hi = 1e8}))
       ->capture_default_str();
-  app->add_flag("--fill-point-holes", a->fill_point_holes, "Fit as `fit --fill-point-holes` does");
+  app->add_flag("!--no-fill-point-holes", a->fill_point_holes, "Fit as `fit --no-fill-point-holes` does (for comparison)");
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm), decimated mesh (NAME_E_decimated.off) and --sample cloud "
                 "(NAME.xyz) into --out, "

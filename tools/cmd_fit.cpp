@@ -60,9 +60,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                   "Rounds of verification and repair of the patches at fault")
       ->check(number({.lo = 0, .hi = 100}))
       ->capture_default_str();
-  app->add_flag("--fill-point-holes", a->options.cover_point_holes,
-                "Point clouds: close the holes between the points that every ball misses (E near or below the points' "
-                "spacing) with the balls at those points, else with disc patches (their neighbours' height quadric)");
+  app->add_flag("!--no-fill-point-holes", a->options.cover_point_holes,
+                "Point clouds: leave the holes between the points that every ball misses (E below the points' spacing) "
+                "open instead of closing them with the balls at those points or disc patches (their tangent planes)");
   app->add_option("--seed", a->options.seed, "Random seed (candidates, hold-out split)")->check(non_negative());
   app->add_flag("--sharp", a->options.sharp,
                 "Sharp features: a clip plane per patch whose normals split into two clusters");

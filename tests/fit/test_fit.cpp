@@ -245,8 +245,11 @@ TEST(FitSlim, SharpCreasesOfFandisk) {
     rms = std::sqrt(rms / double(f.crease.size()));
     return e;
   };
-  const auto smooth = fit_slim(f.cloud, {.max_error = 1e-3});
-  const auto sharp = fit_slim(f.cloud, {.max_error = 1e-3, .sharp = true});
+  // Without the point-hole fill: this is about clip planes. (Fandisk's vertices leave its large
+  // flat faces' interiors between the balls; the fill, on by default, closes those in both fits
+  // alike: 1,474 and 1,226 patches, 0.83×.)
+  const auto smooth = fit_slim(f.cloud, {.max_error = 1e-3, .cover_point_holes = false});
+  const auto sharp = fit_slim(f.cloud, {.max_error = 1e-3, .cover_point_holes = false, .sharp = true});
   double smax, srms, cmax, crms;
   const SlimError es = crease_error(smooth, smax, srms);
   const SlimError ec = crease_error(sharp, cmax, crms);
