@@ -1,9 +1,13 @@
 // quadrix info FILE: counts per kind, bounding box, metadata, validation result; for a volume its
 // statistics (tools/info_volume.h), for a mesh or point cloud its counts and bounds.
 #include <iostream>
+#include <map>
+#include <set>
+#include <tuple>
 
 #include <fmt/format.h>
 
+#include "convert/molecule.h"
 #include "core/mesh_io.h"
 #include "core/model_io.h"
 #include "tools/cli.h"
@@ -72,18 +76,65 @@ ExitCode info_points(const std::string& file, const PointCloud& cloud, bool json
   return kOk;
 }
 
+// A molecule (PDB, mmCIF): atoms, chains, residues, elements, bonds, bounding box in Å.
+ExitCode info_molecule(const std::string& file, bool json, Report& report) {
+  const Molecule mol = read_molecule(file);
+  const std::vector<Bond> bonds = molecule_bonds(mol);
+  std::set<std::string> chains;
+  std::set<std::tuple<std::string, int, std::string>> residues;
+  std::map<std::string, std::size_t> elements;
+  Box3 box;
+  for (const Atom& a : mol.atoms) {
+    chains.insert(a.chain);
+    residues.insert({a.chain, a.residue_number, a.residue});
+    ++elements[a.element];
+    box.extend(a.position);
+  }
+  nlohmann::json j = {{"file", file},
+                      {"valid", true},
+                      {"kind", "molecule"},
+                      {"name", mol.name},
+                      {"atoms", mol.atoms.size()},
+                      {"chains", chains.size()},
+                      {"residues", residues.size()},
+                      {"elements", elements},
+                      {"bonds", bonds.size()},
+                      {"file_bonds", mol.file_bonds.size()},
+                      {"alternates_left_out", mol.alternates_left_out},
+                      {"bbox", box_json(box)}};
+  report.json["info"] = j;
+  if (json) {
+    std::cout << j.dump(2) << "\n";
+    return kOk;
+  }
+  std::cout << fmt::format("{}: molecule {} (render and view draw it as glyphs; convert glyphs or skin make a model)\n",
+                           file, mol.name);
+  std::cout << fmt::format("  atoms              {}{}\n", mol.atoms.size(),
+                           mol.alternates_left_out ? fmt::format(" ({} alternate locations left out)", mol.alternates_left_out) : "");
+  std::cout << fmt::format("  chains             {}\n", chains.size());
+  std::cout << fmt::format("  residues           {}\n", residues.size());
+  std::string list;
+  for (const auto& [e, n] : elements) list += fmt::format("{}{} {}", list.empty() ? "" : ", ", e, n);
+  std::cout << fmt::format("  elements           {}\n", list);
+  std::cout << fmt::format("  bonds              {} ({} stated by the file)\n", bonds.size(), mol.file_bonds.size());
+  std::cout << box_line(box);
+  return kOk;
+}
+
 }  // namespace
 
 void add_info(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("info", "Validate a .qxm/.slim2t model and print what it holds; for a volume, its "
-                                          "values and suggested iso-values; for a mesh or point cloud, its counts and bounds");
+                                          "values and suggested iso-values; for a mesh, point cloud or molecule, its counts "
+                                          "and bounds");
   auto file = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   auto raw = std::make_shared<RawVolumeArgs>();
   app->add_option("MODEL", *file, "Model file (.qxm or .slim2t), or a volume (.nhdr/.nrrd, .inr[.gz], raw with --dims "
                                   "and --type): range, percentiles, histogram, suggested iso-values; or a mesh "
-                                  "(.ply/.obj/.off/.stl: vertices, faces, bounds) or point cloud (.xyz/.pts, a .ply "
-                                  "without faces)")->required();
+                                  "(.ply/.obj/.off/.stl: vertices, faces, bounds), point cloud (.xyz/.pts, a .ply "
+                                  "without faces) or molecule (.pdb/.ent/.cif/.mmcif, optionally .gz: atoms, chains, "
+                                  "residues, elements, bonds)")->required();
   app->add_flag("--json", *json, "Print the summary as JSON on stdout");
   app->add_option("--dims", raw->dims, "Raw volume: samples per axis X,Y,Z (x fastest)");
   app->add_option("--type", raw->type, "Raw volume: uint8|int8|uint16|int16|uint32|int32|float|double");
@@ -95,6 +146,7 @@ void add_info(CLI::App& root, Commands& commands) {
                         Model m;
                         try {
                           // A mesh or a point cloud: what it is, rather than what a model reader finds wrong with it.
+                          if (is_molecule_file(*file)) return info_molecule(*file, *json, report);
                           if (detect_file_kind(*file) == FileKind::mesh) return info_mesh(*file, read_mesh(*file), *json, report);
                           if (is_point_cloud_file(*file)) return info_points(*file, read_points(*file), *json, report);
                           m = read_model(*file);  // validates; throws FormatError

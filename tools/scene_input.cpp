@@ -1,7 +1,5 @@
 #include "tools/scene_input.h"
 
-#include <cctype>
-#include <filesystem>
 #include <utility>
 
 #include <fmt/format.h>
@@ -43,12 +41,7 @@ nlohmann::json molecule_json(const Model& glyphs) {
   return j;
 }
 
-bool is_point_cloud_file(const std::string& file) {
-  std::string ext = std::filesystem::path(file).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  const bool point_format = ext == ".ply" || ext == ".xyz" || ext == ".txt" || ext == ".pts";
-  return point_format && detect_file_kind(file) == FileKind::points;
-}
+bool is_point_cloud_file(const std::string& file) { return known_file_kind(file) == FileKind::points; }
 
 Scene read_scene(const SceneFiles& files) {
   const bool is_molecule = !files.model.empty() && is_molecule_file(files.model);

@@ -48,9 +48,9 @@ bool is_atom_colouring(std::string_view colour_by);
 /// A molecule scene's report entry: style, colour_by, atoms and bonds, from the glyphs' metadata.
 nlohmann::json molecule_json(const Model& glyphs);
 
-/// True for a file read as points: a point-cloud format by extension (.xyz .txt .pts, or a PLY
-/// without faces). A file of another extension is not taken for points (detect_file_kind falls
-/// back to XYZ for unknown names), so its reader names what is wrong with it instead.
+/// True for a file read as points: a point-cloud format (.xyz .txt .pts, or a PLY without faces;
+/// core/io/io.h known_file_kind). A file no format claims is not taken for points, so the model
+/// reader names what is wrong with it instead.
 /// \throws IoError when it cannot be read.
 bool is_point_cloud_file(const std::string& file);
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -23,8 +24,9 @@ namespace fs = std::filesystem;
 
 enum class Format { ply, off, obj, stl, xyz, pts, qxm, slim2t };
 
-/// The file's format by extension; by its first bytes for an unknown one.
-Format format_of(const fs::path& path) {
+/// The file's format by extension; by its first bytes for an unknown one; nothing when neither
+/// tells (format_of reads such a file as XYZ).
+std::optional<Format> known_format(const fs::path& path) {
   io::read_file_prefix(path, 0);  // a missing file or a folder: IoError naming it, before anything else
   const std::string ext = io::lower_extension(path);
   if (ext == ".ply") return Format::ply;
@@ -52,8 +54,10 @@ Format format_of(const fs::path& path) {
     std::memcpy(&d, head.data(), 4);
     if (d == 1 || d == 2 || d == -1 || d == -2) return Format::slim2t;
   }
-  return Format::xyz;
+  return std::nullopt;
 }
+
+Format format_of(const fs::path& path) { return known_format(path).value_or(Format::xyz); }
 
 /// Silences OpenMesh's omerr/omlog (they write to stderr/stdout on their own) for one scope.
 /// The streams are process-wide, so concurrent OpenMesh use elsewhere is muted meanwhile.
@@ -112,8 +116,12 @@ io::Surface read_surface(const fs::path& path, Format format) {
 
 }  // namespace
 
-FileKind detect_file_kind(const fs::path& path) {
-  switch (format_of(path)) {
+FileKind detect_file_kind(const fs::path& path) { return known_file_kind(path).value_or(FileKind::points); }
+
+std::optional<FileKind> known_file_kind(const fs::path& path) {
+  const std::optional<Format> format = known_format(path);
+  if (!format) return std::nullopt;
+  switch (*format) {
     case Format::qxm:
     case Format::slim2t: return FileKind::model;
     case Format::off:

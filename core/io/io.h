@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -30,9 +31,14 @@ namespace quadrix {
 
 enum class FileKind { model, mesh, points };
 
-/// What a file holds, by extension and content (reads at most its first 64 KiB).
+/// What a file holds, by extension and content (reads at most its first 64 KiB): known_file_kind,
+/// else points (an unknown name with no recognised content is read as XYZ).
 /// \throws IoError when it is missing, a folder or unreadable.
 FileKind detect_file_kind(const std::filesystem::path& path);
+/// The same, but nothing for a file whose extension is none of the formats' (.ply .off .obj .stl
+/// .xyz .txt .pts .qxm .slim2t) and whose content none of them claims: the caller decides (a
+/// command that takes several kinds lets the model reader name what is wrong with it).
+std::optional<FileKind> known_file_kind(const std::filesystem::path& path);
 
 /// Reads a mesh (PLY, OFF, OBJ, STL). Faces are kept as in the file (no triangulation); faces
 /// that a halfedge mesh would refuse (complex edge/vertex, repeated vertex) are kept and counted

@@ -252,6 +252,13 @@ TEST(IoKit, PlyKindsByContent) {
   write_bytes(dir / "p.ply", test::encode_ply(d, "ascii"));
   EXPECT_EQ(detect_file_kind(dir / "p.ply"), FileKind::points);
   EXPECT_EQ(read_points(dir / "p.ply").points.size(), 1u);
+  // Named for no format: known by content (a PLY header), else unknown (read as XYZ).
+  std::filesystem::copy_file(dir / "p.ply", dir / "p.scan");
+  EXPECT_EQ(known_file_kind(dir / "p.scan"), FileKind::points);
+  write_bytes(dir / "notes.md", "0 0 0\n");
+  EXPECT_EQ(known_file_kind(dir / "notes.md"), std::nullopt);
+  EXPECT_EQ(detect_file_kind(dir / "notes.md"), FileKind::points);
+  EXPECT_EQ(known_file_kind(dir / "m.ply"), FileKind::model);
 }
 
 }  // namespace

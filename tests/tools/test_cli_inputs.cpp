@@ -1,5 +1,5 @@
 // What `render` and `view` open as MODEL (one loader, tools/scene_input.h: models, molecules,
-// meshes), what `info` says a mesh or a point cloud is, and the molecule options --style and
+// meshes), what `info` says a mesh, a point cloud or a molecule is, and the molecule options --style and
 // --colour-by element|chain|residue of both commands.
 #include <gtest/gtest.h>
 
@@ -91,6 +91,25 @@ TEST_F(CliInputs, InfoSaysWhatAMeshOrAPointCloudIs) {
   r = quadrix_run("info " + q(write("x.qxm", "not a model\n")));
   EXPECT_EQ(r.code, 3) << r.out;
   EXPECT_NE(r.out.find("x.qxm"), std::string::npos) << r.out;
+}
+
+// A molecule: atoms, chains, residues, elements and bonds (computed from covalent radii), in
+// text and JSON; it used to get the model reader's "bad magic".
+TEST_F(CliInputs, InfoSaysWhatAMoleculeHolds) {
+  const auto pdb = write("two.pdb", kTwoChains);
+  CmdResult r = quadrix_run("info " + q(pdb));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("molecule"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("elements           C 2, N 2, O 2"), std::string::npos) << r.out;
+  r = quadrix_run("info --json " + q(pdb));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["kind"], "molecule");
+  EXPECT_EQ(j["atoms"], 6);
+  EXPECT_EQ(j["chains"], 2);
+  EXPECT_EQ(j["residues"], 2);
+  EXPECT_EQ(j["bonds"], 4);  // N–CA and CA–O in each residue; the chains lie 4 Å apart
+  EXPECT_EQ(j["bbox"]["max"][2], 4.0);
 }
 
 // view reads MODEL through the loader render uses: every mesh format, a molecule with its
