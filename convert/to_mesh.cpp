@@ -1413,6 +1413,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (best.within || last) break;
   }
   if (o.progress) o.progress(1.0);
+  // Faces left out over cracks leave their vertices behind.
+  if (const std::size_t unused = best.mesh.remove_unused_vertices(); unused > 0)
+    log::debug("mesh: {} vertices no face uses dropped", unused);
   return best;
 }
 

@@ -27,6 +27,24 @@ struct PolygonMesh {
     indices.insert(indices.end(), vs.begin(), vs.end());
     offsets.push_back(static_cast<int>(indices.size()));
   }
+  /// Drops the vertices no face uses (and their colours), renumbering the faces; returns how many.
+  std::size_t remove_unused_vertices() {
+    std::vector<int> id(vertices.size(), -1);
+    for (const int v : indices) id[static_cast<std::size_t>(v)] = 0;
+    std::size_t n = 0;
+    for (std::size_t v = 0; v < vertices.size(); ++v)
+      if (id[v] == 0) {
+        id[v] = static_cast<int>(n);
+        vertices[n] = vertices[v];
+        if (!colours.empty()) colours[n] = colours[v];
+        ++n;
+      }
+    const std::size_t removed = vertices.size() - n;
+    vertices.resize(n);
+    if (!colours.empty()) colours.resize(n);
+    for (int& v : indices) v = id[static_cast<std::size_t>(v)];
+    return removed;
+  }
 };
 
 }  // namespace quadrix

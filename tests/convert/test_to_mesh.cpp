@@ -460,4 +460,8 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
   // Its faces over cracks between balls left out: the mesh's own samples no farther, fewer beyond.
   EXPECT_LT(with.mesh_to_surface.max, 0.75 * without.mesh_to_surface.max);
   EXPECT_LT(with.mesh_to_surface.beyond, without.mesh_to_surface.beyond);
+  // The vertices of the faces left out went with them.
+  std::vector<char> used(with.mesh.vertices.size(), 0);
+  for (const int v : with.mesh.indices) used[static_cast<std::size_t>(v)] = 1;
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
 }
