@@ -27,8 +27,8 @@ std::vector<double> probe_heights(std::span<const Eigen::Vector3d> points, std::
       double from = 1e-3 * h;
       for (int k = 0; k < 8 && from < 2.0 * h; ++k) {
         bool front = false;
-        const auto t = surface->intersect(Ray{points[i], n}, from, &front);
-        if (!t || *t >= 2.0 * h) break;
+        const auto t = surface->intersect(Ray{points[i], n}, from, &front, 2.0 * h);  // farther: h stays
+        if (!t) break;
         if (front) {
           out[i] = std::min(h, 0.5 * *t);
           break;

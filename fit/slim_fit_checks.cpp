@@ -289,18 +289,24 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
 // planes). The lattice check above is view-independent and cannot see these (buddha at 1e-2:
 // hole pixels inside balls whose zero sets pass 0.002–0.15E from the data). Each fan triangle's
 // centroid is seen along its normal and along two cones of view_hole_rays directions about it,
-// from L before it (L the surface band at the widest angle) on (data_seen, then the blend). Faces covered at the last check and far from every changed ball are
+// from L before it (L the surface band at the widest angle) on (data_front, the blend, data_around). Faces covered at the last check and far from every changed ball are
 // skipped; faces that hold a face patch already are not checked (their prism holds the spot).
 // Whether the view along d sees the data at x (the first data hit from L before it is x, from
 // its front) and the data covers the view's neighbourhood (rays surface_factor·E to each side
 // meet it from the front too, so x is not on the data's silhouette): where the model then shows
 // nothing anywhere on that ray, it is a hole as bench fit counts them (fit/surface_error.h).
 // Data only: the same answer every round.
-bool SlimFitter::data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const {
-  const Eigen::Vector3d o = x - L * d;
+// Asked in two steps (data_front, then data_around), so that the blend is traced between them:
+// where the model shows something on the ray, the six side rays are not needed (armadillo at
+// 1e-3: mesh ray casts were 19 % of the fit).
+bool SlimFitter::data_front(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const {
   bool front = false;
-  const auto t = data_->intersect(Ray{o, d}, 0.0, &front, L + 1e-3 * E_);  // farther fails anyway
-  if (!t || !front || std::abs(*t - L) > 1e-3 * E_) return false;
+  const auto t = data_->intersect(Ray{x - L * d, d}, 0.0, &front, L + 1e-3 * E_);  // farther fails anyway
+  return t && front && std::abs(*t - L) <= 1e-3 * E_;
+}
+
+bool SlimFitter::data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const {
+  const Eigen::Vector3d o = x - L * d;
   const Eigen::Vector3d u = d.unitOrthogonal(), v = d.cross(u);
   const double r = opt_.surface_factor * E_;
   static const std::array<Eigen::Vector2d, 6> kAround = [] {
@@ -386,8 +392,8 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
       if (view_clear_[f] && changed && !changed->near_ball(o, faces_->reach[f] + 2.0 * opt_.surface_factor * E_, nb)) continue;
       const auto vs = m.face(f);
       bool clear = true;
-      // data_seen's answers for this face's rays (fan triangle, spot, direction): 0 not asked
-      // yet, 1 seen away from a silhouette, 2 not.
+      // The data's answers for this face's rays (fan triangle, spot, direction): 0 not asked
+      // yet, 1 seen away from a silhouette, 2 not, 3 seen (data_front), the side rays not asked.
       std::vector<std::uint8_t>& seen = view_data_[f];
       const std::size_t spots = std::size_t(1) << (2 * opt_.view_hole_depth);
       seen.resize((std::max<std::size_t>(vs.size(), 2) - 2) * spots * cone.size(), 0);
@@ -438,9 +444,13 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
           for (std::size_t j = 0; j < cone.size(); ++j) {
             const Eigen::Vector3d d = -(cone[j][0] * n + cone[j][1] * t1 + cone[j][2] * t2).normalized();
             if (local_hit(Ray{x - L * d, d})) continue;
-            if (asked[j] == 0) asked[j] = data_seen(x, d, L) ? 1 : 2;
-            // Last, as the dearest: the whole ray through the blend.
-            if (asked[j] == 1 && !scene.trace(Ray{x - L * d, d}, 0.0, kInf, trace)) {
+            if (asked[j] == 0) asked[j] = data_front(x, d, L) ? 3 : 2;
+            if (asked[j] == 2) continue;
+            // The whole ray through the blend: where it shows something, no hole whatever the
+            // side rays would say.
+            if (scene.trace(Ray{x - L * d, d}, 0.0, kInf, trace)) continue;
+            if (asked[j] == 3) asked[j] = data_around(x, d, L) ? 1 : 2;
+            if (asked[j] == 1) {
               out.push_back({std::uint32_t(f), x});
               clear = false;
               return;

@@ -83,7 +83,9 @@ private:
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> view_holes(const ReferenceScene& scene, const PointIndex& index,
                                                                     const Changed* changed);
-  bool data_seen(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
+  // Whether the view along d sees the data at x away from its silhouette: the main ray, then the six beside it.
+  bool data_front(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
+  bool data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
   void balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
   std::size_t add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
@@ -189,7 +191,7 @@ private:
   std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
-  std::vector<std::vector<std::uint8_t>> view_data_;  // per face: data_seen's answers so far (view_holes)
+  std::vector<std::vector<std::uint8_t>> view_data_;  // per face: data_front/data_around's answers so far (view_holes)
   std::vector<std::uint8_t> point_covered_;           // per point: its coverage disc held at the last check (point_holes)
   std::vector<std::uint8_t> point_tried_;             // per point: a ball was added on its hole once
   std::vector<std::uint8_t> corner_mask_;             // per point: coverage-disc corners with its sheet beyond (point_holes)
