@@ -630,6 +630,8 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
   patch_excess_.resize(balls_.size(), -1.0);
   patch_errors_.resize(balls_.size());
   patch_reach_.resize(balls_.size(), kInf);
+  rim_off_.resize(balls_.size());
+  rim_known_.resize(balls_.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slims.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<SlimSurfaceSample> zero, rim;
     std::vector<SlimSample> blended;
@@ -661,10 +663,18 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       sample_slim_patch(slims[k], opt_.verify_surface_grid, zero);
       // The rim every E/2: its points off the data are seen through the blend too (elsewhere
       // other patches hide it, or the lattice samples above vouch for the blend).
-      rim.clear();
-      if (!ball.on_data) sample_slim_rim(slims[k], 0.5 * E_, rim);
-      for (const auto& z : rim)
-        if (!(data_->distance(z.point, bound, bound) <= bound)) zero.push_back(z);
+      // Which of them lie off the data does not change between rounds either: found once per
+      // candidate ball.
+      if (!rim_known_[chosen_[k]]) {
+        rim.clear();
+        if (!ball.on_data) sample_slim_rim(slims[k], 0.5 * E_, rim);
+        auto& off = rim_off_[chosen_[k]];
+        off.clear();
+        for (const auto& z : rim)
+          if (!(data_->distance(z.point, bound, bound) <= bound)) off.push_back(z);
+        rim_known_[chosen_[k]] = 1;
+      }
+      zero.insert(zero.end(), rim_off_[chosen_[k]].begin(), rim_off_[chosen_[k]].end());
       for (const auto& z : zero) {
         const auto hit = scene.trace(Ray{z.point + h * z.normal, -z.normal}, 0.0, kInf, trace, &blended);
         if (!hit) continue;

@@ -182,6 +182,8 @@ private:
   std::vector<double> patch_excess_;                 // per candidate: zero_set_excess, −1 unknown
   std::vector<std::vector<double>> patch_errors_;    // per candidate: its last surface samples' distances
   std::vector<double> patch_reach_;                  // per candidate: how far its probes' blends looked
+  std::vector<std::vector<SlimSurfaceSample>> rim_off_;  // per candidate: its rim samples off the data (verify_surface)
+  std::vector<std::uint8_t> rim_known_;               // per candidate: rim_off_ found
   std::vector<double> point_reach_;                  // per point: how far its probe's blend looked
   std::vector<std::uint8_t> other_direction_;         // per point: measured along its neighbourhood's normal
   std::vector<double> probe_height_;                  // per point (fit/evaluate.h probe_heights)
