@@ -350,6 +350,9 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                                   "(fit/evaluate.h)"},
                                 {"fitted_points", fit_cloud.points.size()},
                                 {"fitter_surface_samples_beyond_2e", fit.stats.surface_failures},
+                                {"point_holes", fit.stats.point_holes},
+                                {"point_hole_balls", fit.stats.point_hole_balls},
+                                {"disc_patches", fit.stats.disc_patches},
                                 {"surface", surface_json(slim)}}}};
         if (discs) {
           const SurfaceError e =
