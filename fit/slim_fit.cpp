@@ -211,6 +211,27 @@ void SlimFitter::cover_of(std::size_t b, std::vector<Neighbour>& nb) {
     if (ball.owns((P_[p] - c) / ball.R, N_[p])) cov.push_back(p);
 }
 
+void SlimFitter::grow_candidate_arrays() {
+  const std::size_t n = balls_.size();
+  covers_.resize(n);
+  chosen_flag_.resize(n, 0);
+  pinned_.resize(n, 0);
+  // Not verified yet: the next round traces them whole.
+  patch_excess_.resize(n, -1.0);
+  patch_errors_.resize(n);
+  patch_reach_.resize(n, kInf);
+}
+
+std::vector<std::uint32_t> SlimFitter::new_candidates(const std::vector<std::uint32_t>& centres, const std::vector<double>& caps) {
+  const std::size_t first = balls_.size();
+  evaluate(centres, &caps);
+  std::vector<std::uint32_t> fresh(balls_.size() - first);
+  std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
+  settle(fresh);
+  grow_candidate_arrays();
+  return fresh;
+}
+
 // The surface side of candidates (BallFitter::settle), in parallel; their covers follow.
 void SlimFitter::settle(const std::vector<std::uint32_t>& ids) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ids.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -665,18 +686,12 @@ void SlimFitter::repair(const std::vector<std::uint8_t>& at_fault) {
         Ball s = balls_[b];
         s.R *= f;
         balls_.push_back(std::move(s));
-        const std::size_t n = balls_.size();
         std::vector<std::uint32_t> cov = covers_[b];
-        covers_.resize(n);
+        grow_candidate_arrays();
         covers_.back() = std::move(cov);
-        chosen_flag_.resize(n, 0);
         chosen_flag_.back() = 1;
-        pinned_.resize(n, 0);
         pinned_.back() = 1;
-        patch_excess_.resize(n, -1.0);
-        patch_errors_.resize(n);
-        patch_reach_.resize(n, kInf);
-        keep.push_back(std::uint32_t(n - 1));
+        keep.push_back(std::uint32_t(balls_.size() - 1));
       }
       continue;
     }
@@ -714,13 +729,8 @@ void SlimFitter::repair(const std::vector<std::uint8_t>& at_fault) {
   const std::size_t first = balls_.size();
   // Centred on the point itself: a face patch would centre on its face's centroid instead.
   const FaceSet* faces = std::exchange(fitter_->faces, nullptr);
-  evaluate(stubborn, &stubborn_caps);
+  new_candidates(stubborn, stubborn_caps);
   fitter_->faces = faces;
-  std::vector<std::uint32_t> fresh(balls_.size() - first);
-  std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
-  settle(fresh);
-  chosen_flag_.resize(balls_.size(), 0);
-  pinned_.resize(balls_.size(), 0);
   for (std::size_t b = first; b < balls_.size(); ++b) {
     cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
     pinned_[b] = 1;

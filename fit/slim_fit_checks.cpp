@@ -219,33 +219,19 @@ std::size_t SlimFitter::add_point_balls(const std::vector<std::pair<std::uint32_
   std::vector<std::uint32_t> centres;
   std::vector<double> caps;
   for (const auto& [i, x] : spots) centres.push_back(i), caps.push_back(cap_[i]);
-  const std::size_t first = balls_.size();
-  evaluate(centres, &caps);
-  std::vector<std::uint32_t> fresh(balls_.size() - first);
-  std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
-  settle(fresh);
-  chosen_flag_.resize(balls_.size(), 0);
-  pinned_.resize(balls_.size(), 0);
-  patch_excess_.resize(balls_.size(), -1.0);
-  patch_errors_.resize(balls_.size());
-  patch_reach_.resize(balls_.size(), kInf);
+  const std::vector<std::uint32_t> fresh = new_candidates(centres, caps);
   std::vector<std::size_t> order(fresh.size());
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::sort(order.begin(), order.end(), [&](auto a, auto b) { return balls_[fresh[a]].R > balls_[fresh[b]].R; });
   std::vector<std::uint32_t> taken;
   for (const auto k : order) {
     const std::uint32_t b = fresh[k];
-    const Eigen::Vector3d& c = P_[balls_[b].centre];
-    if (std::any_of(taken.begin(), taken.end(), [&](auto t) { return (P_[balls_[t].centre] - c).norm() < 0.5 * balls_[t].R; }))
-      continue;
-    if (!balls_[b].is_bounded || !((spots[k].second - c).norm() < 0.9 * balls_[b].R)) {
+    if (near_taken(b, taken)) continue;
+    if (!balls_[b].is_bounded || !((spots[k].second - P_[balls_[b].centre]).norm() < 0.9 * balls_[b].R)) {
       far.push_back(spots[k]);
       continue;
     }
-    cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
-    pinned_[b] = 1;
-    take(b);
-    taken.push_back(b);
+    take_pinned(b, taken);
   }
   return taken.size();
 }
@@ -268,14 +254,9 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
     // Not on_data: the data's distance asks the nearest points' discs only, and a plane a
     // spacing wide leaves a curved tip (the bunny's ears from 5,000 points: 20E off).
     balls_.push_back(std::move(b));
-    covers_.push_back({i});
+    grow_candidate_arrays();
+    covers_.back() = {i};
   }
-  covers_.resize(balls_.size());
-  chosen_flag_.resize(balls_.size(), 0);
-  pinned_.resize(balls_.size(), 0);
-  patch_excess_.resize(balls_.size(), -1.0);
-  patch_errors_.resize(balls_.size());
-  patch_reach_.resize(balls_.size(), kInf);
   for (std::size_t b = first; b < balls_.size(); ++b) {
     pinned_[b] = 1;
     take(std::uint32_t(b));
@@ -468,6 +449,18 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
   return all;
 }
 
+bool SlimFitter::near_taken(std::uint32_t b, const std::vector<std::uint32_t>& taken) const {
+  const Eigen::Vector3d& c = P_[balls_[b].centre];
+  return std::any_of(taken.begin(), taken.end(), [&](auto t) { return (P_[balls_[t].centre] - c).norm() < 0.5 * balls_[t].R; });
+}
+
+void SlimFitter::take_pinned(std::uint32_t b, std::vector<std::uint32_t>& taken) {
+  cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
+  pinned_[b] = 1;
+  take(b);
+  taken.push_back(b);
+}
+
 // A face patch (BallFitter::face_patch) for each face that holds a spot, kept through pruning.
 std::size_t SlimFitter::add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
   const std::size_t first = balls_.size();
@@ -479,13 +472,7 @@ std::size_t SlimFitter::add_face_patches(const std::vector<std::pair<std::uint32
       face_patched_[spots[k].first] = 1;
     }
   }
-  covers_.resize(balls_.size());
-  chosen_flag_.resize(balls_.size(), 0);
-  pinned_.resize(balls_.size(), 0);
-  // Not verified yet: the next round traces them whole.
-  patch_excess_.resize(balls_.size(), -1.0);
-  patch_errors_.resize(balls_.size());
-  patch_reach_.resize(balls_.size(), kInf);
+  grow_candidate_arrays();
   std::vector<Neighbour> nb;
   for (std::size_t b = first; b < balls_.size(); ++b) {
     cover_of(b, nb);
@@ -512,15 +499,7 @@ std::size_t SlimFitter::add_view_balls(const std::vector<std::pair<std::uint32_t
     caps.push_back(cap_[c]);
   }
   const std::size_t first = balls_.size();
-  evaluate(centres, &caps);
-  std::vector<std::uint32_t> fresh(balls_.size() - first);
-  std::iota(fresh.begin(), fresh.end(), std::uint32_t(first));
-  settle(fresh);
-  chosen_flag_.resize(balls_.size(), 0);
-  pinned_.resize(balls_.size(), 0);
-  patch_excess_.resize(balls_.size(), -1.0);
-  patch_errors_.resize(balls_.size());
-  patch_reach_.resize(balls_.size(), kInf);
+  std::vector<std::uint32_t> fresh = new_candidates(centres, caps);
   std::sort(fresh.begin(), fresh.end(), [&](auto a, auto b) { return balls_[a].R > balls_[b].R; });
   std::vector<std::uint32_t> taken;
   for (const auto b : fresh) {
@@ -530,12 +509,7 @@ std::size_t SlimFitter::add_view_balls(const std::vector<std::pair<std::uint32_t
       small.push_back({f, c});
       continue;
     }
-    if (std::any_of(taken.begin(), taken.end(), [&](auto t) { return (P_[balls_[t].centre] - c).norm() < 0.5 * balls_[t].R; }))
-      continue;
-    cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], balls_[b].R);
-    pinned_[b] = 1;
-    take(b);
-    taken.push_back(b);
+    if (!near_taken(b, taken)) take_pinned(b, taken);
   }
   return taken.size();
 }

@@ -48,6 +48,10 @@ private:
   void evaluate(const std::vector<std::uint32_t>& centres, const std::vector<double>* caps);
   void cover_of(std::size_t b, std::vector<Neighbour>& nb);
   void settle(const std::vector<std::uint32_t>& ids);
+  // The per-candidate arrays grown to every ball (new ones: not chosen, not pinned, unverified).
+  void grow_candidate_arrays();
+  // Candidates evaluated at these centres (radius capped) and settled; their ids.
+  std::vector<std::uint32_t> new_candidates(const std::vector<std::uint32_t>& centres, const std::vector<double>& caps);
   void initial_candidates();
   // Covering and pruning (slim_fit.cpp).
   std::size_t gain(std::uint32_t b) const;
@@ -81,6 +85,10 @@ private:
   std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
                               std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
+  // Whether candidate b's centre lies within half the radius of a ball taken in this fill; b taken
+  // (its centre's cap lowered to it, kept through pruning) and added to them.
+  bool near_taken(std::uint32_t b, const std::vector<std::uint32_t>& taken) const;
+  void take_pinned(std::uint32_t b, std::vector<std::uint32_t>& taken);
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> view_holes(const ReferenceScene& scene, const PointIndex& index,
                                                                     const Changed* changed);
   // Whether the view along d sees the data at x away from its silhouette: the main ray, then the six beside it.

@@ -281,6 +281,21 @@ PointCloud face_centroids(const PolygonMesh& mesh, std::vector<std::uint32_t>* f
   return centroids(mesh, mesh_wound_inward(mesh) ? -1.0 : 1.0, face_of);
 }
 
+// Calls visit(f, a, b, c, n, longest edge) for each fan triangle of each face that is not a
+// sliver (n: the unnormalised cross product).
+template <class Visit>
+void for_each_fan_triangle(const PolygonMesh& mesh, Visit&& visit) {
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+      if (!is_sliver(n.norm(), L * L)) visit(f, a, b, c, n, L);
+    }
+  }
+}
+
 PointCloud sample_faces_uniformly(const PolygonMesh& mesh, std::size_t count, std::uint64_t seed) {
   const double sign = mesh_wound_inward(mesh) ? -1.0 : 1.0;
   struct Tri {
@@ -288,17 +303,11 @@ PointCloud sample_faces_uniformly(const PolygonMesh& mesh, std::size_t count, st
   };
   std::vector<Tri> tris;
   std::vector<double> area;
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    const auto vs = mesh.face(f);
-    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
-      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-      if (is_sliver(n.norm(), L * L)) continue;
-      tris.push_back({a, b, c, sign * n.normalized()});
-      area.push_back(0.5 * n.norm());
-    }
-  }
+  for_each_fan_triangle(mesh, [&](std::size_t, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                  const Eigen::Vector3d& n, double) {
+    tris.push_back({a, b, c, sign * n.normalized()});
+    area.push_back(0.5 * n.norm());
+  });
   PointCloud cloud;
   if (tris.empty()) return cloud;
   std::mt19937_64 rng(seed);
@@ -332,24 +341,18 @@ PointCloud face_samples(const PolygonMesh& mesh, double large_factor, std::vecto
   std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(F / 2), sorted.end());
   const double spacing = sorted[F / 2];
   if (!(spacing > 0) || !(spacing > min_spacing)) return cloud;
-  for (std::size_t f = 0; f < F; ++f) {
-    if (!(longest[f] > large_factor * spacing)) continue;
-    const auto vs = mesh.face(f);
-    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
-      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[k]], &c = mesh.vertices[vs[k + 1]];
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      const double L = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-      if (is_sliver(n.norm(), L * L)) continue;
-      const int m = static_cast<int>(std::min(1000.0, std::ceil(L / spacing)));
-      for (int i = 0; i <= m; ++i)
-        for (int j = 0; i + j <= m; ++j) {
-          if ((i == 0 && j == 0) || i == m || j == m) continue;  // the corners
-          cloud.points.push_back(a + (double(i) / m) * (b - a) + (double(j) / m) * (c - a));
-          cloud.normals.push_back(sign * n.normalized());
-          if (face_of) face_of->push_back(static_cast<std::uint32_t>(f));
-        }
-    }
-  }
+  for_each_fan_triangle(mesh, [&](std::size_t f, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                  const Eigen::Vector3d& n, double L) {
+    if (!(longest[f] > large_factor * spacing)) return;
+    const int m = static_cast<int>(std::min(1000.0, std::ceil(L / spacing)));
+    for (int i = 0; i <= m; ++i)
+      for (int j = 0; i + j <= m; ++j) {
+        if ((i == 0 && j == 0) || i == m || j == m) continue;  // the corners
+        cloud.points.push_back(a + (double(i) / m) * (b - a) + (double(j) / m) * (c - a));
+        cloud.normals.push_back(sign * n.normalized());
+        if (face_of) face_of->push_back(static_cast<std::uint32_t>(f));
+      }
+  });
   return cloud;
 }
 
