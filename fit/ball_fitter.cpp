@@ -250,7 +250,7 @@ std::optional<Ball> BallFitter::try_both_sides(std::uint32_t ci, double R, Scrat
 
 // An open boundary inside the ball: the patch is clipped by a plane just beyond the outermost
 // point, instead of extrapolating to the ball's rim. The plane is the one of the data's
-// boundary points in the ball (DataSurface::boundary_inward) when they bend measurably (a
+// boundary points in the ball (DataSurface::boundary_near) when they bend measurably (a
 // curved boundary: a straight cut across the sheet would leave slivers past it), else across
 // the sheet, facing the boundary points' inward tangent or the points' tangential centroid.
 std::optional<Ball> BallFitter::try_boundary(const Ball& b, const Scratch& s) const {

@@ -218,7 +218,6 @@ void DataSurface::from_mesh_boundary(const PolygonMesh& mesh, Impl& m) {
 bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
 double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
 double DataSurface::spacing(std::size_t i) const { return impl_->disc.at(i) / impl_->options.disc_factor; }
-Eigen::Vector3d DataSurface::boundary_inward(std::size_t i) const { return impl_->inward.at(i); }
 void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const {
   out.clear();
   const auto& m = *impl_;

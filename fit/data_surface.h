@@ -64,8 +64,6 @@ public:
   /// Point i's sample spacing (points only): the distance to its spacing_neighbour-th nearest
   /// neighbour on the same sheet (disc_radius / disc_factor).
   double spacing(std::size_t i) const;
-  /// Point i's unit tangent towards the data when it lies on an open boundary, else zero (points only).
-  Eigen::Vector3d boundary_inward(std::size_t i) const;
   /// The data's open boundary near c: samples (position, unit tangent towards the data) within
   /// r of c — boundary points of a cloud, or the vertices and edge midpoints of a mesh's open
   /// edges (out is cleared first).

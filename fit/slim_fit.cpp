@@ -515,7 +515,7 @@ void SlimFitter::verify_and_repair() {
     const bool view_fill = !seen.empty() && round + 2 < budget;
     // Points without faces: coverage discs no ball holds (point_holes). While two verifying
     // rounds remain, a point tried for the first time gets its candidate ball; later, or tried
-    // before, a disc patch (the data itself: needs no repair of its own).
+    // before, a disc patch (its tangent plane: shrunk by the repair where it runs off the data).
     std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> gaps;
     // Outside the band where they are filled (decided in the first round), counted once: on 1M
     // points each check costs about a second.
@@ -534,6 +534,7 @@ void SlimFitter::verify_and_repair() {
     // tilts the disc off the data (a box of 20,000 points without normals: 107; the balls and
     // disc patches that filled them stood out as fins 5–13E past its corners).
     if (round == 0) {
+      disc_shrunk_.assign(P_.size(), 0);
       const double share = double(gaps.size()) / double(std::max<std::size_t>(1, P_.size()));
       fill_point_holes_ = share >= opt_.point_hole_least && share <= opt_.point_hole_share;
       if (share > opt_.point_hole_share)
@@ -543,8 +544,7 @@ void SlimFitter::verify_and_repair() {
     if (!fill_point_holes_) gaps.clear();
     // A point whose disc patch was shrunk (its plane ran off the data) keeps that patch and its
     // hole: counted, not filled again.
-    disc_cap_.resize(P_.size(), kInf);
-    std::erase_if(gaps, [&](const auto& g) { return std::isfinite(disc_cap_[g.first]); });
+    std::erase_if(gaps, [&](const auto& g) { return disc_shrunk_[g.first] != 0; });
     const bool gap_fill = !gaps.empty() && round < budget;
     // More than one spot per 8 faces: the balls are smaller than the faces nearly everywhere
     // (E far below the data's sampling: bunny at 1e-4 had 88,211 for 69,451 faces). Points
@@ -674,17 +674,15 @@ void SlimFitter::repair(const std::vector<std::uint8_t>& at_fault) {
       continue;
     }
     chosen_flag_[b] = 0;
+    const double f = k < shrink_.size() ? shrink_[k] : opt_.shrink_step;
     if (balls_[b].disc) {
       // A disc patch whose plane runs off the data (a tip more curved than its spacing):
-      // shrunk by the culprit's factor, down to a fifth of the disc it was made for.
-      const double f = k < shrink_.size() ? shrink_[k] : opt_.shrink_step;
-      // Remembered, so the hole it leaves gets no larger one back (none below the floor).
-      const double least = 0.2 * opt_.disc_patch_reach * opt_.point_hole_factor * data_->spacing(balls_[b].centre);
-      disc_cap_.resize(P_.size(), kInf);
-      disc_cap_[balls_[b].centre] = f * balls_[b].R >= least ? f * balls_[b].R : 0.0;
-      if (f * balls_[b].R >= least) {
+      // shrunk by the culprit's factor, down to a fifth of the disc it was made for; its point
+      // is remembered, so the hole it leaves gets no full disc patch back.
+      disc_shrunk_[balls_[b].centre] = 1;
+      if (const double R = f * balls_[b].R; R >= 0.2 * disc_patch_radius(balls_[b].centre)) {
         Ball s = balls_[b];
-        s.R *= f;
+        s.R = R;
         balls_.push_back(std::move(s));
         std::vector<std::uint32_t> cov = covers_[b];
         grow_candidate_arrays();
@@ -695,7 +693,6 @@ void SlimFitter::repair(const std::vector<std::uint8_t>& at_fault) {
       }
       continue;
     }
-    const double f = k < shrink_.size() ? shrink_[k] : opt_.shrink_step;
     cap_[balls_[b].centre] = std::min(cap_[balls_[b].centre], f * balls_[b].R);
   }
   chosen_.swap(keep);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
@@ -119,8 +120,9 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
 // checked as six fan triangles the way face_holes checks a face. A corner is pulled back to the
 // point unless one of its 12 nearest points on its sheet (normals within 60°) lies within 60°
 // of its direction and another one's tangent disc holds it within the band: past an open
-// boundary, or across a crease (where an estimated normal tilts), the plane leaves the data. At most one spot per point; points held at the last check and
-// far from every changed ball are held still.
+// boundary, or across a crease (where an estimated normal tilts), the plane leaves the data.
+// At most one spot per point; points held at the last check and far from every changed ball
+// are held still.
 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(const PointIndex& index, const Changed* changed) {
   const auto& slims = result_.model.slims;
   if (surface_ || !data_ || slims.empty()) return {};
@@ -159,11 +161,12 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     auto& out = found.local();
     std::vector<Neighbour> nb;
-    std::vector<std::uint32_t> near, last;
+    std::vector<std::uint32_t> near;
+    std::optional<std::uint32_t> last;  // the patch that last held a whole disc
     std::array<Eigen::Vector3d, 6> corner;
     for (std::size_t o = r.begin(); o != r.end(); ++o) {
       const std::size_t i = point_order_[o];
-      const double rho = opt_.point_hole_factor * data_->spacing(i);
+      const double rho = coverage_radius(i);
       if (!(rho > 0)) continue;
       if (point_covered_[i] && changed && !changed->near_ball(P_[i], rho, nb)) continue;
       const Eigen::Vector3d& p = P_[i];
@@ -171,12 +174,12 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
       for (int k = 0; k < 6; ++k)
         corner[k] = p + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
       const auto whole = [&](std::uint32_t k) {
-        if (k >= slims.size() || !holds(k, p, band)) return false;
+        if (!holds(k, p, band)) return false;
         for (const auto& x : corner)
           if (!holds(k, x, band)) return false;
         return true;
       };
-      if (!last.empty() && whole(last[0])) {
+      if (last && whole(*last)) {
         point_covered_[i] = 1;
         continue;
       }
@@ -188,7 +191,7 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
         if (std::sqrt(d2) < slims[k].radius + rho) near.push_back(std::uint32_t(k));
       const auto it = std::find_if(near.begin(), near.end(), whole);
       if (it != near.end()) {
-        last.assign(1, *it);
+        last = *it;
         point_covered_[i] = 1;
         continue;
       }
@@ -243,9 +246,8 @@ std::size_t SlimFitter::add_point_balls(const std::vector<std::pair<std::uint32_
 // the pixels beyond 2E of them instead of 0.001 %.)
 std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
   const std::size_t first = balls_.size();
-  disc_cap_.resize(P_.size(), kInf);
   for (const auto& [i, x] : spots) {
-    const double R = std::min(disc_cap_[i], opt_.disc_patch_reach * opt_.point_hole_factor * data_->spacing(i));
+    const double R = disc_patch_radius(i);
     if (!(R > 0)) continue;
     Ball b{i, R, Quadric::plane(N_[i], 0.0), true, true, 0, 0, 0, ClipPlanes{}};
     b.count = 1;
@@ -270,7 +272,8 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
 // planes). The lattice check above is view-independent and cannot see these (buddha at 1e-2:
 // hole pixels inside balls whose zero sets pass 0.002–0.15E from the data). Each fan triangle's
 // centroid is seen along its normal and along two cones of view_hole_rays directions about it,
-// from L before it (L the surface band at the widest angle) on (data_front, the blend, data_around). Faces covered at the last check and far from every changed ball are
+// from L before it (L the surface band at the widest angle) on (data_front, the blend,
+// data_around). Faces covered at the last check and far from every changed ball are
 // skipped; faces that hold a face patch already are not checked (their prism holds the spot).
 // Whether the view along d sees the data at x (the first data hit from L before it is x, from
 // its front) and the data covers the view's neighbourhood (rays surface_factor·E to each side

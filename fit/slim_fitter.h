@@ -82,6 +82,9 @@ private:
   void uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
                  const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> point_holes(const PointIndex& index, const Changed* changed);
+  // Point i's coverage disc radius (point_hole_factor × its spacing) and its disc patch's.
+  double coverage_radius(std::size_t i) const { return opt_.point_hole_factor * data_->spacing(i); }
+  double disc_patch_radius(std::size_t i) const { return opt_.disc_patch_reach * opt_.point_hole_factor * data_->spacing(i); }
   std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
                               std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
@@ -208,7 +211,7 @@ private:
   std::vector<std::uint8_t> corner_known_;            // per point: corner_mask_ computed
   std::vector<std::uint32_t> point_order_;            // the points in Morton order (point_holes)
   bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
-  std::vector<double> disc_cap_;                      // per point: its disc patch's largest radius (repair shrinks it)
+  std::vector<std::uint8_t> disc_shrunk_;             // per point: the repair shrank its disc patch (its hole stays)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
   std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)
   std::vector<std::uint8_t> face_patched_;            // per face: holds a face patch of add_face_patches
