@@ -108,6 +108,7 @@ void FrameTargets::resize(int w, int h) {
   glCreateFramebuffers(1, &fb);
   output = gl::Framebuffer(fb);
   glNamedFramebufferTexture(fb, GL_COLOR_ATTACHMENT0, colour.id(), 0);
+  glNamedFramebufferTexture(fb, GL_DEPTH_ATTACHMENT, depth.id(), 0);  // read by the shading's test
   if (glCheckNamedFramebufferStatus(fb, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     throw GlError("output framebuffer incomplete");
   gl::check_error("allocating render targets");

@@ -6,5 +6,5 @@ uniform mat4 u_proj;
 void main() {
   float eye_depth = texelFetch(g_normal_depth, ivec2(gl_FragCoord.xy), 0).w;
   if (!(eye_depth > 0.0)) discard;
-  gl_FragDepth = window_depth(-eye_depth, u_proj);
+  gl_FragDepth = covered_window_depth(-eye_depth, u_proj);
 }

@@ -51,6 +51,13 @@ float window_depth(float z_eye, mat4 P) {
   return 0.5 * (clip_z / clip_w) + 0.5;
 }
 
+// The window depth a full-screen pass writes for a G-buffer pixel it covers: below the far
+// plane's 1.0 even where the hit lies beyond it, so that "depth < 1" holds at every covered pixel
+// and the deferred shading's depth test skips the background (render/passes/shade_pass.h).
+float covered_window_depth(float z_eye, mat4 P) {
+  return min(window_depth(z_eye, P), 0.99999994);
+}
+
 vec3 unpack_colour(uint c) {
   return vec3(float(c & 0xFFu), float((c >> 8) & 0xFFu), float((c >> 16) & 0xFFu)) / 255.0;
 }

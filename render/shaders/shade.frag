@@ -1,14 +1,17 @@
 // Deferred shading of the G-buffer: Phong (head + key light, as the CPU reference's shade),
 // an environment line map that shows smoothness, or NPR cel shading (its outlines: outline.frag);
-// the key light shadowed from a shadow map.
+// the key light shadowed from a shadow map (SHADOWS 1). Drawn on the far plane with the depth
+// test GL_GREATER, so only pixels some pass drew run it (render/passes/shade_pass.h); the rest
+// keep the background the pass cleared them to.
 in vec2 v_uv;
 layout(binding = 0) uniform sampler2D g_normal_depth;
 layout(binding = 1) uniform sampler2D g_albedo;
 uniform mat3 u_view_rot;
 uniform mat4 u_proj;
 uniform vec2 u_viewport;
-// SHADING_MODE (0 phong, 1 envmap, 2 npr) is defined when the program is built: one program per
-// mode, so a frame runs only the code its mode needs.
+// SHADING_MODE (0 phong, 1 envmap, 2 npr) and SHADOWS (0, 1) are defined when the program is
+// built: one program per mode and shadowing, so a frame runs only the code it needs (on llvmpipe
+// the shadow lookup behind a uniform's ?: cost 10 ms of a 1024² frame with shadows off).
 uniform vec3 u_background;
 out vec4 out_colour;
 
@@ -17,9 +20,9 @@ vec3 view_dir_at(vec2 frag) {
   return normalize(vec3(ndc.x / u_proj[0][0], ndc.y / u_proj[1][1], -1.0));
 }
 
+#if SHADOWS
 // Key-light visibility from the shadow map (core/lighting.h), adaptive PCF [Sigg06] §5: 8 taps on
 // a ring of u_shadow_softness texels; only where they disagree (the penumbra) 64 taps on a grid.
-uniform int u_shadows;
 layout(binding = 2) uniform sampler2D g_shadow_depth;
 uniform mat4 u_eye_to_light;
 uniform vec2 u_light_proj;        // the light's P[2][2], P[3][2]
@@ -56,6 +59,7 @@ float key_light_visibility(vec3 p_eye, vec3 n_eye) {
       lit += lit_tap(uv + r * (vec2(float(i), float(j)) - 3.5) / 3.5, depth, bias);
   return lit / 64.0;
 }
+#endif
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
@@ -68,7 +72,11 @@ void main() {
   vec3 n = normalize(u_view_rot * nd.xyz);
   vec3 dir = view_dir_at(gl_FragCoord.xy);
   vec3 to_eye = -dir;
-  float key = u_shadows != 0 ? key_light_visibility(dir * (nd.w / -dir.z), n) : 1.0;
+#if SHADOWS
+  float key = key_light_visibility(dir * (nd.w / -dir.z), n);
+#else
+  float key = 1.0;
+#endif
   vec3 lights[2] = vec3[2](vec3(0.0, 0.0, 1.0), normalize(vec3(-0.5, 0.8, 0.6)));
   float weights[2] = float[2](0.55, 0.45 * key);
   vec3 colour;
