@@ -84,6 +84,8 @@ SlimPass::SlimPass()
     : visibility_("slim pass 1", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 1\n"),
       accumulate_("slim pass 2", shader_source("slim.vert"), shader_source("slim.frag"), "#define SLIM_PASS 2\n"),
       resolve_("slim pass 3", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag")),
+      resolve_drawn_("slim pass 3, where drawn", shader_source("fullscreen.vert"), shader_source("slim_resolve.frag"),
+                     "#define FULLSCREEN_AT_FAR 1\n#define SLIM_RESOLVE_KEEPS_DEPTH 1\n"),
       visibility_early_("slim pass 1, early depth", shader_source("slim.vert"), shader_source("slim.frag"),
                         "#define SLIM_PASS 1\n#define SLIM_EARLY 1\n"),
       accumulate_early_("slim pass 2, early depth", shader_source("slim.vert"), shader_source("slim.frag"),
@@ -330,13 +332,16 @@ void SlimPass::accumulate(const Frame& f) {
 void SlimPass::resolve(const Frame& f) {
   glBindFramebuffer(GL_FRAMEBUFFER, f.targets.gbuffer.id());
   set_gbuffer_colour_writes(f);
-  glDepthFunc(GL_ALWAYS);
-  glDepthMask(GL_TRUE);
-  set_camera_uniforms(resolve_, f.camera);
-  resolve_.use();
+  const bool keep_depth = !f.depth_only;
+  const gl::Program& program = keep_depth ? resolve_drawn_ : resolve_;
+  glDepthFunc(keep_depth ? GL_GREATER : GL_ALWAYS);
+  glDepthMask(keep_depth ? GL_FALSE : GL_TRUE);
+  set_camera_uniforms(program, f.camera);
+  program.use();
   glBindTextureUnit(0, current_->normal_weight.id());
   glBindTextureUnit(1, current_->depth_colour.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
   glDepthFunc(GL_LESS);
 }
 

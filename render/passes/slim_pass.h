@@ -56,7 +56,7 @@ private:
   /// Packs `balls` (kBallFloats each, the cut's or the model's) into the GPU buffer in chunk order.
   void upload_chunked(std::span<const float> balls, std::span<const Box3> boxes);
 
-  gl::Program visibility_, accumulate_, resolve_;
+  gl::Program visibility_, accumulate_, resolve_, resolve_drawn_;
   gl::Program visibility_early_, accumulate_early_, from_depth_;
   gl::Buffer balls_;
   std::size_t count_ = 0;

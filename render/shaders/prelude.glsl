@@ -54,8 +54,9 @@ float window_depth(float z_eye, mat4 P) {
 // The window depth a full-screen pass writes for a G-buffer pixel it covers: below the far
 // plane's 1.0 even where the hit lies beyond it, so that "depth < 1" holds at every covered pixel
 // and the deferred shading's depth test skips the background (render/passes/shade_pass.h).
+const float kBelowFar = 0.99999994;  // the largest float below 1
 float covered_window_depth(float z_eye, mat4 P) {
-  return min(window_depth(z_eye, P), 0.99999994);
+  return min(window_depth(z_eye, P), kBelowFar);
 }
 
 vec3 unpack_colour(uint c) {

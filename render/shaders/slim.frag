@@ -86,17 +86,20 @@ void main() {
 #if SLIM_PASS == 1
   if (u_count_stats != 0) atomicAdd(stats.hit_fragments, 1u);  // A_obj
   float z_push = p.z * (1.0 + min(u_offset * v_radius, v_max_push > 0.0 ? v_max_push : u_max_push) / length(p));
+  // Below 1 in the depth buffer even when pushed past the far plane: the resolve runs only where
+  // the depth is < 1 (render/passes/slim_pass.h). The colour target keeps it, clamped to 1 as a
+  // written depth is, for pass 2's test.
   float depth = window_depth(z_push, u_proj);
-  gl_FragDepth = depth;
+  gl_FragDepth = min(depth, kBelowFar);
 #ifdef SLIM_EARLY
-  out_pass1_depth = depth;
+  out_pass1_depth = min(depth, 1.0);
 #endif
 #else
 #ifdef SLIM_EARLY
   // The depth test GL_LEQUAL on the hit (the clamp as for a written depth).
   if (min(window_depth(p.z, u_proj), 1.0) > texelFetch(u_pass1_depth, ivec2(gl_FragCoord.xy), 0).x) discard;
 #else
-  gl_FragDepth = window_depth(p.z, u_proj);
+  gl_FragDepth = covered_window_depth(p.z, u_proj);  // as pass 1's
 #endif
   float w = slim_weight(r);
   if (w <= 0.0) discard;

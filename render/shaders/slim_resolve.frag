@@ -18,5 +18,7 @@ void main() {
   out_normal_depth = vec4(normalize(nw.xyz), depth);
   out_albedo = vec4(dc.yzw / nw.w, 1.0);
   out_id = 1 << 28;  // SLIM (the blend has no single patch)
+#ifndef SLIM_RESOLVE_KEEPS_DEPTH
   gl_FragDepth = covered_window_depth(-depth, u_proj);
+#endif
 }
