@@ -83,9 +83,10 @@ ShadowMap Renderer::Impl::draw_shadow_map(const Camera& camera, const Box3& scen
   RenderOptions lo = o;
   lo.statistics = false;
   lo.glyph_proxies = false;
-  // The glyphs' early-depth path drew maps that disagree with shadow rays inside shadows
-  // (ShadowsOutlines.DefaultMapSizeMatchesShadowRays: 64 pixels off the boundary, 0 without its
-  // occluders); not found yet, so the light's view ray-casts every proxy fragment.
+  // The glyphs' early-depth path agrees with shadow rays here too since its buffer clear waits
+  // for the previous resolve (render/passes/glyph_pass.cpp), but it is slower in this view: 1aon
+  // at 1024² (a 1622² map, depth only) spent 419 ms on the map with it against 296 ms without
+  // (spacefill; balls-and-sticks 427 against 267 ms).
   lo.glyph_early_depth = false;
   lo.cull = o.cull && backface_culling_is_exact(box, closed, light);
   Frame frame{light_uniforms, lo, light_targets, statistics.buffer(), empty_vao.id(), o.cull, /*depth_only=*/true};

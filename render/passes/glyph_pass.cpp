@@ -161,6 +161,11 @@ void GlyphPass::run_early_depth(const Frame& f) {
     nearest_pixels_ = pixels;
   }
   const GLuint none[2] = {~0u, ~0u};
+  // The previous frame's resolve reads this buffer (the light's view, then the camera's, share
+  // it). llvmpipe cleared it while that resolve still ran: the shadow map lost glyph texels in 5
+  // runs of 6 (ShadowsOutlines.DefaultMapSizeMatchesShadowRays with this path in the light's
+  // view). The barrier makes the clear wait for the shaders before it.
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   glClearNamedBufferSubData(nearest_buffer_.id(), GL_RG32UI, 0, static_cast<GLsizeiptr>(pixels * 2 * sizeof(GLuint)),
                             GL_RG_INTEGER, GL_UNSIGNED_INT, none);
   // (1) Occluders: depth only, spheres and ellipsoids (stored first).
