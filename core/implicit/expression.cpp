@@ -267,22 +267,25 @@ struct RayDual {
   Interval v, d;
 };
 
-// Statements `float out = base^n;` by repeated squaring, unrolled.
-std::string power_code(const std::string& base, int n, const std::string& out) {
-  if (n == 0) return fmt::format("  float {} = 1.0;\n", out);
-  std::string code = fmt::format("  float {}_b0 = {};\n", out, base);
+// Statements `T out = base^n;` by repeated squaring, unrolled (T float or double).
+std::string power_code(const std::string& base, int n, const std::string& out, std::string_view T) {
+  if (n == 0) return fmt::format("  {} {} = 1.0;\n", T, out);
+  std::string code = fmt::format("  {} {}_b0 = {};\n", T, out, base);
   std::string acc;
   int k = 0;
   for (unsigned m = static_cast<unsigned>(n < 0 ? -n : n);; ++k) {
     if (m & 1u) acc = acc.empty() ? fmt::format("{}_b{}", out, k) : fmt::format("{} * {}_b{}", acc, out, k);
     m >>= 1;
     if (!m) break;
-    code += fmt::format("  float {0}_b{1} = {0}_b{2} * {0}_b{2};\n", out, k + 1, k);
+    code += fmt::format("  {3} {0}_b{1} = {0}_b{2} * {0}_b{2};\n", out, k + 1, k, T);
   }
-  return code + fmt::format("  float {} = {};\n", out, n < 0 ? "1.0 / (" + acc + ")" : acc);
+  return code + fmt::format("  {} {} = {};\n", T, out, n < 0 ? "1.0 / (" + acc + ")" : acc);
 }
 
-std::string literal(double v) { return v < 0 ? fmt::format("({:.9e})", v) : fmt::format("{:.9e}", v); }
+std::string literal(double v, bool dbl) {
+  const std::string t = dbl ? fmt::format("{:.17e}LF", v) : fmt::format("{:.9e}", v);
+  return v < 0 ? "(" + t + ")" : t;
+}
 
 }  // namespace
 
@@ -462,36 +465,50 @@ RayEnclosure Expression::enclose(const Eigen::Vector3d& origin, const Eigen::Vec
   return {r.back().v, r.back().d};
 }
 
-std::string Expression::glsl(std::string_view name) const {
+std::string Expression::glsl(std::string_view name, GlslPrecision precision) const {
+  // Double: every value and dual (value, gradient) in double, so that x − 1e6 near 1e6 keeps its
+  // digits; GLSL has no double sin, exp, pow…, so those go through float (their arguments are
+  // what they are: no cancellation happens inside them).
+  const bool dbl = precision == GlslPrecision::double_;
+  const std::string T = dbl ? "double" : "float", V4 = dbl ? "dvec4" : "vec4", V3 = dbl ? "dvec3" : "vec3";
+  const std::string F = dbl ? "float" : "";  // wraps a double operand for a float-only function
+  const std::string D = dbl ? "double" : "";  // wraps its float result back
   std::string u, v, g;
-  for (std::size_t k = 0; k < parameters_.size(); ++k) u += fmt::format("uniform float {}_p{};\n", name, k);
+  for (std::size_t k = 0; k < parameters_.size(); ++k) u += fmt::format("uniform {} {}_p{};\n", T, name, k);
+  u += fmt::format("uniform {} {}_origin;  // S is evaluated at {}_origin + q\n", V3, name, name);
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     const Node& nd = nodes_[i];
     const std::string a = fmt::format("r{}", nd.a), b = fmt::format("r{}", nd.b);
-    std::string ve, ge;  // value, and (value, gradient) as vec4
-    const auto unary = [&](std::string f, std::string df) {  // df in terms of a.x
-      ve = fmt::format("{}({})", f, a);
-      ge = fmt::format("vec4({}({}.x), ({}) * {}.yzw)", f, a, df, a);
+    std::string ve, ge;  // value, and (value, gradient) as a 4-vector
+    const std::string ax = a + ".x", axf = F + "(" + ax + ")";
+    // A float-only function f with derivative df (written in terms of axf).
+    const auto unary = [&](std::string f, std::string df) {
+      ve = fmt::format("{}({}({}({})))", D, f, F, a);
+      ge = fmt::format("{}({}({}({}({}))), {}({}) * {}.yzw)", V4, D, f, F, ax, D, df, a);
     };
-    const std::string ax = a + ".x";
+    // A function that GLSL also has in double (sqrt, abs): no round trip through float.
+    const auto native = [&](std::string f, std::string df) {
+      ve = fmt::format("{}({})", f, a);
+      ge = fmt::format("{}({}({}), ({}) * {}.yzw)", V4, f, ax, df, a);
+    };
     switch (nd.op) {
       case Op::constant:
-        ve = literal(nd.value);
-        ge = fmt::format("vec4({}, 0.0, 0.0, 0.0)", ve);
+        ve = literal(nd.value, dbl);
+        ge = fmt::format("{}({}, 0.0, 0.0, 0.0)", V4, ve);
         break;
       case Op::parameter:
         ve = fmt::format("{}_p{}", name, nd.n);
-        ge = fmt::format("vec4({}, 0.0, 0.0, 0.0)", ve);
+        ge = fmt::format("{}({}, 0.0, 0.0, 0.0)", V4, ve);
         break;
-      case Op::x: ve = "p.x", ge = "vec4(p.x, 1.0, 0.0, 0.0)"; break;
-      case Op::y: ve = "p.y", ge = "vec4(p.y, 0.0, 1.0, 0.0)"; break;
-      case Op::z: ve = "p.z", ge = "vec4(p.z, 0.0, 0.0, 1.0)"; break;
+      case Op::x: ve = "p.x", ge = V4 + "(p.x, 1.0, 0.0, 0.0)"; break;
+      case Op::y: ve = "p.y", ge = V4 + "(p.y, 0.0, 1.0, 0.0)"; break;
+      case Op::z: ve = "p.z", ge = V4 + "(p.z, 0.0, 0.0, 1.0)"; break;
       case Op::add: ve = ge = fmt::format("{} + {}", a, b); break;
       case Op::sub: ve = ge = fmt::format("{} - {}", a, b); break;
       case Op::neg: ve = ge = fmt::format("-{}", a); break;
       case Op::mul:
         ve = fmt::format("{} * {}", a, b);
-        ge = fmt::format("vec4({0}.x * {1}.x, {0}.x * {1}.yzw + {1}.x * {0}.yzw)", a, b);
+        ge = fmt::format("{2}({0}.x * {1}.x, {0}.x * {1}.yzw + {1}.x * {0}.yzw)", a, b, V4);
         break;
       case Op::div:
         ve = fmt::format("{} / {}", a, b);
@@ -500,29 +517,30 @@ std::string Expression::glsl(std::string_view name) const {
       case Op::pow_int: {
         // Straight-line products (loops per power make a JIT like llvmpipe's crawl).
         const std::string pv = fmt::format("q{}", i);
-        v += power_code(a, nd.n, pv);
-        g += power_code(ax, nd.n - 1, pv);
+        v += power_code(a, nd.n, pv, T);
+        g += power_code(ax, nd.n - 1, pv, T);
         ve = pv;
-        ge = fmt::format("vec4({0} * {1}, {2}.0 * {0} * {3}.yzw)", pv, ax, nd.n, a);
+        ge = fmt::format("{4}({0} * {1}, {2}.0 * {0} * {3}.yzw)", pv, ax, nd.n, a, V4);
         break;
       }
       case Op::pow:
-        ve = fmt::format("qx_pow({}, {})", a, b);
-        ge = fmt::format("vec4(qx_pow({0}.x, {1}.x), {1}.x * qx_pow({0}.x, {1}.x - 1.0) * {0}.yzw)", a, b);
+        ve = fmt::format("{2}(qx_pow({3}({0}), {3}({1})))", a, b, D, F);
+        ge = fmt::format("{2}({3}(qx_pow({4}({0}.x), {4}({1}.x))), {3}({4}({1}.x) * qx_pow({4}({0}.x), {4}({1}.x) - 1.0)) * {0}.yzw)",
+                         a, b, V4, D, F);
         break;
-      case Op::sin: unary("sin", "cos(" + ax + ")"); break;
-      case Op::cos: unary("cos", "-sin(" + ax + ")"); break;
-      case Op::tan: unary("tan", fmt::format("1.0 / (cos({0}) * cos({0}))", ax)); break;
-      case Op::asin: unary("qx_asin", fmt::format("inversesqrt(1.0 - {0} * {0})", ax)); break;
-      case Op::acos: unary("qx_acos", fmt::format("-inversesqrt(1.0 - {0} * {0})", ax)); break;
-      case Op::atan: unary("atan", fmt::format("1.0 / (1.0 + {0} * {0})", ax)); break;
-      case Op::exp: unary("exp", "exp(" + ax + ")"); break;
-      case Op::log: unary("log", "1.0 / " + ax); break;
-      case Op::sqrt: unary("sqrt", "0.5 * inversesqrt(" + ax + ")"); break;
-      case Op::abs: unary("abs", "sign(" + ax + ")"); break;
-      case Op::cosh: unary("cosh", "sinh(" + ax + ")"); break;
-      case Op::sinh: unary("sinh", "cosh(" + ax + ")"); break;
-      case Op::acosh: unary("acosh", fmt::format("inversesqrt({0} * {0} - 1.0)", ax)); break;
+      case Op::sin: unary("sin", "cos(" + axf + ")"); break;
+      case Op::cos: unary("cos", "-sin(" + axf + ")"); break;
+      case Op::tan: unary("tan", fmt::format("1.0 / (cos({0}) * cos({0}))", axf)); break;
+      case Op::asin: unary("qx_asin", fmt::format("inversesqrt(1.0 - {0} * {0})", axf)); break;
+      case Op::acos: unary("qx_acos", fmt::format("-inversesqrt(1.0 - {0} * {0})", axf)); break;
+      case Op::atan: unary("atan", fmt::format("1.0 / (1.0 + {0} * {0})", axf)); break;
+      case Op::exp: unary("exp", "exp(" + axf + ")"); break;
+      case Op::log: unary("log", "1.0 / " + axf); break;
+      case Op::sqrt: native("sqrt", "0.5 * inversesqrt(" + ax + ")"); break;
+      case Op::abs: native("abs", "sign(" + ax + ")"); break;
+      case Op::cosh: unary("cosh", "sinh(" + axf + ")"); break;
+      case Op::sinh: unary("sinh", "cosh(" + axf + ")"); break;
+      case Op::acosh: unary("acosh", fmt::format("inversesqrt({0} * {0} - 1.0)", axf)); break;
       case Op::min:
         ve = fmt::format("min({}, {})", a, b);
         ge = fmt::format("({0}.x <= {1}.x ? {0} : {1})", a, b);
@@ -532,21 +550,22 @@ std::string Expression::glsl(std::string_view name) const {
         ge = fmt::format("({0}.x >= {1}.x ? {0} : {1})", a, b);
         break;
       case Op::cheb:
-        ve = fmt::format("qx_cheb({}, {}).x", nd.n, a);
+        ve = fmt::format("{}(qx_cheb({}, {}({})).x)", D, nd.n, F, a);
         ge = fmt::format("qx_cheb_dual({}, {})", nd.n, a);
         break;
     }
-    v += fmt::format("  float r{} = {};\n", i, ve);
-    g += fmt::format("  vec4 r{} = {};\n", i, ge);
+    v += fmt::format("  {} r{} = {};\n", T, i, ve);
+    g += fmt::format("  {} r{} = {};\n", V4, i, ge);
   }
   const std::size_t last = nodes_.size() - 1;
   std::string comment = text_;
   std::replace_if(comment.begin(), comment.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+  const std::string at = fmt::format("  {0} p = {1}_origin + {0}(q);\n", V3, name);
   return fmt::format(
       "// Generated from: {0}\n{1}"
-      "float {2}_value(vec3 p) {{\n{3}  return r{5};\n}}\n"
-      "vec4 {2}_grad(vec3 p) {{\n{4}  return r{5};\n}}\n",
-      comment, u, name, v, g, last);
+      "float {2}_value(vec3 q) {{\n{6}{3}  return float(r{5});\n}}\n"
+      "vec4 {2}_grad(vec3 q) {{\n{6}{4}  return vec4(r{5});\n}}\n",
+      comment, u, name, v, g, last, at);
 }
 
 }  // namespace quadrix::implicit

@@ -27,6 +27,8 @@ enum class Op : std::uint8_t {
   sin, cos, tan, asin, acos, atan, exp, log, sqrt, abs, cosh, sinh, acosh, min, max, cheb
 };
 
+enum class GlslPrecision { single, double_ };
+
 /// One operation; operands are earlier entries of the list.
 struct Node {
   Op op = Op::constant;
@@ -63,10 +65,13 @@ public:
   RayEnclosure enclose(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, const Interval& t,
                        std::span<const double> params) const;
 
-  /// GLSL functions `float NAME_value(vec3 p)` and `vec4 NAME_grad(vec3 p)` (S, ∇S) reading the
-  /// parameters from uniforms `uniform float NAME_pK;` (K the parameter's index), all declared
-  /// in the returned text.
-  std::string glsl(std::string_view name) const;
+  /// GLSL functions `float NAME_value(vec3 q)` and `vec4 NAME_grad(vec3 q)`: S and ∇S at
+  /// p = NAME_origin + q, reading the parameters from uniforms `NAME_pK` (K the parameter's
+  /// index), all declared in the returned text. In double precision the origin, the parameters
+  /// and every value are double (functions GLSL has only in float go through float), so a
+  /// surface far from the world's origin keeps its digits: x − 1e6 is exact near 1e6; in float
+  /// the origin and parameters are float uniforms too.
+  std::string glsl(std::string_view name, GlslPrecision precision = GlslPrecision::single) const;
 
 private:
   std::string text_;

@@ -77,8 +77,10 @@ public:
   void set(const char* u, int v) const { glProgramUniform1i(id(), mark(u), v); }
   void set(const char* u, unsigned v) const { glProgramUniform1ui(id(), mark(u), v); }
   void set(const char* u, float v) const { glProgramUniform1f(id(), mark(u), v); }
+  void set(const char* u, double v) const { glProgramUniform1d(id(), mark(u), v); }  ///< a double uniform
   void set(const char* u, const Eigen::Vector2f& v) const { glProgramUniform2fv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Vector3f& v) const { glProgramUniform3fv(id(), mark(u), 1, v.data()); }
+  void set(const char* u, const Eigen::Vector3d& v) const { glProgramUniform3dv(id(), mark(u), 1, v.data()); }  ///< dvec3
   void set(const char* u, const Eigen::Vector3i& v) const { glProgramUniform3iv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Vector4f& v) const { glProgramUniform4fv(id(), mark(u), 1, v.data()); }
   void set(const char* u, const Eigen::Matrix3f& m) const {

@@ -59,11 +59,16 @@ void ImplicitPass::upload(std::span<const ImplicitSurface> surfaces, const AmpOp
     const ImplicitSurface& s = surfaces[i];
     const implicit::CompiledImplicit c = implicit::compile(s);
     Surface g;
-    const std::string code = std::string(shader_source("implicit_lib.glsl")) + c.expression.glsl("S");
+    const Eigen::Vector3d centre = s.bounds.centre();
+    g.far = centre.cwiseAbs().maxCoeff() > kImplicitFarFactor * s.bounds.diagonal();
+    if (g.far) g.origin = centre;
+    const std::string code =
+        std::string(shader_source("implicit_lib.glsl")) +
+        c.expression.glsl("S", g.far ? implicit::GlslPrecision::double_ : implicit::GlslPrecision::single);
     g.program = gl::Program(fmt::format("implicit {}", i), shader_source("fullscreen.vert"),
                             shader_source("implicit.frag"), code);
     g.parameter_names = c.expression.parameters();
-    for (const double v : c.parameters) g.parameters.push_back(static_cast<float>(v));
+    g.parameters = c.parameters;
     g.bounds = s.bounds;
     g.amp = amp_settings(s, options);
     const Rgb col = s.colour.value_or(Rgb{200, 200, 200});
@@ -81,7 +86,7 @@ void ImplicitPass::set_parameters(std::size_t i, const std::map<std::string, dou
     const auto it = std::find(s.parameter_names.begin(), s.parameter_names.end(), name);
     if (it == s.parameter_names.end())
       throw InvalidInput(fmt::format("implicit surface {} has no parameter '{}'", i, name));
-    s.parameters[it - s.parameter_names.begin()] = static_cast<float>(v);
+    s.parameters[it - s.parameter_names.begin()] = v;
   }
 }
 
@@ -93,9 +98,18 @@ void ImplicitPass::run(const Frame& f) {
     const Surface& s = surfaces_[i];
     const gl::Program& p = s.program;
     set_camera_uniforms(p, f.camera);
-    p.set("u_eye", Eigen::Vector3f(eye.cast<float>()));
-    p.set("u_box_min", Eigen::Vector3f(s.bounds.min.cast<float>()));
-    p.set("u_box_max", Eigen::Vector3f(s.bounds.max.cast<float>()));
+    // Relative to the surface's origin, in double before the cast.
+    p.set("u_eye", Eigen::Vector3f((eye - s.origin).cast<float>()));
+    p.set("u_box_min", Eigen::Vector3f((s.bounds.min - s.origin).cast<float>()));
+    p.set("u_box_max", Eigen::Vector3f((s.bounds.max - s.origin).cast<float>()));
+    if (s.far) {
+      p.set("S_origin", s.origin);
+      for (std::size_t k = 0; k < s.parameters.size(); ++k) p.set(fmt::format("S_p{}", k).c_str(), s.parameters[k]);
+    } else {
+      p.set("S_origin", Eigen::Vector3f::Zero().eval());
+      for (std::size_t k = 0; k < s.parameters.size(); ++k)
+        p.set(fmt::format("S_p{}", k).c_str(), static_cast<float>(s.parameters[k]));
+    }
     p.set("u_step", static_cast<float>(s.amp.step));
     p.set("u_tau", Eigen::Vector3f(float(s.amp.tau1), float(s.amp.tau2), float(s.amp.tau3)));
     p.set("u_taylor", s.amp.taylor ? 1 : 0);
@@ -106,7 +120,6 @@ void ImplicitPass::run(const Frame& f) {
     p.set("u_max_steps", s.amp.max_steps);
     p.set("u_colour", s.colour);
     p.set("u_id", primitive_id(PrimitiveKind::implicit, i));
-    for (std::size_t k = 0; k < s.parameters.size(); ++k) p.set(fmt::format("S_p{}", k).c_str(), s.parameters[k]);
     p.use();
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }

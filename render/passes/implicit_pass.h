@@ -3,6 +3,11 @@
 /// program generated per surface from its expression (S and ∇S together), one full-screen pass
 /// per surface into the G-buffer, depth-tested with the other kinds.
 ///
+/// A surface whose bounds lie far from the world's origin (their centre more than
+/// kImplicitFarFactor diagonals away) is marched relative to that centre and evaluated in double
+/// (core/implicit/expression.h GlslPrecision): in float world coordinates (x − 1e6)² near 1e6
+/// keeps no digits. Others are evaluated in float about the world's origin.
+///
 /// Derived defaults (AmpOptions ≤ 0): b = diagonal / step_divisions; over a 16³ lattice of the
 /// bounds, τ₁ = 0.05·median |S|, τ₂ = 2τ₁, τ₃ = 0.1·median |∇S| (the horizon: a ray within
 /// about 6° of grazing a surface of typical slope).
@@ -24,6 +29,9 @@ using AmpSettings = implicit::MarchSettings;
 /// \throws InvalidInput as implicit::compile.
 AmpSettings amp_settings(const ImplicitSurface& surface, const AmpOptions& options);
 
+/// Bounds whose centre is farther than this many diagonals from the origin take the double path.
+constexpr double kImplicitFarFactor = 8.0;
+
 class ImplicitPass final : public Pass {
 public:
   /// Compiles one program per surface (timed: compile_ms).
@@ -42,7 +50,9 @@ private:
   struct Surface {
     gl::Program program;
     std::vector<std::string> parameter_names;
-    std::vector<float> parameters;
+    std::vector<double> parameters;
+    bool far = false;  ///< double precision about origin
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     Box3 bounds;
     AmpSettings amp;
     std::uint32_t colour = 0;

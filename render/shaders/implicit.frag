@@ -10,8 +10,10 @@ uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform vec2 u_viewport;
 uniform float u_near;
-uniform vec3 u_eye;          // world
-uniform vec3 u_box_min;      // bounds, world
+// Positions relative to the surface's origin S_origin (render/passes/implicit_pass.h): the world's
+// origin for surfaces near it, their bounds' centre, in double, for those far from it.
+uniform vec3 u_eye;
+uniform vec3 u_box_min;      // bounds
 uniform vec3 u_box_max;
 uniform float u_step;        // base step b, world units
 uniform vec3 u_tau;          // τ₁ τ₂ τ₃ of eq. 2

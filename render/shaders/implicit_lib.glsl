@@ -40,6 +40,10 @@ vec4 qx_div(vec4 a, vec4 b) {
   float q = a.x / b.x;
   return vec4(q, (a.yzw - q * b.yzw) / b.x);
 }
+dvec4 qx_div(dvec4 a, dvec4 b) {  // the double-precision code (far from the origin)
+  double q = a.x / b.x;
+  return dvec4(q, (a.yzw - q * b.yzw) / b.x);
+}
 
 // (T_n(x), T_n′(x)) by the three-term recurrences of T and U (T_n′ = n·U_{n−1}).
 vec2 qx_cheb(int n, float x) {
@@ -59,4 +63,8 @@ vec2 qx_cheb(int n, float x) {
 vec4 qx_cheb_dual(int n, vec4 a) {
   vec2 c = qx_cheb(n, a.x);
   return vec4(c.x, c.y * a.yzw);
+}
+dvec4 qx_cheb_dual(int n, dvec4 a) {  // T_n in float, its argument's gradient in double
+  vec2 c = qx_cheb(n, float(a.x));
+  return dvec4(double(c.x), double(c.y) * a.yzw);
 }

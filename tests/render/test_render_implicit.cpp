@@ -2,6 +2,8 @@
 // against the CPU reference's guaranteed interval root isolation, at 128².
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -330,5 +332,40 @@ TEST_F(GlImplicit, FarAndThinSurfaces) {
   render::AmpOptions o;
   o.step_divisions = 2000;
   expect_agree(run(m, view(m.implicits[0].bounds, 10, 50), o, "thin far torus"), 150);
+}
+
+// 10⁴ and 10⁶ of their diagonals from the world's origin, the centre written into the expression
+// as literal numbers: float world coordinates keep none of (x − 3.7e6)'s digits near 3.7e6, so
+// such surfaces are marched about their bounds' centre and evaluated in double (render/passes/
+// implicit_pass.h). A torus, and a sphere rippled by sin (a float-only function in GLSL) of a
+// difference that must be taken in double first.
+TEST_F(GlImplicit, FarFromTheWorldsOriginMatchesTheReference) {
+  const Eigen::Vector3d dir = Eigen::Vector3d(1.0, -0.6, 0.4).normalized();
+  for (const double diagonals : {1e4, 1e6}) {
+    struct Case {
+      std::string what, expression;
+      Eigen::Vector3d half;
+    };
+    const Eigen::Vector3d half_torus(1.35, 1.35, 0.35), half_ripple(1.1, 1.1, 1.1);
+    const Eigen::Vector3d c = diagonals * 2.0 * half_torus.norm() * dir;
+    const auto sq = [&](const char* v, double cv) { return fmt::format("({} - {:.17g})^2", v, cv); };
+    const std::string r2 = sq("x", c.x()) + " + " + sq("y", c.y()) + " + " + sq("z", c.z());
+    const std::vector<Case> cases = {
+        {"torus", fmt::format("({} + 1 - 0.09)^2 - 4*({} + {})", r2, sq("x", c.x()), sq("y", c.y())), half_torus},
+        {"rippled sphere", fmt::format("{} - 1 + 0.05*sin(12*(x - {:.17g}))", r2, c.x()), half_ripple},
+    };
+    for (const Case& k : cases) {
+      Model m;
+      m.implicits.push_back({k.expression, {}, {c - k.half, c + k.half}, {}});
+      ASSERT_GT(c.cwiseAbs().maxCoeff(), render::kImplicitFarFactor * m.implicits[0].bounds.diagonal());
+      render::AmpOptions o;
+      o.step_divisions = 400;
+      for (const auto& [az, el] : {std::pair(30.0, 40.0), std::pair(200.0, -25.0)}) {
+        const std::string what = fmt::format("{} at {:g} diagonals", k.what, diagonals);
+        SCOPED_TRACE(testing::Message() << what << " azimuth " << az << " elevation " << el);
+        expect_agree(run(m, view(m.implicits[0].bounds, az, el), o, what), 2000);
+      }
+    }
+  }
 }
 #endif
