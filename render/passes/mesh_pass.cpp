@@ -1,5 +1,7 @@
 #include "render/passes/mesh_pass.h"
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/bounds.h"
@@ -10,12 +12,25 @@ namespace quadrix::render {
 
 MeshPass::MeshPass() : program_("mesh", shader_source("mesh.vert"), shader_source("mesh.frag")) {}
 
+namespace {
+
+// One vertex as the vertex stage reads it: its offset from the mesh's fixed-point origin, and
+// its face's normal.
+struct GpuVertex {
+  std::int32_t q[3];
+  float rest[3];
+  float normal[3];
+};
+static_assert(sizeof(GpuVertex) == 36);
+
+}  // namespace
+
 void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
   Box3 box;
   for (const auto& v : mesh.vertices) box.extend(v);
-  origin_ = box.empty() ? Eigen::Vector3d::Zero() : box.centre();
+  origin_ = box.empty() ? FixedOrigin{} : FixedOrigin::of(box);
   colour_ = colour;
-  std::vector<float> data;  // position, normal per vertex; flat face normals
+  std::vector<GpuVertex> data;  // flat face normals
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto face = mesh.face(f);
     for (std::size_t k = 1; k + 1 < face.size(); ++k) {
@@ -24,18 +39,22 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
       if (!(n.norm() > 0)) continue;
       n.normalize();
       for (const auto* p : {&a, &b, &c}) {
-        const Eigen::Vector3f q = (*p - origin_).cast<float>();
-        data.insert(data.end(), {q.x(), q.y(), q.z(), float(n.x()), float(n.y()), float(n.z())});
+        const FixedOrigin::Offset o = origin_.offset(*p - origin_.origin);
+        data.push_back({{o.q.x(), o.q.y(), o.q.z()}, {o.rest.x(), o.rest.y(), o.rest.z()},
+                        {float(n.x()), float(n.y()), float(n.z())}});
       }
     }
   }
-  vertices_ = static_cast<GLsizei>(data.size() / 6);
-  vbo_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data());
+  vertices_ = static_cast<GLsizei>(data.size());
+  vbo_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuVertex)), data.data());
   vao_ = gl::make_vertex_array();
-  glVertexArrayVertexBuffer(vao_.id(), 0, vbo_.id(), 0, 6 * sizeof(float));
-  for (GLuint a = 0; a < 2; ++a) {
+  glVertexArrayVertexBuffer(vao_.id(), 0, vbo_.id(), 0, sizeof(GpuVertex));
+  for (GLuint a = 0; a < 3; ++a) {
     glEnableVertexArrayAttrib(vao_.id(), a);
-    glVertexArrayAttribFormat(vao_.id(), a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
+    if (a == 0)
+      glVertexArrayAttribIFormat(vao_.id(), a, 3, GL_INT, offsetof(GpuVertex, q));
+    else
+      glVertexArrayAttribFormat(vao_.id(), a, 3, GL_FLOAT, GL_FALSE, a == 1 ? offsetof(GpuVertex, rest) : offsetof(GpuVertex, normal));
     glVertexArrayAttribBinding(vao_.id(), a, 0);
   }
   has_mesh_ = true;
@@ -44,7 +63,7 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
 void MeshPass::run(const Frame& f) {
   begin_gbuffer_draw(f);
   set_camera_uniforms(program_, f.camera);
-  program_.set("u_origin_minus_target", Eigen::Vector3f((origin_ - f.camera.target_world).cast<float>()));
+  set_origin_uniforms(program_, origin_, f.camera);
   program_.set("u_colour", Eigen::Vector3f(colour_[0] / 255.f, colour_[1] / 255.f, colour_[2] / 255.f));
   program_.set("u_id_base", primitive_id(PrimitiveKind::mesh, 0));  // + the triangle's gl_PrimitiveID
   program_.use();

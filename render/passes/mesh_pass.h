@@ -18,7 +18,7 @@ private:
   gl::VertexArray vao_;
   gl::Buffer vbo_;
   GLsizei vertices_ = 0;
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // vertices are relative to it (float)
+  FixedOrigin origin_;  // vertices are whole quanta plus a float rest from it
   Rgb colour_{180, 180, 190};
   bool has_mesh_ = false;
 };

@@ -10,8 +10,11 @@
 uniform ivec3 u_origin_q;
 uniform vec3 u_origin_rest;
 uniform float u_quantum;
-vec3 from_fixed_origin(vec3 quanta_bits, vec3 rest) {
-  return vec3(u_origin_q + floatBitsToInt(quanta_bits)) * u_quantum + (u_origin_rest + rest);
+vec3 from_fixed_origin(ivec3 quanta, vec3 rest) {
+  return vec3(u_origin_q + quanta) * u_quantum + (u_origin_rest + rest);
+}
+vec3 from_fixed_origin(vec3 quanta_bits, vec3 rest) {  // quanta stored as float bits (buffers of floats)
+  return from_fixed_origin(floatBitsToInt(quanta_bits), rest);
 }
 
 // Real roots of a·λ² + 2b·λ + c = 0, ascending, by the q-form (no cancellation in −b ∓ √D).
