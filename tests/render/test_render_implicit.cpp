@@ -367,5 +367,20 @@ TEST_F(GlImplicit, FarFromTheWorldsOriginMatchesTheReference) {
       }
     }
   }
+  // Every kind of operation on the double path (abs and a real power, sqrt, cheb, exp and cos),
+  // the centre as parameters (double uniforms there), 10⁴ diagonals out.
+  for (const char* name : {"superquadric", "torus-sqrt", "chmutov-iter-14", "scherk"}) {
+    const implicit::GalleryEntry g = implicit::gallery_surface(name);
+    ImplicitSurface s = g.surface;
+    const Eigen::Vector3d c = 1e4 * s.bounds.diagonal() * dir;
+    s.expression = moved(s.expression);
+    s.parameters.insert({{"cx", c.x()}, {"cy", c.y()}, {"cz", c.z()}});
+    s.bounds = {s.bounds.min + c, s.bounds.max + c};
+    Model m;
+    m.implicits.push_back(s);
+    const std::string what = std::string(name) + " at 1e4 diagonals";
+    SCOPED_TRACE(what);
+    expect_agree(run(m, view(s.bounds, 40, 25), amp_for(g), what), 500);
+  }
 }
 #endif
