@@ -36,25 +36,9 @@ flat out uint v_colour;
 flat out int v_id;
 flat out uint v_index;  // in the Glyphs buffer
 
-// The projected ellipse (NDC) of x = C + M u (eye space), S = M Mᵀ: centre c and shape S2 =
-// L Lᵀ. From the dual conic D = P Q* Pᵀ normalised by −D₃₃ = C_z² − S_zz; the C Cᵀ terms of
-// c cᵀ + D₂ₓ₂ cancel analytically, so they are never formed (far, small glyphs keep their digits).
-// The result is invariant under (C, S) → (C/L, S/L²): callers pass lengths in units of the
-// glyph's distance, so the fourth powers stay within float's range.
 void project_ellipse(vec3 C, mat3 S, out vec2 c, out mat2 S2) {
-  vec2 K = vec2(u_proj[0][0], u_proj[1][1]);
-  float den = C.z * C.z - S[2][2];
-  vec2 sz = vec2(S[0][2], S[1][2]);
-  vec2 Cxy = C.xy;
-  c = K * (sz - Cxy * C.z) / den;
-  mat2 sxy = mat2(S[0][0], S[0][1], S[1][0], S[1][1]);
-  mat2 N = (den * sxy + S[2][2] * outerProduct(Cxy, Cxy) + outerProduct(sz, sz)) -
-           C.z * (outerProduct(sz, Cxy) + outerProduct(Cxy, sz));
-  S2 = mat2(K.x * K.x * N[0][0], K.x * K.y * N[0][1], K.x * K.y * N[1][0], K.y * K.y * N[1][1]) / (den * den);
+  project_ellipse(C, S, vec2(u_proj[0][0], u_proj[1][1]), c, S2);  // NDC
 }
-
-// Support of the ellipse (c, S2) in the unit direction n.
-float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 * n), 0.0)); }
 
 void main() {
   Glyph g = glyphs[u_first + gl_InstanceID];

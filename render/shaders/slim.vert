@@ -2,14 +2,14 @@
 // that bounds the patch's surface piece, not the ball. The piece lies in the slab
 // s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
 // load); the quad is the screen rectangle oriented along the projected axis that holds the
-// projected octagonal prism about that slab (16 corners) — the projected slab's quad: thin where
-// the piece is seen edge-on. Balls without a tight slab get the ball's axis-aligned tight screen
+// projected cylinder about that slab (the hull of its two cap discs' exact projected ellipses,
+// [Sigg06] eq. 5) — the projected slab's quad: thin where the piece is seen edge-on. Balls without a tight slab get the ball's axis-aligned tight screen
 // rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
 // never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
 // test for spheres ([Stoll06] eq. 18).
 //
 // The quad lies at one depth, in front of every point of the surface piece: the nearer of the
-// ball's front and the prism's nearest corner, so a depth test before the fragment stage (pass 2
+// ball's front and the cylinder's nearest point, so a depth test before the fragment stage (pass 2
 // of the early-depth path, render/passes/slim_pass.h) rejects only fragments whose hits would
 // fail it.
 //
@@ -48,8 +48,6 @@ uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
 uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
 uniform int u_base;   // the first ball of this draw
-
-const float kOctagonOut = 1.0823922;  // 1/cos(22.5°): the octagon about a unit circle
 
 out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
@@ -103,11 +101,11 @@ void main() {
   int vid = gl_VertexID;
 #endif
 
-  // The prism about the slab: an octagon about its disc of radius ρ, caps at s0 and s1.
+  // The cylinder about the slab: its disc of radius ρ, caps at s0 and s1.
   bool tight = ball.slab.w <= ball.q2.w && u_tight != 0;
   float s0 = ball.slab.w, s1 = ball.q2.w;
   float rho = (s0 <= 0.0 && s1 >= 0.0) ? 1.0 : sqrt(max(0.0, 1.0 - min(s0 * s0, s1 * s1)));
-  float reach = tight ? sqrt(rho * rho * kOctagonOut * kOctagonOut + max(s0 * s0, s1 * s1)) : 1.0;
+  float reach = tight ? sqrt(rho * rho + max(s0 * s0, s1 * s1)) : 1.0;
   float Rp = R * reach;  // a sphere about the centre that holds the proxy
   bool inside_or_near = dot(C, C) <= Rp * Rp * 1.0001 || C.z + Rp > -u_near;
   vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
@@ -118,32 +116,31 @@ void main() {
     corner = vec2((vid & 1) != 0 ? 1.0 : -1.0, (vid & 2) != 0 ? 1.0 : -1.0);
   } else {
     if (tight) {
-      // Screen slopes k = xy/(−z) of the 16 corners, extents along the projected axis a and a⊥.
+      // Extents in screen slopes k = xy/(−z) along the projected axis a and a⊥.
       vec3 axis = u_view_rot * ball.slab.xyz;
-      vec3 t1 = normalize(abs(axis.x) < 0.9 ? cross(axis, vec3(1.0, 0.0, 0.0)) : cross(axis, vec3(0.0, 1.0, 0.0)));
-      vec3 t2 = cross(axis, t1);
       vec2 kc = C.xy / -C.z;
       vec3 ahead = C + R * axis;
       vec2 a = ahead.xy / -ahead.z - kc;
       a = dot(a, a) > 1e-20 * dot(kc, kc) + 1e-30 ? normalize(a) : vec2(1.0, 0.0);
       vec2 ap = vec2(-a.y, a.x);
-      vec2 lo = vec2(1e30), hi = vec2(-1e30);
-      float z_prism = -1e30;  // the prism's nearest corner
-      for (int k = 0; k < 8; ++k) {
-        float angle = (float(k) + 0.5) * 0.78539816;
-        vec3 ring = rho * kOctagonOut * (cos(angle) * t1 + sin(angle) * t2);
-        for (int cap = 0; cap < 2; ++cap) {
-          vec3 p = C + R * (ring + (cap == 0 ? s0 : s1) * axis);
-          vec2 kp = p.xy / -p.z - kc;  // relative to the centre's slope: no large cancellation
-          vec2 e = vec2(dot(kp, a), dot(kp, ap));
-          lo = min(lo, e);
-          hi = max(hi, e);
-          z_prism = max(z_prism, p.z);
-        }
-      }
+      // The slab's cylinder (its two cap discs of radius ρ, at s0 and s1) projects onto the hull
+      // of the caps' projected ellipses ([Sigg06] eq. 5, prelude.glsl project_ellipse): its
+      // extents along a and a⊥ are their supports, in slopes, lengths in units of L.
+      float L = max(-C.z, R);
+      mat3 S = (R * rho / L) * (R * rho / L) * (mat3(1.0) - outerProduct(axis, axis));
+      vec2 c0, c1;
+      mat2 S0, S1;
+      project_ellipse((C + R * s0 * axis) / L, S, vec2(1.0), c0, S0);
+      project_ellipse((C + R * s1 * axis) / L, S, vec2(1.0), c1, S1);
+      vec2 hi = vec2(max(support(c0, S0, a), support(c1, S1, a)), max(support(c0, S0, ap), support(c1, S1, ap))) -
+                vec2(dot(kc, a), dot(kc, ap));
+      vec2 lo = -vec2(max(support(c0, S0, -a), support(c1, S1, -a)), max(support(c0, S0, -ap), support(c1, S1, -ap))) -
+                vec2(dot(kc, a), dot(kc, ap));
+      // The nearest point of the cylinder: a cap centre's z plus its rim's reach in z.
+      float z_prism = C.z + R * max(s0 * axis.z, s1 * axis.z) + R * rho * sqrt(max(0.0, 1.0 - axis.z * axis.z));
       zn = min(zn, z_prism);
-      // Widen by a float ulp of the slopes so rounding never trims a covered pixel.
-      vec2 pad = vec2(2e-6 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
+      // Widen by a few float ulps of the slopes so rounding never trims a covered pixel.
+      vec2 pad = vec2(1e-5 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
       lo -= pad;
       hi += pad;
       vec2 e = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
