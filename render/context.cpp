@@ -16,6 +16,13 @@ std::string GlContext::description() const {
 
 std::vector<std::string> context_names() { return {"auto", "osmesa", "egl", "glfw"}; }
 
+bool current_context_is_software() {
+  const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  if (!r) return false;
+  const std::string_view s(r);
+  return s.find("llvmpipe") != s.npos || s.find("softpipe") != s.npos || s.find("swrast") != s.npos;
+}
+
 std::unique_ptr<GlContext> create_context(std::string_view name, const ContextOptions& options) {
   using Factory = std::unique_ptr<GlContext> (*)(const ContextOptions&);
   std::vector<std::pair<std::string, Factory>> order;

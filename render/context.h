@@ -38,6 +38,10 @@ std::unique_ptr<GlContext> create_context(std::string_view name, const ContextOp
 /// Context names accepted by create_context.
 std::vector<std::string> context_names();
 
+/// The current context rasterizes on the CPU (Mesa's llvmpipe, softpipe, swrast), where a
+/// triangle costs more than the fragments it covers: passes pick their proxies by it.
+bool current_context_is_software();
+
 namespace detail {
 std::unique_ptr<GlContext> create_osmesa(const ContextOptions&);
 std::unique_ptr<GlContext> create_egl(const ContextOptions&);

@@ -59,7 +59,8 @@ double cpu_ms() {
 
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
             const SlimBlendOptions& blend = {}, bool tight_splats = true, bool effects = false,
-            bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0) {
+            bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0,
+            std::optional<bool> glyph_early_depth = std::nullopt) {
   render::RenderOptions o;
   o.shadow_map_size = shadow_map_size;
   o.slim_pixel_error = pixel_error;
@@ -67,7 +68,10 @@ Row measure(const std::string& name, render::Renderer& r, const Camera& cam, boo
   o.cull = cull;
   o.shadows = o.outlines = effects;  // as [Sigg06] Table 1's second row
   o.tet_early_depth = tet_early_depth;
-  o.glyph_early_depth = tet_early_depth;  // glyphs: occluders and nearest hits first (render/passes/glyph_pass.h)
+  // Glyphs: the platform's way unless asked (render/passes/glyph_pass.h); the hit-depth rows draw
+  // each glyph's polygon writing its hit's depth.
+  o.glyph_early_depth = glyph_early_depth;
+  if (!tet_early_depth) o.glyph_early_depth = false, o.glyph_rectangles = false;
   o.slim_early_depth = tet_early_depth;   // SLIM: splats at conservative depths, nearest chunks first (slim_pass.h)
   o.slim_tight_splats = tight_splats;
   o.set_slim_blend(blend);
@@ -272,7 +276,10 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           if (!model.glyphs.empty()) {
                             rows.push_back(measure("quadrics, shadows+outlines", r, cam, true, a->frames,
                                                    slim_blend_of(model), true, true, true, true, a->shadow_map));
-                            // Each proxy fragment writing its hit's depth (no early depth test on llvmpipe).
+                            // Occluders, nearest hits, one ray per pixel (the default where triangles are cheap).
+                            rows.push_back(measure("quadrics, early depth", r, cam, true, a->frames, slim_blend_of(model),
+                                                   true, false, true, true, 0, 0, true));
+                            // Each polygon fragment writing its hit's depth (no early depth test on llvmpipe).
                             rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
                                                    slim_blend_of(model), true, false, false));
                             rows.push_back(measure("quadrics, hit depth, shadows+outlines", r, cam, true, a->frames,
@@ -408,6 +415,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         if (tess_fx && glyph_fx)
                           j["ratio_glyphs_over_tessellated_shadows_outlines"] = glyph_fx->ms_median / tess_fx->ms_median;
                         if (tess && hit_depth) j["ratio_glyphs_hit_depth_over_tessellated"] = hit_depth->ms_median / tess->ms_median;
+                        if (const Row* early = row_named("quadrics, early depth"); tess && early)
+                          j["ratio_glyphs_early_depth_over_tessellated"] = early->ms_median / tess->ms_median;
                         if (tess_fx && hit_fx)
                           j["ratio_glyphs_hit_depth_over_tessellated_shadows_outlines"] = hit_fx->ms_median / tess_fx->ms_median;
                         if (const Row* base = row_named("baseline model"))

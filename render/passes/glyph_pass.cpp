@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/primitive.h"
+#include "render/context.h"
 #include "render/shaders.h"
 
 namespace quadrix::render {
@@ -92,7 +93,8 @@ std::string with_lib(std::string_view stage) { return std::string(shader_source(
 }  // namespace
 
 GlyphPass::GlyphPass()
-    : program_("glyph", with_lib(shader_source("glyph.vert")), with_lib(shader_source("glyph.frag"))) {
+    : software_(current_context_is_software()),
+      program_("glyph", with_lib(shader_source("glyph.vert")), with_lib(shader_source("glyph.frag"))) {
   occluder_ = gl::Program("glyph occluders", with_lib(shader_source("glyph_occluder.vert")), shader_source("glyph_occluder.frag"));
   nearest_ = gl::Program("glyph nearest hits", with_lib(shader_source("glyph.vert")), with_lib(shader_source("glyph.frag")),
                          "#define GLYPH_NEAREST 1\n");
@@ -147,11 +149,11 @@ void GlyphPass::draw_proxies(const gl::Program& program, const Frame& f, bool co
 
 void GlyphPass::run(const Frame& f) {
   begin_gbuffer_draw(f);
-  if (f.options.glyph_early_depth && !f.options.glyph_proxies) {
+  if (f.options.glyph_early_depth.value_or(!software_) && !f.options.glyph_proxies) {
     run_early_depth(f);
     return;
   }
-  draw_proxies(program_, f, true, false);
+  draw_proxies(program_, f, true, f.options.glyph_rectangles.value_or(software_));
 }
 
 void GlyphPass::run_early_depth(const Frame& f) {

@@ -3,6 +3,9 @@
 /// instanced polygon each around the exact projected outline (octagons around ellipses,
 /// 12-gons around cylinders), ray-cast in the glyph's parameter space into the G-buffer.
 ///
+/// On a software rasterizer the default is the direct path with rectangles (RenderOptions::
+/// glyph_rectangles: measured fastest there), elsewhere the early-depth path below.
+///
 /// Early-depth path (RenderOptions::glyph_early_depth): a fragment that writes its hit's depth
 /// keeps llvmpipe from testing depth before the shader, so every proxy fragment of every glyph
 /// behind the surface would be ray-cast. Instead: (1) depth-only occluders, a square inside each
@@ -33,6 +36,7 @@ private:
   void draw_proxies(const gl::Program& program, const Frame& frame, bool count_statistics, bool rectangles) const;
   void run_early_depth(const Frame& frame);
 
+  bool software_ = false;  // render/context.h current_context_is_software, at construction
   gl::Program program_;
   gl::Program occluder_, nearest_, resolve_;  // the early-depth path
   gl::Buffer nearest_buffer_;  // per pixel: the nearest hit's window depth bits, its glyph's index

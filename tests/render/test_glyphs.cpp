@@ -158,10 +158,14 @@ TEST_F(GlGlyphs, IdsNameTheNearestGlyph) {
 
 TEST_F(GlGlyphs, NoGlyphPixelLiesOutsideItsProxy) {
   // Property over random glyphs and views, near ones included: every pixel the reference covers
-  // is a fragment of the proxy (drawn flat with glyph_proxies). The proxies' waste is printed.
+  // is a fragment of the proxy (drawn flat with glyph_proxies), polygons and rectangles alike.
+  // The proxies' waste is printed.
+  for (const bool rectangles : {false, true}) {
+  SCOPED_TRACE(rectangles ? "rectangles" : "polygons");
   std::mt19937_64 rng(11);
   render::RenderOptions proxies;
   proxies.glyph_proxies = true;
+  proxies.glyph_rectangles = rectangles;
   proxies.cull = false;
   double proxy_area[3] = {0, 0, 0}, glyph_area[3] = {0, 0, 0};
   for (int i = 0; i < 90; ++i) {
@@ -187,12 +191,15 @@ TEST_F(GlGlyphs, NoGlyphPixelLiesOutsideItsProxy) {
   const char* names[] = {"sphere", "ellipsoid", "cylinder"};
   for (int k = 0; k < 3; ++k) {
     const double waste = 1.0 - glyph_area[k] / proxy_area[k];
-    std::printf("%s proxy waste %.1f %% (area of the proxies outside the glyphs)\n", names[k], 100 * waste);
+    std::printf("%s %s waste %.1f %% (area of the proxies outside the glyphs)\n", names[k],
+                rectangles ? "rectangle" : "polygon", 100 * waste);
     EXPECT_GE(waste, 0.0);
-    // A circumscribed octagon leaves 5.2 % of its area outside an ellipse, plus pixel rounding.
+    // A circumscribed octagon leaves 5.2 % of its area outside an ellipse, a rectangle 21.5 %,
+    // plus pixel rounding.
     if (k != 2) {
-      EXPECT_LE(waste, 0.09);
+      EXPECT_LE(waste, rectangles ? 0.26 : 0.09);
     }
+  }
   }
 }
 
@@ -207,6 +214,7 @@ TEST_F(GlGlyphs, StatisticsMeasureTheWaste) {
   render::RenderOptions o;
   o.statistics = true;
   o.glyph_early_depth = false;  // the tight proxies (the early-depth path draws rectangles)
+  o.glyph_rectangles = false;
   draw(m, cam, o);
   const auto& st = last_stats_;
   std::printf("glyph fragments %llu hit %llu waste %.2f %%\n", (unsigned long long)st.glyph_proxy_fragments,
@@ -303,10 +311,18 @@ TEST_F(GlGlyphs, EarlyDepthRayCastsOnlyNearTheSurface) {
     SCOPED_TRACE(early);
     render::RenderOptions o;
     o.glyph_early_depth = early;
+    o.glyph_rectangles = false;
     o.statistics = true;
     const Comparison c = testing_gl::compare(ref, draw(m, cam, o));
     expect_accurate(c, 10000);
     fragments[early] = last_stats_.glyph_proxy_fragments;
+  }
+  {  // the direct path with rectangles (the default on software rasterizers)
+    render::RenderOptions o;
+    o.glyph_early_depth = false;
+    o.glyph_rectangles = true;
+    SCOPED_TRACE("rectangles");
+    expect_accurate(testing_gl::compare(ref, draw(m, cam, o)), 10000);
   }
   std::printf("proxy fragments ray-cast: %llu early depth, %llu hit depth\n", (unsigned long long)fragments[1],
               (unsigned long long)fragments[0]);
