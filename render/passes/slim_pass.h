@@ -3,6 +3,13 @@
 /// the first hit), accumulation (additive weighted normal, depth, colour), resolve (divide by Σw
 /// into the G-buffer, shaded later with everything else). And the debug overlay of their splats.
 ///
+/// In the camera's view the resolve is drawn on the far plane with the depth test GL_GREATER and
+/// writes no depth, so only pixels with a depth below 1 run it (early depth test; pass 1 keeps
+/// its depth-buffer value below 1 even past the far plane): the depth buffer keeps pass 1's
+/// pushed depth there, and the G-buffer's eye depth is the blended one (what the shading, the
+/// outlines and the read-back use). The light's view, whose depth buffer is the shadow map,
+/// writes the blended depth.
+///
 /// Early-depth path (RenderOptions::slim_early_depth): llvmpipe runs the depth test before the
 /// fragment shader only for shaders that write no depth. Pass 1 is unchanged but also keeps its
 /// depth in a colour target; pass 2's splats lie in front of every hit they can make
