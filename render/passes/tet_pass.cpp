@@ -56,10 +56,18 @@ GpuTet pack(const TetPatch& t, std::int32_t id, const FixedOrigin& origin) {
 
 }  // namespace
 
+const gl::Program& TetPass::program(bool entry_face_depth, bool corner_colours) {
+  std::optional<gl::Program>& p = programs_[2 * int(entry_face_depth) + int(corner_colours)];
+  if (!p)
+    p.emplace(fmt::format("tet{}{}", entry_face_depth ? " (entry-face depth)" : "", corner_colours ? " (corner colours)" : ""),
+              shader_source("tet.vert"), shader_source("tet.frag"),
+              fmt::format("{}#define TET_CORNER_COLOURS {}\n", entry_face_depth ? "" : "#define TET_EXACT_DEPTH 1\n",
+                          corner_colours ? 1 : 0));
+  return *p;
+}
+
 TetPass::TetPass()
-    : program_("tet", shader_source("tet.vert"), shader_source("tet.frag"), "#define TET_EXACT_DEPTH 1\n"),
-      early_program_("tet (entry-face depth)", shader_source("tet.vert"), shader_source("tet.frag")),
-      depth_program_("depth from G-buffer", shader_source("fullscreen.vert"), shader_source("depth_from_gbuffer.frag")) {}
+    : depth_program_("depth from G-buffer", shader_source("fullscreen.vert"), shader_source("depth_from_gbuffer.frag")) {}
 
 void TetPass::upload(std::span<const TetPatch> tets, bool tessellation) {
   tessellation_ = tessellation;
@@ -118,7 +126,7 @@ void TetPass::run(const Frame& f) {
   // Entry-face depth needs the G-buffer to turn it back into hit depth: not for the light's
   // depth-only view (shadow map), which must hold the hit depth itself.
   const bool early_depth = o.tet_early_depth && tessellation_ && !f.depth_only;
-  const gl::Program& program = early_depth ? early_program_ : program_;
+  const gl::Program& program = this->program(early_depth, has_corner_colours_);
   begin_gbuffer_draw(f);
   // Front faces of each tetrahedron only: every covered pixel gets exactly one ray.
   glEnable(GL_CULL_FACE);
@@ -130,7 +138,6 @@ void TetPass::run(const Frame& f) {
   program.set("u_count_stats", o.statistics ? 1 : 0);
   program.set("u_clip_eps", o.clip_eps);
   program.set("u_base", 0);
-  program.set("u_corner_colours", has_corner_colours_ ? 1 : 0);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, corner_colours_.id());
   // Statistics frames draw instanced so each tetrahedron is counted exactly once; other frames
   // indexed, 4 vertex-shader runs per tetrahedron instead of 12 (measured on llvmpipe).

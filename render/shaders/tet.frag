@@ -14,14 +14,15 @@ in vec4 v_plane_v;
 in float v_z_entry;
 flat in vec4 v_bc;
 flat in uint v_colour;
+#if TET_CORNER_COLOURS  // tet.vert
 flat in uvec4 v_corner_colours;
 flat in vec4 v_heights;
+#endif
 flat in int v_id;
 
 uniform mat4 u_proj;
 uniform int u_cull;
 uniform float u_clip_eps;  // tolerance of the plane tests, in local units
-uniform int u_corner_colours;
 
 #ifdef TET_EXACT_DEPTH
 layout(depth_greater) out float gl_FragDepth;
@@ -71,13 +72,15 @@ void main() {
 #endif
   out_normal_depth = vec4(n, -z);
   vec3 albedo = unpack_colour(v_colour);
-  if (u_corner_colours != 0) {
+#if TET_CORNER_COLOURS
+  {
     // Barycentric coordinates: each plane's distance over its corner's height.
     vec4 w = max((v_plane_o + t * plane_d) / v_heights, vec4(0.0));
     w /= max(w.x + w.y + w.z + w.w, 1e-30);
     albedo = w.x * unpack_colour(v_corner_colours.x) + w.y * unpack_colour(v_corner_colours.y) +
              w.z * unpack_colour(v_corner_colours.z) + w.w * unpack_colour(v_corner_colours.w);
   }
+#endif
   out_albedo = vec4(albedo, 1.0);
   out_id = v_id;
 }

@@ -23,7 +23,6 @@ uniform float u_target_distance;   // ‖target − eye‖: the target is at (0,
 uniform int u_cull;        // per-quadric and per-fragment backface culling
 uniform int u_count_stats;
 uniform int u_indexed;
-uniform int u_corner_colours;  // colours per corner (binding 2), blended barycentrically
 uniform int u_base;         // instanced: the first tetrahedron of this draw
 
 out vec3 v_o;
@@ -35,8 +34,10 @@ out vec4 v_plane_v;
 out float v_z_entry;
 flat out vec4 v_bc;
 flat out uint v_colour;
+#if TET_CORNER_COLOURS  // colours per corner (binding 2), blended barycentrically
 flat out uvec4 v_corner_colours;
 flat out vec4 v_heights;       // each corner's distance from its opposite face (local units)
+#endif
 flat out int v_id;
 
 // Faces with outward counter-clockwise order for a positively oriented tetrahedron.
@@ -100,9 +101,13 @@ void main() {
     float d = -dot(n, p0);
     v_plane_o[i] = dot(n, o) + d;
     v_plane_v[i] = dot(n, v_dir);
+#if TET_CORNER_COLOURS
     v_heights[i] = dot(n, t.corner[i].xyz) + d;
+#endif
   }
-  v_corner_colours = u_corner_colours != 0 ? corner_colours[tet] : uvec4(0u);
+#if TET_CORNER_COLOURS
+  v_corner_colours = corner_colours[tet];
+#endif
   v_bc = vec4(b, c);
   v_colour = floatBitsToUint(t.centre_lo.w);
   v_id = floatBitsToInt(t.corner[0].w);
