@@ -100,8 +100,8 @@ void main() {
       mat2 R0 = mat2(cos(ang0), sin(ang0), -sin(ang0), cos(ang0));
       mat2 R1 = mat2(cos(ang1), sin(ang1), -sin(ang1), cos(ang1));
       vec2 n0 = R0 * d, n1 = R1 * d;
-      float h0 = max(support(c0, S0, n0), support(c1, S1, n0));
-      float h1 = max(support(c0, S0, n1), support(c1, S1, n1));
+      float h0 = hull_support(c0, S0, c1, S1, n0);
+      float h1 = hull_support(c0, S0, c1, S1, n1);
       // Solve [n0; n1] x = (h0, h1).
       float det = n0.x * n1.y - n0.y * n1.x;
       corner = vec2(h0 * n1.y - h1 * n0.y, n0.x * h1 - n1.x * h0) / det;

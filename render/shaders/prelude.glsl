@@ -80,6 +80,8 @@ void project_ellipse(vec3 C, mat3 S, vec2 K, out vec2 c, out mat2 S2) {
 
 // Support of the ellipse (c, S2) in the unit direction n.
 float support(vec2 c, mat2 S2, vec2 n) { return dot(n, c) + sqrt(max(dot(n, S2 * n), 0.0)); }
+// Support of the hull of two ellipses (a capped cylinder's projection: its two end discs).
+float hull_support(vec2 c0, mat2 S0, vec2 c1, mat2 S1, vec2 n) { return max(support(c0, S0, n), support(c1, S1, n)); }
 
 vec3 unpack_colour(uint c) {
   return vec3(float(c & 0xFFu), float((c >> 8) & 0xFFu), float((c >> 16) & 0xFFu)) / 255.0;

@@ -3,8 +3,8 @@
 // s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
 // load); the quad is the screen rectangle oriented along the projected axis that holds the
 // projected cylinder about that slab (the hull of its two cap discs' exact projected ellipses,
-// [Sigg06] eq. 5) — the projected slab's quad: thin where the piece is seen edge-on. Balls without a tight slab get the ball's axis-aligned tight screen
-// rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
+// [Sigg06] eq. 5) — the projected slab's quad: thin where the piece is seen edge-on. Balls
+// without a tight slab get the ball's axis-aligned tight screen rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
 // never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
 // test for spheres ([Stoll06] eq. 18).
 //
@@ -132,13 +132,12 @@ void main() {
       mat2 S0, S1;
       project_ellipse((C + R * s0 * axis) / L, S, vec2(1.0), c0, S0);
       project_ellipse((C + R * s1 * axis) / L, S, vec2(1.0), c1, S1);
-      vec2 hi = vec2(max(support(c0, S0, a), support(c1, S1, a)), max(support(c0, S0, ap), support(c1, S1, ap))) -
-                vec2(dot(kc, a), dot(kc, ap));
-      vec2 lo = -vec2(max(support(c0, S0, -a), support(c1, S1, -a)), max(support(c0, S0, -ap), support(c1, S1, -ap))) -
-                vec2(dot(kc, a), dot(kc, ap));
+      vec2 kc_e = vec2(dot(kc, a), dot(kc, ap));  // the centre's slope in the (a, a⊥) frame
+      vec2 hi = vec2(hull_support(c0, S0, c1, S1, a), hull_support(c0, S0, c1, S1, ap)) - kc_e;
+      vec2 lo = -vec2(hull_support(c0, S0, c1, S1, -a), hull_support(c0, S0, c1, S1, -ap)) - kc_e;
       // The nearest point of the cylinder: a cap centre's z plus its rim's reach in z.
-      float z_prism = C.z + R * max(s0 * axis.z, s1 * axis.z) + R * rho * sqrt(max(0.0, 1.0 - axis.z * axis.z));
-      zn = min(zn, z_prism);
+      float z_cylinder = C.z + R * max(s0 * axis.z, s1 * axis.z) + R * rho * sqrt(max(0.0, 1.0 - axis.z * axis.z));
+      zn = min(zn, z_cylinder);
       // Widen by a few float ulps of the slopes so rounding never trims a covered pixel.
       vec2 pad = vec2(1e-5 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
       lo -= pad;

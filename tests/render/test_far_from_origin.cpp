@@ -305,6 +305,14 @@ class FarMesh : public GlTest {};
 
 namespace {
 
+// The random quad blob both far-mesh tests draw, and its box.
+std::pair<PolygonMesh, Box3> quad_blob_and_box() {
+  std::mt19937_64 rng(8);
+  std::pair<PolygonMesh, Box3> r{test::random_quad_blob(rng, 6), {}};
+  for (const auto& v : r.first.vertices) r.second.extend(v);
+  return r;
+}
+
 // A mesh's G-buffer g against g0, the same mesh's image taken as the truth (meshes are not in the
 // CPU reference): coverage mismatches, and depth (÷ g0's depth range) and normal errors' p99.
 struct MeshImageError {
@@ -342,10 +350,7 @@ void expect_same_mesh_image(const MeshImageError& e) {
 }  // namespace
 
 TEST_F(FarMesh, SameImageAsAtTheOrigin) {
-  std::mt19937_64 rng(8);
-  const PolygonMesh base = test::random_quad_blob(rng, 6);
-  Box3 box;
-  for (const auto& v : base.vertices) box.extend(v);
+  const auto [base, box] = quad_blob_and_box();
   const Camera cam0 = frame_box(box, {.azimuth_deg = 35, .elevation_deg = 25, .width = 200, .height = 200});
   renderer_->set_mesh(base);
   renderer_->draw(cam0, {});
@@ -395,10 +400,7 @@ PolygonMesh joined(PolygonMesh a, const PolygonMesh& b) {
 // not in the CPU reference; at 10⁶ double itself moves them by 1.8e-5 of their depth range
 // against the same part at the origin, so the image at the origin is not the truth there).
 TEST_F(FarMesh, TinyPartOfALargeMeshAsByItself) {
-  std::mt19937_64 rng(8);
-  const PolygonMesh unit = test::random_quad_blob(rng, 6);
-  Box3 ub;
-  for (const auto& v : unit.vertices) ub.extend(v);
+  const auto [unit, ub] = quad_blob_and_box();
   const double d0 = ub.diagonal();
   const Vector3d place(0.25, -0.2, 0.2);
   const FramingOptions view{.azimuth_deg = 35, .elevation_deg = 25, .width = 200, .height = 200};
