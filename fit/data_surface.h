@@ -50,7 +50,9 @@ public:
   /// Distance from x to the data's surface, world units (thread-safe). With a finite cap, any
   /// distance beyond the cap comes back as +inf (faster: a mesh walk prunes what lies farther).
   /// With good > 0, a mesh walk stops at the first triangle within good and returns its
-  /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions).
+  /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions); for
+  /// points, a disc within good of a point surely among the `candidates` nearest answers so,
+  /// before any search. Either way the answer to "≤ good?" is the full query's.
   double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
                   double good = 0) const;
   /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax); nothing

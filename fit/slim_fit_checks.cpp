@@ -314,28 +314,38 @@ double patch_bend(const SlimPatch& patch) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(patch.local.A, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
 }
 
-// Along a ray u + σd (local units, d a unit view direction), g is exactly g0 + a1·σ + a2·σ² with
-// a1 = ∇g(u)·d and |a2| = |dᵀAd| ≤ bend; a view within `widest` of −n has A1 = −a1 ≥
-// cos(widest)·(∇g·n) − sin(widest)·|∇g − (∇g·n)n|. With A1 > 0, g falls strictly through zero
-// within |σ| ≤ ρ, the smaller root of bend·ρ² − A1·ρ + |g0| (g' = a1 + 2a2σ < 0 there): one
-// front-facing crossing, the patch's only one on the line. So every such ray meets the patch
-// within ρR of x if the ball and the planes hold ρ of room around x and ρR ≤ reach.
+// The proofs of meets_views and meets_every_view: fit/slim_fitter.h.
+PatchAtSpot patch_at_spot(const SlimPatch& patch, const Eigen::Vector3d& x) {
+  PatchAtSpot a;
+  a.u = (x - patch.centre) / patch.radius;
+  a.r = a.u.norm();
+  if (!(a.r < 1.0)) return a;
+  a.inside = true;
+  a.g = patch.local.gradient(a.u);
+  a.g0 = std::abs(patch.local.eval(a.u));
+  return a;
+}
+
+bool meets_views(const SlimPatch& patch, double bend, const PatchAtSpot& at, double A1, double reach) {
+  const double disc = A1 * A1 - 4.0 * bend * at.g0;
+  if (!at.inside || !(A1 > 0) || !(disc > 0)) return false;
+  const double rho = 2.0 * at.g0 / (A1 + std::sqrt(disc)) * (1.0 + 1e-6) + 1e-9;
+  if (!(rho * patch.radius <= reach) || !(at.r + rho < 1.0)) return false;
+  for (const ClipPlane& c : patch.clips)
+    if (!(c.n.dot(at.u) + c.d > rho * c.n.norm())) return false;
+  return true;
+}
+
+bool meets_every_view(const SlimPatch& patch, double bend, const PatchAtSpot& at, const Eigen::Vector3d& n, double widest,
+                      double reach) {
+  if (!at.inside) return false;
+  const double gn = at.g.dot(n);
+  return meets_views(patch, bend, at, std::cos(widest) * gn - std::sin(widest) * (at.g - gn * n).norm(), reach);
+}
+
 bool meets_every_view(const SlimPatch& patch, double bend, const Eigen::Vector3d& x, const Eigen::Vector3d& n, double widest,
                       double reach) {
-  const Eigen::Vector3d u = (x - patch.centre) / patch.radius;
-  const double r = u.norm();
-  if (!(r < 1.0)) return false;
-  const Eigen::Vector3d g = patch.local.gradient(u);
-  const double gn = g.dot(n);
-  const double A1 = std::cos(widest) * gn - std::sin(widest) * (g - gn * n).norm();
-  const double g0 = std::abs(patch.local.eval(u));
-  const double disc = A1 * A1 - 4.0 * bend * g0;
-  if (!(A1 > 0) || !(disc > 0)) return false;
-  const double rho = 2.0 * g0 / (A1 + std::sqrt(disc)) * (1.0 + 1e-6) + 1e-9;
-  if (!(rho * patch.radius <= reach) || !(r + rho < 1.0)) return false;
-  for (const ClipPlane& c : patch.clips)
-    if (!(c.n.dot(u) + c.d > rho * c.n.norm())) return false;
-  return true;
+  return meets_every_view(patch, bend, patch_at_spot(patch, x), n, widest, reach);
 }
 
 std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(const ReferenceScene& scene, const PointIndex& index,
@@ -370,6 +380,7 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
     auto& out = found.local();
     std::vector<Neighbour> nb;
     std::vector<std::uint32_t> near;
+    std::vector<PatchAtSpot> at;  // near's patches seen from the spot
     for (std::size_t f = r.begin(); f != r.end(); ++f) {
       if (faces_->centroid[f] == FaceSet::kNone || !face_covered_[f] || face_patched_[f]) continue;
       const Eigen::Vector3d& o = P_[faces_->centroid[f]];
@@ -393,16 +404,17 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
         // the blend hit it (each patch's own first hit, as the blend's first pass takes it), so
         // only a ray none of them meets is traced through the scene.
         balls_near_triangle(index, max_radius, a, b, c, nb, near);
-        // A patch that provably meets every view of a spot spares its rays.
-        const auto meets_every_view = [&](std::uint32_t i, const Eigen::Vector3d& x) {
-          return fit_detail::meets_every_view(slims[i], bend[i], x, n, widest, L);
-        };
         // The patch that last met a view is asked first (neighbouring spots share patches).
         const auto met_by = [&](std::size_t k) {
-          if (k > 0) std::swap(near[0], near[k]);
+          if (k > 0) std::swap(near[0], near[k]), std::swap(at[0], at[k]);
           return true;
         };
+        // A patch that provably meets a view spares its ray (meets_views, for this direction
+        // alone: a third of the spots' patches meet every view, most of the rest most of them),
+        // else the ray is solved against it.
         const auto local_hit = [&](const Ray& ray) {
+          for (std::size_t k = 0; k < near.size(); ++k)
+            if (meets_views(slims[near[k]], bend[near[k]], at[k], -at[k].g.dot(ray.dir), L)) return met_by(k);
           Hit h;
           for (std::size_t k = 0; k < near.size(); ++k)
             if (const std::uint32_t i = near[k];
@@ -420,8 +432,11 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
           }
           const Eigen::Vector3d x = (p + q + s) / 3.0;
           std::uint8_t* asked = &seen[spot++ * cone.size()];
+          at.resize(near.size());
+          for (std::size_t k = 0; k < near.size(); ++k) at[k] = patch_at_spot(slims[near[k]], x);
+          // A patch that provably meets every view of the spot spares all its rays.
           for (std::size_t k = 0; k < near.size(); ++k)
-            if (meets_every_view(near[k], x)) {
+            if (meets_every_view(slims[near[k]], bend[near[k]], at[k], n, widest, L)) {
               met_by(k);
               return;
             }

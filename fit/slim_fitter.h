@@ -20,9 +20,26 @@ namespace quadrix::fit_detail {
 
 /// The spectral norm of a patch's quadratic part: |dᵀAd| for any unit d, local units.
 double patch_bend(const SlimPatch& patch);
-/// Whether every ray through x within `widest` (radians) of −n meets the patch's zero set
-/// front-facing, inside its ball and clip planes, within `reach` (world units) of x — proven from
-/// g's exact quadratic along each such ray (view_holes' shortcut; bend = patch_bend(patch)).
+/// A patch seen from a spot x: x in local units, its distance from the centre, and (inside the
+/// ball) g's gradient and |g| there.
+struct PatchAtSpot {
+  Eigen::Vector3d u, g = Eigen::Vector3d::Zero();
+  double r = 0, g0 = 0;
+  bool inside = false;
+};
+PatchAtSpot patch_at_spot(const SlimPatch& patch, const Eigen::Vector3d& x);
+/// Whether every ray through the spot along a direction d with −∇g·d ≥ A1 (local units) meets
+/// the patch's zero set front-facing, inside its ball and clip planes, within `reach` (world
+/// units) of the spot — proven from g's exact quadratic along the ray (bend = patch_bend(patch)):
+/// along u + σd, g = g0 + a1·σ + a2·σ² with −a1 ≥ A1 and |a2| ≤ bend, so with A1 > 0 g falls
+/// strictly through zero within |σ| ≤ ρ, the smaller root of bend·ρ² − A1·ρ + |g0| (g' < 0
+/// there): one front-facing crossing, if the ball and the planes hold ρ of room around the spot
+/// and ρR ≤ reach.
+bool meets_views(const SlimPatch& patch, double bend, const PatchAtSpot& at, double A1, double reach);
+/// Whether every view of the spot within `widest` (radians) of −n meets the patch so
+/// (view_holes' shortcut): meets_views with A1 = cos(widest)·(∇g·n) − sin(widest)·|∇g − (∇g·n)n|.
+bool meets_every_view(const SlimPatch& patch, double bend, const PatchAtSpot& at, const Eigen::Vector3d& n, double widest,
+                      double reach);
 bool meets_every_view(const SlimPatch& patch, double bend, const Eigen::Vector3d& x, const Eigen::Vector3d& n, double widest,
                       double reach);
 

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "core/error.h"
@@ -564,11 +565,96 @@ TEST(EvaluateSlim, FitterVerifiesWithTheMeasureItReports) {
   EXPECT_LE(r.stats.surface_max, 2 * r.stats.max_error_abs);
 }
 
+// A points data surface answers "within good?" from the discs of its last queries' points
+// (DataSurface::distance): the same answer as the full search over each query's nearest points,
+// an upper bound no nearer than the search's distance. Runs of queries along random lines past a
+// noisy sphere with an open cut (boundary discs), at goods from tiny to wide; then a second,
+// smaller surface built where the first one was (its hints must not carry over).
+TEST(DataSurface, WithinGoodAnswersAsTheFullSearchOnPoints) {
+  std::mt19937_64 rng(37);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const auto cloud = [&](std::size_t n) {
+    std::vector<Eigen::Vector3d> p, nrm;
+    while (p.size() < n) {
+      const Eigen::Vector3d v(U(rng), U(rng), U(rng));
+      if (!(v.norm() > 0.1 && v.norm() <= 1.0) || v.normalized().z() > 0.6) continue;  // open above z = 0.6
+      nrm.push_back(v.normalized());
+      p.push_back((1.0 + 0.003 * U(rng)) * nrm.back());
+    }
+    return std::pair{p, nrm};
+  };
+  std::size_t asked = 0, within = 0;
+  for (const std::size_t n : {4000u, 300u}) {
+    const auto [points, normals] = cloud(n);
+    std::optional<DataSurface> data;
+    data.emplace(DataSurface::from_points(points, normals));
+    for (int run = 0; run < 400; ++run) {
+      const Eigen::Vector3d a = 1.1 * Eigen::Vector3d(U(rng), U(rng), U(rng)), d = 0.002 * Eigen::Vector3d(U(rng), U(rng), U(rng));
+      const double good = std::pow(10.0, -3.0 + 2.5 * std::abs(U(rng)));
+      // The run's quick answers first (each thread's hints come from the run's earlier queries).
+      std::vector<double> quicks;
+      for (int k = 0; k < 60; ++k)
+        quicks.push_back(data->distance(a.normalized() + double(k) * d, std::numeric_limits<double>::infinity(), good));
+      for (int k = 0; k < 60; ++k) {
+        const double full = data->distance(a.normalized() + double(k) * d), quick = quicks[std::size_t(k)];
+        ++asked;
+        within += full <= good;
+        ASSERT_EQ(quick <= good, full <= good) << "run " << run << " query " << k << ": " << quick << " against " << full;
+        ASSERT_GE(quick, full) << "run " << run << " query " << k;
+        if (quick > good) ASSERT_EQ(quick, full);
+      }
+    }
+    data.reset();
+  }
+  std::printf("%zu queries, %zu within their good\n", asked, within);
+  EXPECT_GT(within, asked / 4);
+  EXPECT_LT(within, asked * 3 / 4 + asked / 5);
+}
+
+// A random patch for view_holes' shortcuts (trial picks its curvature and clipping: planes to
+// tight curvature and saddles) and a spot: a random point in the ball moved onto the zero set
+// (Newton along the gradient), then off it by up to 2 % of the radius. False: no usable spot.
+bool random_patch_and_spot(std::mt19937_64& rng, int trial, SlimPatch& p, Eigen::Vector3d& x, Eigen::Vector3d& g) {
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const auto unit = [&] {
+    for (;;)
+      if (const Eigen::Vector3d v(U(rng), U(rng), U(rng)); v.norm() > 0.1 && v.norm() <= 1.0) return Eigen::Vector3d(v.normalized());
+  };
+  p = SlimPatch{};
+  p.centre = 0.3 * unit();
+  p.radius = 0.05 + 0.1 * std::abs(U(rng));
+  const double curve = std::array{0.0, 0.05, 0.3, 1.0, 3.0}[trial % 5];
+  Eigen::Matrix3d A;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j <= i; ++j) A(i, j) = A(j, i) = curve * U(rng);
+  p.local.A = A;
+  p.local.b = 0.5 * unit();
+  p.local.c = 0.1 * U(rng);
+  if (trial % 3 == 0) p.clips.add(ClipPlane{unit(), 0.2 + 0.4 * U(rng)});
+  Eigen::Vector3d u = 0.7 * std::abs(U(rng)) * unit();
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d gk = p.local.gradient(u);
+    if (!(gk.squaredNorm() > 1e-12)) break;
+    u -= p.local.eval(u) * gk / gk.squaredNorm();
+  }
+  g = p.local.gradient(u);
+  if (!(u.norm() < 1.0) || !(g.norm() > 1e-6)) return false;
+  u += 0.02 * U(rng) * g.normalized();
+  x = p.centre + p.radius * u;
+  return true;
+}
+
+// Whether the ray through x along d, from reach before it, meets the patch front-facing inside
+// its ball and planes within reach of x (intersect_slim_patch, the renderer's maths).
+bool view_meets(const SlimPatch& p, const Eigen::Vector3d& x, const Eigen::Vector3d& d, double reach) {
+  Hit h;
+  return intersect_slim_patch(p, Ray{x - reach * d, d}, 0.0, 2.0 * reach, h) && (h.point - p.centre).norm() < p.radius;
+}
+
 // view_holes' shortcut: where fit_detail::meets_every_view vouches for a patch at a spot, every
-// view of the spot within the widest angle meets that patch (intersect_slim_patch, the renderer's
-// maths) inside its ball and planes, within the reach of the spot. Random quadrics from planes
-// to tight curvature and saddles, clipped or not, spots near and off their zero sets, normals
-// tilted from the patch's; dense random rays in each cone and on its rim.
+// view of the spot within the widest angle meets that patch inside its ball and planes, within
+// the reach of the spot. Random quadrics, spots near and off their zero sets, normals tilted
+// from the patch's; dense random rays in each cone and on its rim.
 TEST(ViewHoles, EveryViewTheShortcutVouchesForMeetsThePatch) {
   std::mt19937_64 rng(29);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
@@ -580,28 +666,8 @@ TEST(ViewHoles, EveryViewTheShortcutVouchesForMeetsThePatch) {
   int vouched = 0, rays = 0, misses = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     SlimPatch p;
-    p.centre = 0.3 * unit();
-    p.radius = 0.05 + 0.1 * std::abs(U(rng));
-    const double curve = std::array{0.0, 0.05, 0.3, 1.0, 3.0}[trial % 5];
-    Eigen::Matrix3d A;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j <= i; ++j) A(i, j) = A(j, i) = curve * U(rng);
-    p.local.A = A;
-    p.local.b = 0.5 * unit();
-    p.local.c = 0.1 * U(rng);
-    if (trial % 3 == 0) p.clips.add(ClipPlane{unit(), 0.2 + 0.4 * U(rng)});
-    // A spot: a random point in the ball moved onto the zero set (Newton along the gradient),
-    // then off it by up to 2 % of the radius.
-    Eigen::Vector3d u = 0.7 * std::abs(U(rng)) * unit();
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3d g = p.local.gradient(u);
-      if (!(g.squaredNorm() > 1e-12)) break;
-      u -= p.local.eval(u) * g / g.squaredNorm();
-    }
-    const Eigen::Vector3d g = p.local.gradient(u);
-    if (!(u.norm() < 1.0) || !(g.norm() > 1e-6)) continue;
-    u += 0.02 * U(rng) * g.normalized();
-    const Eigen::Vector3d x = p.centre + p.radius * u;
+    Eigen::Vector3d x, g;
+    if (!random_patch_and_spot(rng, trial, p, x, g)) continue;
     // The face's normal: the patch's, tilted by up to 20°.
     const Eigen::Vector3d n = (g.normalized() + std::tan(20.0 * std::numbers::pi / 180.0) * std::abs(U(rng)) * unit()).normalized();
     const double reach = p.radius * (0.1 + std::abs(U(rng)));
@@ -612,14 +678,43 @@ TEST(ViewHoles, EveryViewTheShortcutVouchesForMeetsThePatch) {
       // Uniform in the cone; every fourth on its rim.
       const double ct = k % 4 == 0 ? std::cos(widest) : 1.0 - (1.0 - std::cos(widest)) * std::abs(U(rng));
       const double st = std::sqrt(1.0 - ct * ct), phi = std::numbers::pi * U(rng);
-      const Eigen::Vector3d d = -(ct * n + st * (std::cos(phi) * t1 + std::sin(phi) * t2));
-      Hit h;
       ++rays;
-      if (!(intersect_slim_patch(p, Ray{x - reach * d, d}, 0.0, 2.0 * reach, h) && (h.point - p.centre).norm() < p.radius)) ++misses;
+      misses += !view_meets(p, x, -(ct * n + st * (std::cos(phi) * t1 + std::sin(phi) * t2)), reach);
     }
   }
   std::printf("meets_every_view vouched for %d spots; %d rays, %d missed\n", vouched, rays, misses);
   EXPECT_GT(vouched, 300);  // the shortcut holds often enough to be tested
+  EXPECT_EQ(misses, 0);
+}
+
+// The shortcut for one view (view_holes asks it per ray before solving): where meets_views
+// vouches for a direction, the ray along it meets the patch; and it vouches for most of the rays
+// that do meet it near the spot (directions uniform on the sphere, up to grazing ones).
+TEST(ViewHoles, EachViewTheShortcutVouchesForMeetsThePatch) {
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  int vouched = 0, met = 0, misses = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    SlimPatch p;
+    Eigen::Vector3d x, g;
+    if (!random_patch_and_spot(rng, trial, p, x, g)) continue;
+    const double reach = p.radius * (0.1 + std::abs(U(rng)));
+    const double bend = fit_detail::patch_bend(p);
+    const fit_detail::PatchAtSpot at = fit_detail::patch_at_spot(p, x);
+    for (int k = 0; k < 50; ++k) {
+      Eigen::Vector3d d;
+      do d = Eigen::Vector3d(U(rng), U(rng), U(rng));
+      while (!(d.norm() > 0.1 && d.norm() <= 1.0));
+      d.normalize();
+      const bool meets = view_meets(p, x, d, reach);
+      met += meets;
+      if (!fit_detail::meets_views(p, bend, at, -at.g.dot(d), reach)) continue;
+      ++vouched;
+      misses += !meets;
+    }
+  }
+  std::printf("meets_views vouched for %d of the %d views that meet their patch; %d missed\n", vouched, met, misses);
+  EXPECT_GT(vouched, met / 2);
   EXPECT_EQ(misses, 0);
 }
 
