@@ -1,6 +1,7 @@
 #pragma once
-/// A bounding volume hierarchy over axis-aligned boxes (median split on the longest axis of the
-/// centroid bounds), for ray queries in the CPU reference.
+/// A bounding volume hierarchy over axis-aligned boxes (each split by the surface area heuristic
+/// over 16 centroid bins per axis, else at the median of the longest axis), for ray and
+/// nearest-point queries: the CPU reference, the fit's data surface.
 #include <cstdint>
 #include <span>
 #include <vector>
