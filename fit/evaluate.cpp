@@ -149,10 +149,30 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   std::vector<Eigen::Vector3d> unit(normals.size());
   for (std::size_t i = 0; i < normals.size(); ++i) unit[i] = normals[i].normalized();
   const PointIndex index{std::span<const Eigen::Vector3d>(cloud.points)};
+  // The blended surface's normal where each point's probe counted it, against the point's own
+  // normal (−1: no blend to compare, e.g. a probe settled along another line).
+  std::vector<double> angle(out.points, -1.0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.points, 512), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i)
-      out.per_point[i] = measure_point(scene, trace, index, unit, cloud.points[i], unit[i], heights[i], E).error;
+    std::vector<SlimSample> blended;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      out.per_point[i] = measure_point(scene, trace, index, unit, cloud.points[i], unit[i], heights[i], E, &blended).error;
+      if (!std::isfinite(out.per_point[i]) || blended.empty()) continue;
+      if (const auto b = blend_slim_samples(blended, trace.slim))
+        angle[i] = std::acos(std::clamp(b->normal.dot(unit[i]), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    }
   });
+  std::erase_if(angle, [](double a) { return a < 0; });
+  out.normal_points = angle.size();
+  if (!angle.empty()) {
+    const auto at = [&](double q) {
+      const auto k = std::min(angle.size() - 1, static_cast<std::size_t>(q * double(angle.size())));
+      std::nth_element(angle.begin(), angle.begin() + std::ptrdiff_t(k), angle.end());
+      return angle[k];
+    };
+    out.normal_p50_deg = at(0.5);
+    out.normal_p99_deg = at(0.99);
+    out.normal_max_deg = *std::max_element(angle.begin(), angle.end());
+  }
   double sum = 0;
   std::size_t hits = 0;
   for (std::size_t i = 0; i < out.points; ++i) {

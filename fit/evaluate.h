@@ -74,6 +74,12 @@ struct SlimError {
   std::size_t worst = 0;        ///< index of the point with the largest error
   double probe_height = 0;      ///< h actually used
   std::vector<double> per_point;  ///< error per point (+inf for a miss), when asked for
+  /// The blended surface's normal where each point's probe met it (core's blend of the patches'
+  /// unit normals), against the point's normal: median, 99th percentile and largest angle,
+  /// degrees, over the normal_points probes that counted a blend. Facets ("a hammered look":
+  /// neighbouring patches crossing at an angle) show here while every point is within E.
+  std::size_t normal_points = 0;
+  double normal_p50_deg = 0, normal_p99_deg = 0, normal_max_deg = 0;
   std::size_t count_above(double e) const;  ///< needs per_point
 };
 

@@ -211,6 +211,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     int view_resolution = 512;
     std::size_t sample = 0;
     bool fill_point_holes = true;
+    double cover_fraction = SlimFitOptions{}.cover_fraction;
   };
   auto a = std::make_shared<Args>();
   app->add_option("--datasets", a->datasets, "Folder of the shared datasets")->capture_default_str();
@@ -236,6 +237,9 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->check(number({.lo = 0, .hi = 1e8}))
       ->capture_default_str();
   app->add_flag("!--no-fill-point-holes", a->fill_point_holes, "Fit as `fit --no-fill-point-holes` does (for comparison)");
+  app->add_option("--cover-fraction", a->cover_fraction, "Fit as `fit --cover-fraction` does (for comparison)")
+      ->check(number({.lo = 0.3, .hi = 1.0}))
+      ->capture_default_str();
   app->add_flag("--keep-models", a->keep_models,
                 "Also write each SLIM model (NAME_E.qxm), decimated mesh (NAME_E_decimated.off) and --sample cloud "
                 "(NAME.xyz) into --out, "
@@ -320,9 +324,12 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
         if (!a->view_holes) fo.view_hole_rays = 0;
         fo.cover_point_holes = a->fill_point_holes;
+        fo.cover_fraction = a->cover_fraction;
         const SlimFitResult fit = fit_mesh ? fit_slim(fit_cloud, *fit_mesh, fo) : fit_slim(fit_cloud, fo);
         const SlimError se =
             evaluate_slim(fit.model, fit_cloud, {.keep_per_point = true, .surface = fit_mesh ? &data : nullptr});
+        log::info("bench fit: {} at E = {:g}: {} patches; the blended surface's normals against the points': median {:.2f}°, "
+                  "p99 {:.2f}°, max {:.1f}°", d.name, E, fit.stats.patches, se.normal_p50_deg, se.normal_p99_deg, se.normal_max_deg);
         if (a->keep_models) write_model(fit.model, out_dir / fmt::format("{}_{:g}.qxm", d.name, E));
         const double Eabs = fit.stats.max_error_abs;
         Row slim{d.name, "slim", E, fit.stats.patches, "patches", se.max / d.diagonal, se.rms / d.diagonal,
@@ -353,6 +360,14 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"point_holes", fit.stats.point_holes},
                                 {"point_hole_balls", fit.stats.point_hole_balls},
                                 {"disc_patches", fit.stats.disc_patches},
+                                {"cover_fraction", fo.cover_fraction},
+                                {"normals_vs_points",
+                                 {{"p50_deg", se.normal_p50_deg},
+                                  {"p99_deg", se.normal_p99_deg},
+                                  {"max_deg", se.normal_max_deg},
+                                  {"points", se.normal_points},
+                                  {"measure", "angle between the blended surface's normal where each point's probe meets "
+                                              "it and the point's normal (facets show here)"}}},
                                 {"surface", surface_json(slim)}}}};
         if (discs) {
           const SurfaceError e =

@@ -565,6 +565,51 @@ TEST(EvaluateSlim, FitterVerifiesWithTheMeasureItReports) {
   EXPECT_LE(r.stats.surface_max, 2 * r.stats.max_error_abs);
 }
 
+// evaluate_slim's normal measure: the blended surface's normal where each probe meets it against
+// the point's normal. One patch, the plane z = 0: points on it with their own normals give 0°,
+// the same points with normals tilted by 10° give 10° (their probes still meet the plane).
+TEST(SlimError, NormalsAgainstThePointsMeasureTheBlendedNormal) {
+  Model m;
+  m.slims.push_back(SlimPatch{Eigen::Vector3d::Zero(), 1.0, Quadric::plane(Eigen::Vector3d::UnitZ(), 0.0), {}, std::nullopt, std::nullopt});
+  PointCloud c;
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> U(-0.4, 0.4);
+  for (int i = 0; i < 400; ++i) c.points.emplace_back(U(rng), U(rng), 0.0);
+  const double tilt = 10.0 * std::numbers::pi / 180.0;
+  for (const Eigen::Vector3d& n : std::array<Eigen::Vector3d, 2>{Eigen::Vector3d::UnitZ(), Eigen::Vector3d(0.0, std::sin(tilt), std::cos(tilt))}) {
+    c.normals.assign(c.points.size(), n);
+    const SlimError e = evaluate_slim(m, c, {.probe_height = 0.01});
+    const double expected = std::acos(n.z()) * 180.0 / std::numbers::pi;
+    EXPECT_EQ(e.normal_points, c.points.size());
+    EXPECT_NEAR(e.normal_p50_deg, expected, 1e-6);
+    EXPECT_NEAR(e.normal_p99_deg, expected, 1e-6);
+    EXPECT_NEAR(e.normal_max_deg, expected, 1e-6);
+  }
+}
+
+// cover_fraction: covering each point only within a smaller fraction of a ball's radius makes
+// the balls overlap more, so neighbouring patches blend over wider bands: more patches, the
+// bound kept, and the blended normals closer to the data's (fewer facets).
+TEST(FitSlim, ASmallerCoverFractionBlendsWiderForMorePatches) {
+  const PointCloud c = torus(6000, 1.0, 0.35, 43);
+  std::size_t patches[2];
+  double p99[2];
+  int k = 0;
+  for (const double f : {0.9, 0.6}) {
+    const SlimFitResult r = fit_slim(c, {.max_error = 1e-3, .cover_fraction = f});
+    EXPECT_EQ(r.stats.blend_failures, 0u) << f;
+    EXPECT_EQ(r.stats.surface_failures, 0u) << f;
+    const SlimError e = evaluate_slim(r.model, c);
+    EXPECT_EQ(e.count_above(r.stats.max_error_abs), 0u) << f;
+    patches[k] = r.stats.patches;
+    p99[k++] = e.normal_p99_deg;
+    std::printf("cover fraction %.1f: %zu patches, normals p50 %.2f° p99 %.2f° max %.2f°\n", f, r.stats.patches,
+                e.normal_p50_deg, e.normal_p99_deg, e.normal_max_deg);
+  }
+  EXPECT_GT(patches[1], patches[0] * 5 / 4);
+  EXPECT_LT(p99[1], p99[0]);
+}
+
 // A points data surface answers "within good?" from the discs of its last queries' points
 // (DataSurface::distance): the same answer as the full search over each query's nearest points,
 // an upper bound no nearer than the search's distance. Runs of queries along random lines past a
