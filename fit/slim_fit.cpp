@@ -58,8 +58,8 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
     throw InvalidInput(fmt::format("fit_slim: max_error must be positive and finite, got {}", o.max_error));
   if (!(o.normal_weight > 0)) throw InvalidInput(fmt::format("fit_slim: normal_weight must be > 0, got {}", o.normal_weight));
   if (!(o.radius_growth > 1)) throw InvalidInput(fmt::format("fit_slim: radius_growth must be > 1, got {}", o.radius_growth));
-  if (!(o.cover_fraction > 0 && o.cover_fraction <= 1))
-    throw InvalidInput(fmt::format("fit_slim: cover_fraction must lie in (0, 1], got {}", o.cover_fraction));
+  if (o.cover_fraction && !(*o.cover_fraction > 0 && *o.cover_fraction <= 1))
+    throw InvalidInput(fmt::format("fit_slim: cover_fraction must lie in (0, 1], got {}", *o.cover_fraction));
   if (!(o.weight_floor >= 0)) throw InvalidInput(fmt::format("fit_slim: weight_floor must be ≥ 0, got {}", o.weight_floor));
   if (o.sharp && !(o.sharp_angle_deg > 0 && o.sharp_angle_deg < 180))
     throw InvalidInput(fmt::format("fit_slim: sharp_angle_deg must lie in (0, 180), got {}", o.sharp_angle_deg));
@@ -204,7 +204,7 @@ void SlimFitter::cover_of(std::size_t b, std::vector<Neighbour>& nb) {
     balls_[b].count = nb.size();
     return;
   }
-  index_->radius(c, (ball.is_bounded ? opt_.cover_fraction : 0.5) * ball.R, nb);
+  index_->radius(c, (ball.is_bounded ? cover_fraction() : 0.5) * ball.R, nb);
   auto& cov = covers_[b];
   cov.clear();
   for (const auto& [p, d2] : nb)

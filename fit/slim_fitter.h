@@ -99,6 +99,10 @@ private:
   void uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
                  const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> point_holes(const PointIndex& index, const Changed* changed);
+  // How deep in a ball a point counts as covered (SlimFitOptions::cover_fraction).
+  double cover_fraction() const {
+    return opt_.cover_fraction.value_or(surface_ ? SlimFitOptions::kCoverFractionMesh : SlimFitOptions::kCoverFractionPoints);
+  }
   // Point i's coverage disc radius (point_hole_factor × its spacing) and its disc patch's.
   double coverage_radius(std::size_t i) const { return opt_.point_hole_factor * data_->spacing(i); }
   double disc_patch_radius(std::size_t i) const { return opt_.disc_patch_reach * opt_.point_hole_factor * data_->spacing(i); }
