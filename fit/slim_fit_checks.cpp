@@ -409,9 +409,8 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
           if (k > 0) std::swap(near[0], near[k]), std::swap(at[0], at[k]);
           return true;
         };
-        // A patch that provably meets a view spares its ray (meets_views, for this direction
-        // alone: a third of the spots' patches meet every view, most of the rest most of them),
-        // else the ray is solved against it.
+        // A patch that provably meets this one view (meets_views) spares the ray's solve; else
+        // the ray is solved against each patch.
         const auto local_hit = [&](const Ray& ray) {
           for (std::size_t k = 0; k < near.size(); ++k)
             if (meets_views(slims[near[k]], bend[near[k]], at[k], -at[k].g.dot(ray.dir), L)) return met_by(k);
