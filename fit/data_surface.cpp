@@ -65,6 +65,20 @@ double point_triangle_distance2(const Eigen::Vector3d& x, const Eigen::Vector3d&
   return (ax - v * ab - w * ac).squaredNorm();
 }
 
+// The primitives (triangles or points) nearest a thread's last few distance queries on one
+// surface: queries come in runs along one patch, so they are asked first.
+struct Hints {
+  std::uint64_t owner = 0;  // the surface's serial
+  std::array<std::uint32_t, 4> ids{};
+  unsigned next = 0;
+  void use_for(std::uint64_t serial) {
+    if (owner != serial) owner = serial, ids.fill(0), next = 0;
+  }
+  void remember(std::uint32_t id) {
+    if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids[next++ % ids.size()] = id;
+  }
+};
+
 }  // namespace
 
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
@@ -244,6 +258,8 @@ void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<
 double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) const {
   const auto& m = *impl_;
   thread_local std::vector<Neighbour> nb;
+  thread_local Hints hints;
+  hints.use_for(m.serial);
   if (!m.triangles.empty()) {
     // BVH walk in squared distances, nearest box first, pruning boxes farther than the best
     // triangle so far (or than the cap).
@@ -252,20 +268,13 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     // Queries come in runs along one patch: the triangles nearest the last few queries of this
     // thread (same surface) give a first upper bound, often good enough to stop at once. The
     // walk below stays exact: it only prunes boxes farther than a distance already reached.
-    thread_local std::uint64_t hint_owner = 0;
-    thread_local std::array<std::uint32_t, 4> hint{};
-    thread_local unsigned hint_next = 0;
-    if (hint_owner != m.serial) hint_owner = m.serial, hint.fill(0), hint_next = 0;
-    std::uint32_t best_id = hint[0];
-    for (const std::uint32_t id : hint) {
+    std::uint32_t best_id = hints.ids[0];
+    for (const std::uint32_t id : hints.ids) {
       const auto& t = m.triangles[id];
       if (const double d2 = point_triangle_distance2(x, t[0], t[1], t[2]); d2 < best) best = d2, best_id = id;
     }
-    const auto remember = [&](std::uint32_t id) {
-      if (std::find(hint.begin(), hint.end(), id) == hint.end()) hint[hint_next++ % hint.size()] = id;
-    };
     if (best <= good2) {
-      remember(best_id);
+      hints.remember(best_id);
       return std::sqrt(best);
     }
     const auto& nodes = m.bvh.nodes();
@@ -298,7 +307,7 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
       }
     }
     if (!(best < cap2)) return kInf;
-    remember(best_id);
+    hints.remember(best_id);
     return std::sqrt(best);
   }
   // The distance to point i's disc (short beyond a boundary).
@@ -315,20 +324,16 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
   // few queries are asked first, and one within good settles "within good?" if its point is
   // surely among x's candidates (the same answer as the search, without it: the kitten's fit
   // spent 57 % of its time in the tree searches below).
-  thread_local std::uint64_t hint_owner = 0;
-  thread_local std::array<std::uint32_t, 4> hint{};
-  thread_local unsigned hint_next = 0;
-  if (hint_owner != m.serial) hint_owner = m.serial, hint.fill(0), hint_next = 0;
   if (good > 0)
-    for (const std::uint32_t i : hint)
+    for (const std::uint32_t i : hints.ids)
       if (2.0 * (x - m.points[i]).norm() < m.candidate_reach[i])
         if (const double d = disc_distance(i); d <= good) return d;
   m.index->nearest(x, m.options.candidates, nb);
   double best = kInf;
-  std::uint32_t best_id = hint[0];
+  std::uint32_t best_id = hints.ids[0];
   for (const auto& [i, d2] : nb)
     if (const double d = disc_distance(i); d < best) best = d, best_id = i;
-  if (std::find(hint.begin(), hint.end(), best_id) == hint.end()) hint[hint_next++ % hint.size()] = best_id;
+  hints.remember(best_id);
   return best;
 }
 

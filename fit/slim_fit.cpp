@@ -117,6 +117,7 @@ void SlimFitter::setup() {
   st_.diagonal = box.diagonal();
   E_ = opt_.max_error_is_absolute ? opt_.max_error : opt_.max_error * st_.diagonal;
   st_.max_error_abs = E_;
+  st_.cover_fraction = cover_fraction();
   const auto t0 = Clock::now();
   if (cloud_.has_normals()) {
     N_.resize(n);

@@ -240,6 +240,7 @@ struct SlimFitStats {
   std::size_t clipped_patches = 0;   ///< patches with a clip plane (--sharp)
   bool normals_estimated = false;
   double max_error_abs = 0;          ///< E in world units
+  double cover_fraction = 0;         ///< the cover depth used (SlimFitOptions::cover_fraction or its default)
   double diagonal = 0;               ///< bounding-box diagonal of the points
   double max_taubin = 0, rms_taubin = 0;  ///< per-patch Taubin error over each ball's points, world units
   double max_blend = 0, rms_blend = 0;    ///< blended surface vs every point (fit/evaluate.h), world units

@@ -360,8 +360,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"point_holes", fit.stats.point_holes},
                                 {"point_hole_balls", fit.stats.point_hole_balls},
                                 {"disc_patches", fit.stats.disc_patches},
-                                {"cover_fraction", fo.cover_fraction.value_or(fit_mesh ? SlimFitOptions::kCoverFractionMesh
-                                                                                       : SlimFitOptions::kCoverFractionPoints)},
+                                {"cover_fraction", fit.stats.cover_fraction},
                                 {"normals_vs_points",
                                  {{"p50_deg", se.normal_p50_deg},
                                   {"p99_deg", se.normal_p99_deg},
