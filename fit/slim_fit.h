@@ -303,6 +303,7 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options = 
 /// The same with the data's own surface given (the mesh the points come from): the surface side
 /// is then bounded against the mesh's triangles instead of the points' tangent discs, so the
 /// surface stops where the mesh does (open boundaries) rather than a sample spacing beyond.
+/// Faces of more than three corners count as their fans of triangles (PolygonMesh::fanned).
 SlimFitResult fit_slim(const PointCloud& cloud, const PolygonMesh& surface, const SlimFitOptions& options = {});
 
 }  // namespace quadrix

@@ -45,6 +45,24 @@ struct PolygonMesh {
     for (int& v : indices) v = id[static_cast<std::size_t>(v)];
     return removed;
   }
+  /// Whether every face is a triangle.
+  bool is_triangles() const {
+    for (std::size_t f = 0; f < face_count(); ++f)
+      if (offsets[f + 1] - offsets[f] != 3) return false;
+    return true;
+  }
+  /// The same vertices with each face split into the fan of triangles from its first vertex
+  /// (the triangles every reader of faces in Quadrix takes as the face's surface).
+  PolygonMesh fanned() const {
+    PolygonMesh m;
+    m.vertices = vertices;
+    m.colours = colours;
+    for (std::size_t f = 0; f < face_count(); ++f) {
+      const auto vs = face(f);
+      for (std::size_t k = 1; k + 1 < vs.size(); ++k) m.add_face(std::array<int, 3>{vs[0], vs[k], vs[k + 1]});
+    }
+    return m;
+  }
 };
 
 }  // namespace quadrix
