@@ -208,7 +208,21 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
       const double at = most - 2.0 * least;
       cut = ClipPlane{n, -n.dot(vl) + at / R};
       tip = worst;
+    }
+    // A sliver with a second corner the floor keeps beyond (two sharp corners; the fourth plane
+    // cuts one): that corner's two walls go down to a hair outside their edges, as at an open
+    // edge (happy_buddha_10k at 1e-4: such face patches ran 1.5–3.2E from the data, were
+    // dropped by the repair and made again, round after round, until the fit ended outside its
+    // bound).
+    for (std::size_t i = 0; i < 3; ++i)
+      if (const double p = corner(i); i != tip && p > most * (1 + 1e-9) && std::isfinite(p)) {
+        m[i] = std::max(1e-3 * E, m[i] * most / p);
+        m[(i + 1) % 3] = std::max(1e-3 * E, m[(i + 1) % 3] * most / p);
+      }
+    if (cut) {
       // Where the cut meets the two walls.
+      const Eigen::Vector3d n = cut->n;
+      const double at = most - 2.0 * least;
       for (const double q : {meet(sa.inward, m[worst], n, at), meet(sb.inward, m[(worst + 1) % 3], n, at)})
         if (std::isfinite(q)) tip_reach = std::max(tip_reach, q);
     }

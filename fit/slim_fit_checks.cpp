@@ -644,6 +644,12 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       if (excess < 0)
         excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
       if (const double d = excess; d > 0) {
+        if (log::level() <= log::Level::debug) {
+          const std::lock_guard lock(debug_mutex_);
+          if (++debug_shown_ <= 8)
+            log::debug("fit_slim: patch {}{} (ball {}, R {:.3g}E) runs {:.3g}E from the data inside its ball", k,
+                       ball.face >= 0 ? " (face)" : ball.disc ? " (disc)" : "", chosen_[k], slims[k].radius / E_, d / E_);
+        }
         at_fault[k] = 1;
         errors.push_back(d);
         reach = kInf;
