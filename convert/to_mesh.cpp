@@ -1123,6 +1123,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       const SurfaceError se = surface_error(r.mesh, keep);
       set_surface_side(r, se);
       for (const auto& b : se.beyond_points) beyond.push_back(b.point);
+    } else {  // nothing meshed: the drawn surface is nowhere near it
+      const double inf = std::numeric_limits<double>::infinity();
+      r.surface_to_mesh = {inf, inf, inf, 0, 0, 0};
     }
     r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
     return beyond;
@@ -1388,7 +1391,10 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     // or does not halve the larger of the two maxima (parts of the drawn surface that no closed
     // inside/outside labelling holds, at any resolution): the previous, smaller mesh is kept, or,
     // where only the maximum stays, the one nearer the surface.
-    if (have_best) {
+    // Only where SLIM patches are meshed: the tetrahedra's lattice and the glyphs' tessellation
+    // converge as the resolution doubles (a bilinear quad's tetrahedron has the surface through
+    // its corners and no triangle at the first level: the empty mesh was kept, with exit 7).
+    if (have_best && !model.slims.empty() && best.mesh.face_count() > 0) {
       if (!surface_measured) measure_surface_side(r);
       surface_measured = true;
       if (best.surface_to_mesh.samples == 0) measure_surface_side(best);

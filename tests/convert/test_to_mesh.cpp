@@ -11,6 +11,7 @@
 #include <random>
 
 #include "convert/mesh_measure.h"
+#include "convert/quads.h"
 #include "convert/to_mesh.h"
 #include "core/error.h"
 #include "core/io/io.h"
@@ -420,6 +421,28 @@ const Model* kitten_points_fit() {
     return fit_slim(read_points(file), {.max_error = 1e-3}).model;
   }();
   return model ? &*model : nullptr;
+}
+
+// A twisted quad as one tetrahedron patch (convert quads: the bilinear patch through the
+// tetrahedron's four corners). At the first level the lattice is the corners, on the surface: no
+// triangle. The doublings must go on from there (the empty mesh was kept, reported as "max
+// error 0" with exit 7), and a mesh with no triangle never counts as near the surface.
+TEST(ToMesh, TwistedQuadMeshedPastAnEmptyFirstLevel) {
+  PolygonMesh q;
+  q.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.3}, {0, 1, 0}};
+  q.add_face(std::vector<int>{0, 1, 2, 3});
+  const Model m = convert_quads(q).model;
+  ASSERT_EQ(m.tets.size(), 1u);
+  const ToMeshResult first = mesh_model(m, {.max_refinements = 0, .progress = {}});
+  EXPECT_EQ(first.mesh.face_count(), 0u) << "the case no longer starts empty";
+  EXPECT_FALSE(first.within);
+  EXPECT_TRUE(std::isinf(first.max_error())) << "an empty mesh reported " << first.max_error() << " from the surface";
+  const ToMeshResult r = mesh_model(m, {.max_refinements = 4, .progress = {}});
+  std::cout << "twisted quad: " << r.mesh.face_count() << " triangles after " << r.refinements << " doublings, max "
+            << r.mesh_to_surface.max << " / " << r.surface_to_mesh.max << ", bound " << r.bound << "\n";
+  EXPECT_EQ(r.refinements, 4);
+  EXPECT_GT(r.mesh.face_count(), 100u);
+  EXPECT_LT(r.surface_to_mesh.max, 0.1 * (q.vertices[2] - q.vertices[0]).norm());
 }
 
 // The kitten fitted from its points alone at 1e-3: its blend draws lone patches' rims running on
