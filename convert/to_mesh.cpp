@@ -227,7 +227,8 @@ void mesh_tets(const Model& model, int k, Builder& out) {
       }
       march(p, f, out, [&](int i, int j) {
         if (f[j] >= 0.0) std::swap(i, j);  // i on the positive side: a canonical edge direction
-        const double s = edge_root(tet.quadric, p[i] - centroid, p[j] - centroid, f[i], f[j]);
+        // A node on the surface (value 0) is its own crossing, as in the face rule above.
+        const double s = f[i] == 0.0 ? 0.0 : edge_root(tet.quadric, p[i] - centroid, p[j] - centroid, f[i], f[j]);
         // A crossing at a lattice point (the surface through a node) is that node's one vertex.
         constexpr double kAtNode = 1e-9;
         const EdgeKey ek = s <= kAtNode ? EdgeKey{keys[i], keys[i]} : s >= 1 - kAtNode ? EdgeKey{keys[j], keys[j]} : EdgeKey{keys[i], keys[j]};
