@@ -336,7 +336,8 @@ void SlimFitter::run_greedy(std::size_t from) {
   }
 }
 
-// Greedy covering, adding uncovered points as new candidates until every point is covered.
+// Greedy covering, adding uncovered points as new candidates until every point is covered (or
+// has been tried as a centre once in this covering).
 void SlimFitter::cover(const std::vector<double>* cap_of_point) {
   run_greedy(0);
   // Each uncovered point is tried as a centre at most once per covering, so the loop ends even

@@ -445,12 +445,18 @@ TEST(ToMesh, TwistedQuadMeshedPastAnEmptyFirstLevel) {
   EXPECT_TRUE(r.within) << "max " << r.max_error() << ", bound " << r.bound;
   EXPECT_GT(r.mesh.face_count(), 100u);
   for (const auto& v : r.mesh.vertices) ASSERT_NEAR(v.z(), 0.3 * v.x() * v.y(), 1e-9) << "a vertex off the patch";
-  // Open edges only along the quad's own edges.
-  std::map<std::pair<int, int>, int> uses;
+  // Consistently oriented (each directed edge used once, every normal on the patch's positive
+  // side, +z here), open edges only along the quad's own edges.
+  std::map<std::pair<int, int>, int> uses, directed;
   for (std::size_t f = 0; f < r.mesh.face_count(); ++f) {
     const auto v = r.mesh.face(f);
-    for (int i = 0; i < 3; ++i) ++uses[std::minmax(v[i], v[(i + 1) % 3])];
+    const Eigen::Vector3d& a = r.mesh.vertices[v[0]];
+    const Eigen::Vector3d n = (r.mesh.vertices[v[1]] - a).cross(r.mesh.vertices[v[2]] - a);
+    const Eigen::Vector3d c = (a + r.mesh.vertices[v[1]] + r.mesh.vertices[v[2]]) / 3.0;
+    EXPECT_GT(n.dot(Eigen::Vector3d(-0.3 * c.y(), -0.3 * c.x(), 1.0)), 0.0) << "a triangle facing the wrong way";
+    for (int i = 0; i < 3; ++i) ++uses[std::minmax(v[i], v[(i + 1) % 3])], ++directed[{v[i], v[(i + 1) % 3]}];
   }
+  for (const auto& [e, n] : directed) EXPECT_EQ(n, 1) << "a directed edge used twice";
   for (const auto& [e, n] : uses)
     if (n != 2)
       for (const int v : {e.first, e.second}) {

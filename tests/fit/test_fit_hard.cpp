@@ -571,6 +571,7 @@ TEST(FitSlimHard, TwistedQuadsBelowTheirSampling) {
   for (const double rel : {1e-3, 1e-4}) {
     const Outcome o = fit_and_measure(s, rel);
     expect_two_sided(o);
+    EXPECT_GT(o.fit.stats.hole_face_patches, 0u) << "the case no longer needs face patches";
   }
 }
 
@@ -610,6 +611,7 @@ TEST(FitSlimHard, SliversWithTwoSharpCornersBelowTheirSampling) {
   s = vertices_only(std::move(s));
   const Outcome o = fit_and_measure(s, 1e-4);
   expect_two_sided(o);
+  EXPECT_GT(o.fit.stats.hole_face_patches, 0u) << "the case no longer needs face patches";
 }
 
 TEST(PolygonMesh, FannedSplitsEachFaceFromItsFirstCorner) {
