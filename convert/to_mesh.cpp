@@ -57,6 +57,12 @@ struct Builder {
     const int f[3] = {a, b, c};
     mesh.add_face(f);
   }
+  /// The triangle wound so its normal has a positive component along `outward`.
+  void add_triangle_facing(int a, int b, int c, const Eigen::Vector3d& outward) {
+    const auto& V = mesh.vertices;
+    if ((V[b] - V[a]).cross(V[c] - V[a]).dot(outward) < 0) std::swap(b, c);
+    add_triangle(a, b, c);
+  }
 };
 
 /// Marching tetrahedra on one tetrahedron: values at four nodes, positive outside. crossing(i, j)
@@ -72,11 +78,7 @@ void march(const std::array<Eigen::Vector3d, 4>& p, const std::array<double, 4>&
   for (int i = 0; i < np; ++i) cp += p[pos[i]] / np;
   for (int i = 0; i < nn; ++i) cn += p[neg[i]] / nn;
   const Eigen::Vector3d outward = cp - cn;
-  const auto emit = [&](int a, int b, int c) {
-    const auto& V = out.mesh.vertices;
-    if ((V[b] - V[a]).cross(V[c] - V[a]).dot(outward) < 0) std::swap(b, c);
-    out.add_triangle(a, b, c);
-  };
+  const auto emit = [&](int a, int b, int c) { out.add_triangle_facing(a, b, c, outward); };
   if (np == 1 || nn == 1) {
     const bool lone_pos = np == 1;
     const int lone = lone_pos ? pos[0] : neg[0];
@@ -164,6 +166,13 @@ void mesh_tets(const Model& model, int k, Builder& out) {
       if (n.norm() > 0) thickness = std::min(thickness, std::abs(n.normalized().dot(tet.corners[i] - a)));
     }
     if (!std::isfinite(thickness)) thickness = 0;
+    // The mesh vertex of a crossing (an edge, or a node as {key, key}), made at x the first time.
+    const auto vertex_at = [&](const EdgeKey& ek, const Eigen::Vector3d& x) {
+      if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
+      const int v = out.add_vertex(x, colour);
+      crossings.emplace(ek, v);
+      return v;
+    };
     const auto node_of = [&](const Eigen::Vector3i& x) -> std::pair<Key4, Node> {
       const int c[4] = {k - x[0], x[0] - x[1], x[1] - x[2], x[2]};
       // (global corner id, count, local corner): sorted by id, so a point shared with a neighbour
@@ -207,21 +216,14 @@ void mesh_tets(const Model& model, int k, Builder& out) {
         int off = 0;
         while (f[off] == 0.0) ++off;
         std::array<int, 3> v;
-        for (int i = 0, n = 0; i < 4; ++i) {
-          if (i == off) continue;
-          const EdgeKey ek{keys[i], keys[i]};
-          auto it = crossings.find(ek);
-          if (it == crossings.end()) it = crossings.emplace(ek, out.add_vertex(p[i], colour)).first;
-          v[n++] = it->second;
-        }
+        for (int i = 0, n = 0; i < 4; ++i)
+          if (i != off) v[n++] = vertex_at(EdgeKey{keys[i], keys[i]}, p[i]);
         std::array<int, 3> sorted = v;
         std::sort(sorted.begin(), sorted.end());
         if (zero_faces.insert(sorted).second) {
           const auto& V = out.mesh.vertices;
           const Eigen::Vector3d mid = (V[v[0]] + V[v[1]] + V[v[2]]) / 3.0;
-          const Eigen::Vector3d outward = f[off] > 0 ? Eigen::Vector3d(p[off] - mid) : Eigen::Vector3d(mid - p[off]);
-          if ((V[v[1]] - V[v[0]]).cross(V[v[2]] - V[v[0]]).dot(outward) < 0) std::swap(v[1], v[2]);
-          out.add_triangle(v[0], v[1], v[2]);
+          out.add_triangle_facing(v[0], v[1], v[2], f[off] > 0 ? Eigen::Vector3d(p[off] - mid) : Eigen::Vector3d(mid - p[off]));
         }
         continue;
       }
@@ -231,11 +233,9 @@ void mesh_tets(const Model& model, int k, Builder& out) {
         const double s = f[i] == 0.0 ? 0.0 : edge_root(tet.quadric, p[i] - centroid, p[j] - centroid, f[i], f[j]);
         // A crossing at a lattice point (the surface through a node) is that node's one vertex.
         constexpr double kAtNode = 1e-9;
-        const EdgeKey ek = s <= kAtNode ? EdgeKey{keys[i], keys[i]} : s >= 1 - kAtNode ? EdgeKey{keys[j], keys[j]} : EdgeKey{keys[i], keys[j]};
-        if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
-        const int v = out.add_vertex(p[i] + s * (p[j] - p[i]), colour);
-        crossings.emplace(ek, v);
-        return v;
+        if (s <= kAtNode) return vertex_at(EdgeKey{keys[i], keys[i]}, p[i]);
+        if (s >= 1 - kAtNode) return vertex_at(EdgeKey{keys[j], keys[j]}, p[j]);
+        return vertex_at(EdgeKey{keys[i], keys[j]}, p[i] + s * (p[j] - p[i]));
       });
     }
   }

@@ -200,13 +200,8 @@ void SlimFitter::cover_of(std::size_t b, std::vector<Neighbour>& nb) {
     index_->radius(c, ball.R, nb);
     auto& cov = covers_[b];
     cov.clear();
-    // Its own samples by their face, since a non-planar face's centroid (its patch's centre)
-    // lies off its fan triangles: a quad mesh's face patches covered none of their centres, and
-    // the covering looped until memory ran out. Other points (vertices, neighbours' samples)
-    // where they lie on the face.
-    const auto f = std::uint32_t(ball.face);
     for (const auto& [p, d2] : nb)
-      if (faces_->face_of[p] == f || faces_->distance(f, P_[p]) <= 1e-3 * E_) cov.push_back(p);
+      if (faces_->distance(std::uint32_t(ball.face), P_[p]) <= 1e-3 * E_) cov.push_back(p);
     balls_[b].count = nb.size();
     return;
   }
