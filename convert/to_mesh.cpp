@@ -21,6 +21,7 @@
 #include "convert/between_views.h"
 #include "convert/kuhn_bisection.h"
 #include "convert/mesh_measure.h"
+#include "core/bounds.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/reference.h"
@@ -158,14 +159,7 @@ void mesh_tets(const Model& model, int k, Builder& out) {
     std::array<std::uint64_t, 4> g;
     for (int i = 0; i < 4; ++i) g[i] = corner_id(tet.corners[i]);
     const Rgb colour = tet.colour.value_or(Rgb{200, 200, 200});
-    // The smallest height: each corner's distance from the plane of the other three.
-    double thickness = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < 4; ++i) {
-      const Eigen::Vector3d &a = tet.corners[(i + 1) % 4], &b = tet.corners[(i + 2) % 4], &c = tet.corners[(i + 3) % 4];
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      if (n.norm() > 0) thickness = std::min(thickness, std::abs(n.normalized().dot(tet.corners[i] - a)));
-    }
-    if (!std::isfinite(thickness)) thickness = 0;
+    const double thickness = tetrahedron_thickness(tet.corners);
     // The mesh vertex of a crossing (an edge, or a node as {key, key}), made at x the first time.
     const auto vertex_at = [&](const EdgeKey& ek, const Eigen::Vector3d& x) {
       if (const auto it = crossings.find(ek); it != crossings.end()) return it->second;
@@ -680,6 +674,163 @@ std::uint64_t edge_key(int a, int b) {
   const auto [lo, hi] = std::minmax(a, b);
   return static_cast<std::uint64_t>(lo) << 32 | static_cast<std::uint32_t>(hi);
 }
+
+/// Closes seams between pieces meshed apart (each tetrahedron, glyph and the SLIM grid make their
+/// own vertices): open edges' vertices within eps of each other become one, and an open edge with
+/// another piece's open-edge vertices on it (within eps, strictly inside: a T-junction, where a
+/// flat triangle's coarser lattice meets a finer one) has its triangle split at them, as a fan
+/// from the opposite corner. Nothing moves by more than eps; faces that the welding makes
+/// degenerate, and the second copy of a triangle, are dropped. Returns how many vertices were
+/// welded and edges split.
+std::pair<std::size_t, std::size_t> close_seams(PolygonMesh& m, double eps) {
+  const auto open_vertices = [&] {
+    std::unordered_map<std::uint64_t, int> uses;
+    for (std::size_t f = 0; f < m.face_count(); ++f) {
+      const auto t = m.face(f);
+      for (int i = 0; i < 3; ++i) ++uses[edge_key(t[i], t[(i + 1) % 3])];
+    }
+    std::vector<std::uint8_t> open(m.vertices.size(), 0);
+    for (const auto& [k, n] : uses)
+      if (n == 1) open[k >> 32] = open[k & 0xffffffffu] = 1;
+    return std::pair{std::move(uses), std::move(open)};
+  };
+  // Open vertices by grid cell of side `cell`.
+  const auto cell_of = [](const Eigen::Vector3d& p, double cell) {
+    return Eigen::Vector3i((p / cell).array().floor().cast<int>());
+  };
+  const auto cell_key = [](const Eigen::Vector3i& c) {
+    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) | (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
+           static_cast<std::uint64_t>(c.z() & 0x1fffff);
+  };
+  // Welding.
+  std::size_t welded = 0;
+  {
+    const auto [uses, open] = open_vertices();
+    std::vector<int> to(m.vertices.size());
+    std::iota(to.begin(), to.end(), 0);
+    std::unordered_map<std::uint64_t, std::vector<int>> grid;
+    const double cell = 2.0 * eps;
+    for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+      if (!open[v]) continue;
+      const Eigen::Vector3i c = cell_of(m.vertices[v], cell);
+      int found = -1;
+      for (int dx = -1; dx <= 1 && found < 0; ++dx)
+        for (int dy = -1; dy <= 1 && found < 0; ++dy)
+          for (int dz = -1; dz <= 1 && found < 0; ++dz)
+            if (const auto it = grid.find(cell_key(c + Eigen::Vector3i(dx, dy, dz))); it != grid.end())
+              for (const int w : it->second)
+                if ((m.vertices[w] - m.vertices[v]).norm() <= eps) {
+                  found = w;
+                  break;
+                }
+      if (found >= 0) {
+        to[v] = found;
+        ++welded;
+      } else {
+        grid[cell_key(c)].push_back(static_cast<int>(v));
+      }
+    }
+    if (welded > 0) {
+      PolygonMesh out;
+      out.vertices = m.vertices;
+      out.colours = m.colours;
+      std::set<std::array<int, 3>> seen;
+      for (std::size_t f = 0; f < m.face_count(); ++f) {
+        const auto t = m.face(f);
+        const std::array<int, 3> w = {to[t[0]], to[t[1]], to[t[2]]};
+        if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2]) continue;
+        std::array<int, 3> sorted = w;
+        std::sort(sorted.begin(), sorted.end());
+        if (!seen.insert(sorted).second) continue;
+        out.add_face(w);
+      }
+      m = std::move(out);
+    }
+  }
+  // T-junctions: open vertices strictly inside open edges.
+  std::size_t split = 0;
+  const auto [uses, open] = open_vertices();
+  std::vector<int> open_list;
+  double length = 0;
+  std::size_t n_open = 0;
+  for (const auto& [k, n] : uses)
+    if (n == 1) length += (m.vertices[k >> 32] - m.vertices[k & 0xffffffffu]).norm(), ++n_open;
+  if (n_open == 0) return {welded, 0};
+  const double cell = std::max(length / static_cast<double>(n_open), 4.0 * eps);
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    if (open[v]) grid[cell_key(cell_of(m.vertices[v], cell))].push_back(static_cast<int>(v));
+  // Per face, its open edges' inner points (sorted along the edge).
+  std::vector<std::array<std::vector<int>, 3>> inner(m.face_count());
+  std::vector<std::size_t> touched;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto t = m.face(f);
+    bool any = false;
+    for (int i = 0; i < 3; ++i) {
+      const int a = t[i], b = t[(i + 1) % 3];
+      if (uses.at(edge_key(a, b)) != 1) continue;
+      const Eigen::Vector3d pa = m.vertices[a], ab = m.vertices[b] - pa;
+      const double len2 = ab.squaredNorm();
+      if (!(len2 > 0)) continue;
+      const Eigen::Vector3i lo = cell_of(pa.cwiseMin(m.vertices[b]).array() - eps, cell),
+                            hi = cell_of(pa.cwiseMax(m.vertices[b]).array() + eps, cell);
+      if (((hi - lo).array() + 1).cast<double>().prod() > 4096) continue;  // a long edge across many cells
+      std::vector<std::pair<double, int>> on;
+      for (int x = lo.x(); x <= hi.x(); ++x)
+        for (int y = lo.y(); y <= hi.y(); ++y)
+          for (int z = lo.z(); z <= hi.z(); ++z)
+            if (const auto it = grid.find(cell_key({x, y, z})); it != grid.end())
+              for (const int v : it->second) {
+                if (v == a || v == b) continue;
+                const double s = (m.vertices[v] - pa).dot(ab) / len2;
+                if (s * std::sqrt(len2) <= eps || (1.0 - s) * std::sqrt(len2) <= eps) continue;
+                if ((pa + s * ab - m.vertices[v]).norm() <= eps) on.emplace_back(s, v);
+              }
+      if (on.empty()) continue;
+      std::sort(on.begin(), on.end());
+      for (const auto& [s, v] : on) inner[f][i].push_back(v);
+      split += on.size();
+      any = true;
+    }
+    if (any) touched.push_back(f);
+  }
+  if (split == 0) return {welded, 0};
+  PolygonMesh out;
+  out.vertices = m.vertices;
+  out.colours = m.colours;
+  std::size_t next_touched = 0;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto t = m.face(f);
+    if (next_touched >= touched.size() || touched[next_touched] != f) {
+      out.add_face(t);
+      continue;
+    }
+    ++next_touched;
+    // Each split edge in turn: the triangle holding it becomes a fan from its opposite corner
+    // (the other two edges stay whole in the fan's end triangles).
+    std::vector<std::array<int, 3>> tris = {{t[0], t[1], t[2]}};
+    for (int i = 0; i < 3; ++i) {
+      if (inner[f][i].empty()) continue;
+      const int a = t[i], b = t[(i + 1) % 3];
+      for (std::size_t k = 0; k < tris.size(); ++k) {
+        const auto tri = tris[k];
+        int j = 0;
+        while (j < 3 && !(tri[j] == a && tri[(j + 1) % 3] == b)) ++j;
+        if (j == 3) continue;
+        const int c = tri[(j + 2) % 3];
+        tris.erase(tris.begin() + static_cast<std::ptrdiff_t>(k));
+        int prev = a;
+        for (const int v : inner[f][i]) tris.push_back({prev, v, c}), prev = v;
+        tris.push_back({prev, b, c});
+        break;
+      }
+    }
+    for (const auto& tri : tris) out.add_face(tri);
+  }
+  m = std::move(out);
+  return {welded, split};
+}
+
 
 /// Longest-edge bisection (Rivara) of the marked faces among those from first_face on, closed so
 /// no T-junction remains: a face with an edge to split has its longest edge split too, and every
@@ -1469,6 +1620,18 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (best.within || last) break;
   }
   if (o.progress) o.progress(1.0);
+  // Pieces meshed apart meet at coincident vertices and T-junctions: closed where they coincide
+  // within 1e-7 of the diagonal (a compact .qxm's float32 rounding moves corners by up to 5e-8 of
+  // it; nothing moves farther, so the measures stand).
+  if (best.open_edges > 0) {
+    const auto [welded, split] = close_seams(best.mesh, 1e-7 * diagonal);
+    if (welded + split > 0) {
+      const std::size_t before = best.open_edges;
+      best.open_edges = count_open_edges(best.mesh);
+      log::debug("mesh: {} vertices welded and {} T-junctions split along open edges: {} open edges, {} before", welded,
+                 split, best.open_edges, before);
+    }
+  }
   // Faces left out over cracks leave their vertices behind.
   if (const std::size_t unused = best.mesh.remove_unused_vertices(); unused > 0)
     log::debug("mesh: {} vertices no face uses dropped", unused);

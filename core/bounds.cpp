@@ -90,6 +90,16 @@ bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double r
   return !(vol6 > rel_eps * diam * diam * diam);
 }
 
+double tetrahedron_thickness(const std::array<Eigen::Vector3d, 4>& p) {
+  double thickness = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d &a = p[(i + 1) % 4], &b = p[(i + 2) % 4], &c = p[(i + 3) % 4];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() > 0) thickness = std::min(thickness, std::abs(n.normalized().dot(p[i] - a)));
+  }
+  return std::isfinite(thickness) ? thickness : 0.0;
+}
+
 std::vector<std::array<Eigen::Vector3d, 4>> clip_tetrahedron(const std::array<Eigen::Vector3d, 4>& t, int axis,
                                                              double limit, int side) {
   using V = Eigen::Vector3d;

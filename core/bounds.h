@@ -54,6 +54,10 @@ inline constexpr double kDegenerateTetrahedron = 1e-12;
 /// when an edge is not finite.
 bool is_degenerate_tetrahedron(const std::array<Eigen::Vector3d, 4>& p, double rel_eps = kDegenerateTetrahedron);
 
+/// The tetrahedron's smallest height: each corner's distance from the plane of the other three,
+/// the least of the four (0 for a flat one).
+double tetrahedron_thickness(const std::array<Eigen::Vector3d, 4>& p);
+
 /// The part of tetrahedron t inside the half-space {x : x[axis]·side ≤ limit·side} (side = ±1)
 /// as 0 to 3 tetrahedra that tile it exactly: 1 corner inside gives one tetrahedron, 2 or 3 give
 /// a triangular prism split into three. New corners lie on the plane exactly (their `axis`

@@ -189,7 +189,40 @@ public:
     for (std::size_t k = 0; k < 4; ++k)
       if (std::string why = moved_problem(t.corners[k], r.corners[k], edge); !why.empty()) return why;
     const Quadric moved = t.quadric.translated_to_origin(r.centroid() - t.centroid());
-    return coefficients_problem(moved.coefficients(), r.quadric.coefficients());
+    if (std::string why = coefficients_problem(moved.coefficients(), r.quadric.coefficients()); !why.empty()) return why;
+    return along_problem(t, r);
+  }
+  /// A surface that runs along two edges of its tetrahedron from one corner (the bilinear patch
+  /// of a quad holds its four sides) touches the face they span there tangentially and stays
+  /// within about h·(r/L)² of it at a distance r from that corner (h the thickness, L the size).
+  /// Corners moved by δ cut it there out to r ≈ L·√(δ/h): holes at the corners, pinholes to any
+  /// ray caster (inspired_mesh_quads at δ/h = 3e-4: 2 % of each quad's size; torus_quad at
+  /// δ/h = 0.05: whole quads lost, and stray pieces of the quadric where the moved faces let
+  /// them in). Compact only while those holes stay within 1/1000 of the size: δ ≤ 1e-6·h.
+  static std::string along_problem(const TetPatch& t, const TetPatch& r) {
+    const double thickness = tetrahedron_thickness(t.corners);
+    double moved = 0;
+    for (std::size_t k = 0; k < 4; ++k) moved = std::max(moved, (r.corners[k] - t.corners[k]).norm());
+    if (moved <= 1e-6 * thickness) return {};
+    // Edges on the surface: its value at five points along them within 1e-9 of their length.
+    const Eigen::Vector3d c = t.centroid();
+    const auto on_surface = [&](std::size_t i, std::size_t j) {
+      const Eigen::Vector3d a = t.corners[i] - c, b = t.corners[j] - c;
+      const double tolerance = 1e-9 * (b - a).norm();
+      for (const double s : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+        const Eigen::Vector3d y = a + s * (b - a);
+        if (!(std::abs(t.quadric.eval(y)) <= tolerance * t.quadric.gradient(y).norm())) return false;
+      }
+      return true;
+    };
+    std::array<int, 4> edges_at{};
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = i + 1; j < 4; ++j)
+        if (on_surface(i, j)) ++edges_at[i], ++edges_at[j];
+    if (*std::max_element(edges_at.begin(), edges_at.end()) < 2) return {};
+    return fmt::format("its surface runs along two of its tetrahedron's edges, where float32 would cut holes {:.2g} "
+                       "of its size wide (its corners moved by {:g}, the tetrahedron {:g} thin)",
+                       std::sqrt(moved / thickness), moved, thickness);
   }
   /// Whether float32 turns the tetrahedron flat or inside out: a sliver whose height is below
   /// the rounding of its corners.

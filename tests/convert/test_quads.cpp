@@ -12,10 +12,13 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support.h"
+
 #include "convert/quads.h"
 #include "core/bounds.h"
 #include "core/error.h"
 #include "core/mesh_io.h"
+#include "core/model_io.h"
 #include "core/reference.h"
 
 namespace quadrix {
@@ -465,6 +468,57 @@ TEST(ConvertQuads, TinyQuadsFarFromTheOriginAreExact) {
               m.face_count(), c.quadric_quads, c.flat_quads, c.split_quads, conv.model.tets.size(), worst, worst_out);
   EXPECT_LE(worst, kTol);
   EXPECT_LE(worst_out, kTol);
+}
+
+TEST(ConvertQuads, NearlyPlanarQuadsKeepTheirCornersThroughTheModelFile) {
+  // A bilinear patch runs along its tetrahedron's sides and touches the face two of them span at
+  // each corner; a nearly planar quad's tetrahedron is thin, so float32 corners (the compact
+  // .qxm) would cut holes there (inspired_mesh_quads: pinholes at every quad; torus_quad: whole
+  // quads lost). Written with the default fallback, such a model keeps the double encoding, and
+  // rays near every corner still meet the patch.
+  const fs::path dir = fs::temp_directory_path() / ("quadrix_quads_corners_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  PolygonMesh m;
+  constexpr int kCells = 6;
+  const Vector3d origin(41.8, 25.6, 0.8);  // off the world origin, as scanned models are
+  for (int i = 0; i <= kCells; ++i)
+    for (int j = 0; j <= kCells; ++j) {
+      const double x = 0.7 * i, y = 0.7 * j;
+      m.vertices.push_back(origin + Vector3d(x, y, 0.02 * x * y + 0.1 * x));
+    }
+  for (int i = 0; i < kCells; ++i)
+    for (int j = 0; j < kCells; ++j) {
+      const int v = i * (kCells + 1) + j;
+      const int f[4] = {v, v + kCells + 1, v + kCells + 2, v + 1};
+      m.add_face(f);
+    }
+  const QuadConversion conv = convert_quads(m);
+  ASSERT_EQ(conv.counts.quadric_quads, m.face_count());
+  EXPECT_THROW(write_model(conv.model, dir / "c.qxm", {.encoding = ModelEncoding::compact, .fallback_to_full = false}),
+               InvalidInput);
+  const WriteModelResult w = write_model(conv.model, dir / "m.qxm");
+  EXPECT_EQ(w.encoding, ModelEncoding::full);
+  EXPECT_NE(w.fallback.find("runs along two of its tetrahedron's edges"), std::string::npos) << w.fallback;
+  const Model r = read_model(dir / "m.qxm");
+  fs::remove_all(dir);
+  ASSERT_EQ(r.tets.size(), conv.model.tets.size());
+  const ReferenceScene scene(r);
+  const TraceOptions trace = no_cull();
+  int misses = 0;
+  for (const TetPatch& t : r.tets) {
+    const Vector3d c = t.centroid();
+    for (const Vector3d& corner : t.corners)
+      for (const double s : {1e-4, 1e-3, 1e-2}) {
+        Vector3d p = corner + s * (c - corner);
+        for (int k = 0; k < 4; ++k) {  // onto the patch
+          const Vector3d g = t.quadric.gradient(p - c);
+          p -= t.quadric.eval(p - c) / g.squaredNorm() * g;
+        }
+        const double d = line_distance(scene, trace, p, t.quadric.gradient(p - c).normalized(), 1e-2);
+        if (!(d >= 0 && d <= 1e-9) && misses++ < 5) ADD_FAILURE() << "corner hole at s " << s << ": " << d;
+      }
+  }
+  EXPECT_EQ(misses, 0);
 }
 
 TEST(ConvertQuads, OrientationFollowsTheFace) {

@@ -1,5 +1,6 @@
 // Models as triangle meshes: the measured error against analytic truth, watertightness, colours.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +10,7 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <set>
 
 #include "convert/mesh_measure.h"
 #include "convert/quads.h"
@@ -16,6 +18,7 @@
 #include "core/error.h"
 #include "core/io/io.h"
 #include "core/mesh_io.h"
+#include "core/model_io.h"
 #include "core/points_io.h"
 #include "core/reference.h"
 #include "core/synth.h"
@@ -463,6 +466,78 @@ TEST(ToMesh, TwistedQuadMeshedPastAnEmptyFirstLevel) {
         const Eigen::Vector3d& x = r.mesh.vertices[v];
         EXPECT_NEAR(std::min({x.x(), x.y(), 1 - x.x(), 1 - x.y()}), 0.0, 1e-9) << "open edge inside the quad";
       }
+}
+
+/// A 2 × 2 × 1 box of quads about `centre`: its top's middle vertex lifted by `lift` (four curved
+/// quads), the rest flat; counter-clockwise from outside.
+PolygonMesh quad_box(const Eigen::Vector3d& centre, double lift) {
+  PolygonMesh m;
+  std::map<std::array<int, 3>, int> id;
+  const auto v = [&](int x, int y, int z) {
+    const auto [it, added] = id.emplace(std::array<int, 3>{x, y, z}, static_cast<int>(m.vertices.size()));
+    if (added) m.vertices.push_back(centre + Eigen::Vector3d(x, y, z == 1 && x == 0 && y == 0 ? 1 + lift : z));
+    return it->second;
+  };
+  const auto quad = [&](int a, int b, int c, int d) { m.add_face(std::vector<int>{a, b, c, d}); };
+  for (int i = -1; i < 1; ++i)
+    for (int j = -1; j < 1; ++j) {
+      quad(v(i, j, 1), v(i + 1, j, 1), v(i + 1, j + 1, 1), v(i, j + 1, 1));       // top, +z
+      quad(v(i, j, -1), v(i, j + 1, -1), v(i + 1, j + 1, -1), v(i + 1, j, -1));   // bottom, -z
+    }
+  for (int i = -1; i < 1; ++i) {
+    quad(v(i, -1, -1), v(i + 1, -1, -1), v(i + 1, -1, 1), v(i, -1, 1));  // -y
+    quad(v(i + 1, 1, -1), v(i, 1, -1), v(i, 1, 1), v(i + 1, 1, 1));      // +y
+    quad(v(1, i, -1), v(1, i + 1, -1), v(1, i + 1, 1), v(1, i, 1));      // +x
+    quad(v(-1, i + 1, -1), v(-1, i, -1), v(-1, i, 1), v(-1, i + 1, 1));  // -x
+  }
+  return m;
+}
+
+/// Closed and consistently oriented: every edge in two triangles, once each way.
+void expect_closed_oriented(const PolygonMesh& m) {
+  std::map<std::pair<int, int>, int> directed;
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto t = m.face(f);
+    for (int i = 0; i < 3; ++i) ++directed[{t[i], t[(i + 1) % 3]}];
+  }
+  int bad = 0;
+  for (const auto& [e, n] : directed)
+    if ((n != 1 || !directed.count({e.second, e.first})) && bad++ < 5) ADD_FAILURE() << "edge " << e.first << "-" << e.second;
+  EXPECT_EQ(bad, 0);
+}
+
+// Each tetrahedron is meshed on its own lattice: a flat triangle's on the cross-section of its
+// clip tetrahedron, coarser than a curved quad's along a shared side, and each makes its own
+// vertices (in a compact .qxm, float32 corners off by up to 5e-8 of the diagonal). The pieces
+// are joined where they coincide: a box of flat quads read back from a compact file is 8
+// vertices and 12 triangles, closed (it had 36 vertices and 36 open edges); with a curved top,
+// closed, its flat sides split where the curved quads' finer lattice meets them.
+TEST(ToMesh, PiecesMeshedApartAreClosedAtTheirSeams) {
+  {
+    const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                       ("quadrix_seams_" + std::to_string(::getpid()) + ".qxm");
+    const Model converted = convert_quads(quad_box(Eigen::Vector3d(100, 50, 20), 0.0)).model;
+    EXPECT_EQ(write_model(converted, file).encoding, ModelEncoding::compact);
+    const Model m = read_model(file);
+    std::filesystem::remove(file);
+    const ToMeshResult r = mesh_model(m);
+    EXPECT_TRUE(r.within);
+    EXPECT_EQ(r.open_edges, 0u);
+    EXPECT_EQ(r.mesh.vertices.size(), 18u);  // the box's own vertices, no copies
+    expect_closed_oriented(r.mesh);
+    EXPECT_NEAR(signed_volume(r.mesh), 8.0, 1e-5);
+  }
+  {
+    const Model m = convert_quads(quad_box(Eigen::Vector3d(0, 0, 0), 0.4)).model;
+    const ToMeshResult r = mesh_model(m, {.max_error = 1e-3, .progress = {}});
+    std::cout << "curved box: " << r.mesh.face_count() << " triangles after " << r.refinements << " doublings, max "
+              << r.max_error() << ", " << r.open_edges << " open edges\n";
+    EXPECT_TRUE(r.within) << r.max_error();
+    EXPECT_GT(r.refinements, 0);
+    EXPECT_EQ(r.open_edges, 0u);
+    expect_closed_oriented(r.mesh);
+    EXPECT_GT(signed_volume(r.mesh), 8.0);
+  }
 }
 
 // The kitten fitted from its points alone at 1e-3: its blend draws lone patches' rims running on
