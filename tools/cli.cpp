@@ -136,9 +136,13 @@ CLI::Validator number(NumberRange r) {
 std::pair<int, int> parse_size(const std::string& text) {
   int w = 0, h = 0;
   char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
-      w > 16384 || h > 16384)
-    throw CLI::ValidationError("--size", fmt::format("'{}' is not WxH with 1 ≤ W, H ≤ 16384", text));
+  const int read = std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra);
+  if (read == 1 && text.find_first_not_of("0123456789") == std::string::npos) h = w;  // "512": a square
+  else if (read != 3 || (x != 'x' && x != 'X')) w = 0;
+  if (w < 1 || h < 1 || w > 16384 || h > 16384) {
+    const std::string shown = text.size() > 40 ? text.substr(0, 40) + "…" : text;
+    throw CLI::ValidationError("--size", fmt::format("'{}' is not WxH (or N for N×N) with 1 ≤ W, H ≤ 16384", shown));
+  }
   return {w, h};
 }
 

@@ -237,7 +237,7 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                   "A .qxm drawn as the row 'baseline model' with the same camera (e.g. a coarser fit of the same "
                   "data), its image error against full detail, and each LOD row's frame time over it");
   app->add_option("--context", a->context, "GL context")->check(CLI::IsMember(render::context_names()));
-  app->add_option("--size", a->size, "Image size WxH");
+  app->add_option("--size", a->size, "Image size WxH, or N for N×N");
   app->add_option("--frames", a->frames, "Timed frames per configuration (median reported)")->check(number({.lo = 1, .hi = 1000}));
   app->add_option("--azimuth", a->azimuth, "Camera azimuth (degrees)")->check(finite());
   app->add_option("--shadow-map", a->shadow_map, "Shadow map side of the shadows+outlines rows (0: as render)")

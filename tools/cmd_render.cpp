@@ -482,7 +482,7 @@ void add_render(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   app->add_option("--context", a->context, "GL context: auto, osmesa, egl, glfw")
       ->check(CLI::IsMember(render::context_names()));
-  app->add_option("--size", a->size, "Image size WxH");
+  app->add_option("--size", a->size, "Image size WxH, or N for N×N");
   add_view_options(*app, a->view);
   app->add_option("--supersample", a->supersample, "Antialiasing: render N×N samples per pixel and box-filter them")
       ->check(number({.lo = 1, .hi = 16}))

@@ -160,7 +160,7 @@ void add_view(CLI::App& root, Commands& commands) {
                                               "convert glyphs (default: element)")
       ->check(CLI::IsMember({"element", "chain", "residue"}))
       ->default_str("");
-  app->add_option("--size", a->size, "Window size WxH")->capture_default_str();
+  app->add_option("--size", a->size, "Window size WxH, or N for N×N")->capture_default_str();
   add_view_options(*app, a->view);
   app->add_option("--shading", a->shading, "phong, envmap or npr")
       ->check(CLI::IsMember({"phong", "envmap", "npr"}))

@@ -387,6 +387,9 @@ TEST(Cli, EveryNumericOptionOfEveryCommandRefusesNanInfAndOutOfRange) {
   const std::vector<std::string> inside = {
       "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size 0x10",
       "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size nanx10",
+      "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size 0",
+      "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size 20000",
+      "render " + missing("a.qxm") + " -o " + missing("a.png") + " --size 64x",
       "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,nan",
       "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,0",
       "convert volume " + missing("v.raw") + " --iso 1 -o " + missing("v.qxm") + " --type uint8 --dims 4,4,4 --spacing 1,inf,1",

@@ -125,6 +125,10 @@ TEST_F(CliCamera, BackgroundColourOrTransparent) {
   EXPECT_EQ(corner[2], 30);
   EXPECT_EQ(corner[3], 255);
   EXPECT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --background 1,2").code, 2);
+  // One number is a square.
+  ASSERT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(png) + " --size 48").code, 0);
+  EXPECT_EQ(read_png(png).width, 48);
+  EXPECT_EQ(read_png(png).height, 48);
 }
 
 namespace {
