@@ -85,6 +85,9 @@ struct ToMeshResult {
   int fin_rounds = 0;               ///< rounds of open sheets added on patches' rims drawn alone, kept
   std::size_t fin_triangles = 0;    ///< triangles of those sheets
   bool within = false;              ///< both maxima ≤ bound and no misses
+  /// A closed tetrahedron model meshed on one grid (nodes labelled by the drawn surface) instead
+  /// of each tetrahedron's own lattice (a skin's slivers; refinements then counts its halvings)
+  bool on_grid = false;
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
 

@@ -56,6 +56,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"refined_cells", r.refined_cells},
                          {"view_rounds", r.view_rounds},
                          {"fin_rounds", r.fin_rounds},
+                         {"on_grid", r.on_grid},
                          {"fin_triangles", r.fin_triangles},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
