@@ -958,7 +958,7 @@ using SurfaceMeasure = std::function<SurfaceError(const PolygonMesh&)>;
 
 LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& trace, const ToMeshOptions& o,
                                double bound, double reach, double snap_reach, std::size_t first_face, Builder& b,
-                               SampleMemo& memo, const SurfaceMeasure& surface_error) {
+                               SampleMemo& memo, const SurfaceMeasure& surface_error, bool any_kind = false) {
   std::vector<std::uint8_t> fresh(b.mesh.face_count(), 0);
   std::fill(fresh.begin() + static_cast<std::ptrdiff_t>(first_face), fresh.end(), 1);
   // Per face: its worst sample, and how many generations it has been cut without that dropping
@@ -1031,7 +1031,7 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
           half_edge[t[(i + 1) % 3]] = std::max(half_edge[t[(i + 1) % 3]], l);
         }
       }
-      snap_to_surface(scene, trace, snap_reach, 0, keep, b, /*drop_unmet=*/false, &half_edge);
+      snap_to_surface(scene, trace, snap_reach, 0, keep, b, /*drop_unmet=*/false, &half_edge, any_kind);
     }
     std::size_t n_marked = static_cast<std::size_t>(std::count(marked.begin(), marked.end(), 1));
     if (md.beyond == 0) {
@@ -1091,7 +1091,8 @@ LocalRefinement refine_locally(const ReferenceScene& scene, const TraceOptions& 
     }
     std::vector<double> reach_of(added);
     for (std::size_t k = 0; k < added; ++k) reach_of[k] = std::min(edge_of[k], cap_of[k]);
-    snap_to_surface(scene, trace, snap_reach, first_vertex, std::vector<std::uint8_t>(added, 0), b, /*drop_unmet=*/false, &reach_of);
+    snap_to_surface(scene, trace, snap_reach, first_vertex, std::vector<std::uint8_t>(added, 0), b, /*drop_unmet=*/false,
+                    &reach_of, any_kind);
   }
   out.rounds = round;
   return out;
@@ -1463,12 +1464,25 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       std::vector<std::uint8_t> on_surface;
       mesh_slims(model, scene, trace, h, {}, b, on_surface);
       snap_to_surface(scene, trace, 1.5 * h, 0, on_surface, b, /*drop_unmet=*/true, nullptr, /*any_kind=*/true);
+      // The SLIM grid's local refinement: the triangles with samples beyond the bound cut by
+      // longest-edge bisection, new vertices moved onto the surface (undone where it leaves more
+      // samples beyond than it found).
+      const double reach = std::max(4.0 * bound, 1.5 * h);
+      LocalRefinement local = refine_locally(scene, trace, o, bound, reach, 1.5 * h, 0, b, memo,
+                                             [&](const PolygonMesh& m) { return surface_error(m, kKeepBeyond); },
+                                             /*any_kind=*/true);
       ToMeshResult r;
       r.bound = bound;
       r.refinements = level;
       r.on_grid = true;
+      r.local_rounds = local.rounds;
       r.mesh = std::move(b.mesh);
-      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, std::max(4.0 * bound, 1.5 * h), bound, nullptr, &memo);
+      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, nullptr, &memo);
+      if (local.rounds > 0 && local.before.beyond < r.mesh_to_surface.beyond) {
+        r.mesh = std::move(local.unrefined);
+        r.mesh_to_surface = local.before;
+        r.local_rounds = 0;
+      }
       r.open_edges = count_open_edges(r.mesh);
       measure_surface_side(r);
       log::info("mesh: on one grid of spacing {:.3g}: {} triangles, max {:.3g} / {:.3g}, {} open edges ({:.1f} s)", h,
