@@ -1419,6 +1419,11 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     return r;
   };
   const auto total_beyond = [](const ToMeshResult& r) { return r.mesh_to_surface.beyond + r.surface_to_mesh.beyond; };
+  // Progress never goes back: the grid's levels and the tetrahedra's lattices after them share it.
+  double progress_shown = -1;
+  const auto progress = [&](double fraction) {
+    if (o.progress && fraction > progress_shown) o.progress(progress_shown = fraction);
+  };
   // A closed tetrahedron model meshed on one grid, as SLIM is (mesh_slims: nodes labelled
   // inside/outside by the drawn surface along the grid lines through them, vertices where grid
   // edges meet it), at halving spacings from the SLIM rule with the tetrahedra's median longest
@@ -1458,6 +1463,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     for (int level = 0; level <= o.max_refinements; ++level) {
       const double h = h0 / (1 << level);
       if ((((box.max - box.min) / h).array() + 4.0).prod() > 1.5e9) break;  // a byte per node, as SLIM's
+      progress(static_cast<double>(level) / (o.max_refinements + 1));
       const auto t0 = std::chrono::steady_clock::now();
       Builder b;
       b.colours = has_any_colour(model);
@@ -1509,7 +1515,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       if (best.surface_to_mesh.samples == 0) measure_surface_side(best);
       break;
     }
-    if (o.progress) o.progress(static_cast<double>(level) / (o.max_refinements + 1));
+    progress(static_cast<double>(level) / (o.max_refinements + 1));
     const bool grid_refining = !model.slims.empty() && o.grid_refinements > 0;
     std::vector<Eigen::Vector3d> bad, surface_bad;
     bool surface_measured = false;
@@ -1705,7 +1711,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     have_best = true;
     if (best.within || last) break;
   }
-  if (o.progress) o.progress(1.0);
+  progress(1.0);
   if (closed_tets && !grid_mesh && !best.within) grid_mesh = mesh_on_grid();
   if (grid_mesh && (!have_best || grid_mesh->within || grid_mesh->max_error() < best.max_error())) {
     if (have_best) log::info("mesh: the grid's mesh kept (max {:.3g} against {:.3g} on the tetrahedra's lattices)",
