@@ -753,7 +753,6 @@ std::pair<std::size_t, std::size_t> close_seams(PolygonMesh& m, double eps) {
   // T-junctions: open vertices strictly inside open edges.
   std::size_t split = 0;
   const auto [uses, open] = open_vertices();
-  std::vector<int> open_list;
   double length = 0;
   std::size_t n_open = 0;
   for (const auto& [k, n] : uses)

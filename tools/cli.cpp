@@ -113,13 +113,18 @@ nlohmann::json camera_json(const Camera& c) {
           {"near", c.near_plane},     {"far", c.far_plane}};
 }
 
+namespace {
+/// A typed value as echoed in a refusal: cut to 40 characters.
+std::string shown_value(const std::string& text) { return text.size() > 40 ? text.substr(0, 40) + "…" : text; }
+}  // namespace
+
 CLI::Validator number(NumberRange r) {
   const bool open_lo = r.open_lo || std::isinf(r.lo), open_hi = r.open_hi || std::isinf(r.hi);
   const std::string range = fmt::format("{}{}, {}{}", open_lo ? '(' : '[', r.lo, r.hi, open_hi ? ')' : ']');
   const std::string description = open_lo && open_hi && std::isinf(r.lo) && std::isinf(r.hi) ? "finite NUMBER" : "NUMBER in " + range;
   return CLI::Validator(
       [r, range](std::string& text) -> std::string {
-        const std::string shown = text.size() > 40 ? text.substr(0, 40) + "…" : text;
+        const std::string shown = shown_value(text);
         char* end = nullptr;
         const double v = std::strtod(text.c_str(), &end);
         if (text.empty() || end != text.c_str() + text.size()) return fmt::format("'{}' is not a number", shown);
@@ -140,8 +145,8 @@ std::pair<int, int> parse_size(const std::string& text) {
   if (read == 1 && text.find_first_not_of("0123456789") == std::string::npos) h = w;  // "512": a square
   else if (read != 3 || (x != 'x' && x != 'X')) w = 0;
   if (w < 1 || h < 1 || w > 16384 || h > 16384) {
-    const std::string shown = text.size() > 40 ? text.substr(0, 40) + "…" : text;
-    throw CLI::ValidationError("--size", fmt::format("'{}' is not WxH (or N for N×N) with 1 ≤ W, H ≤ 16384", shown));
+    throw CLI::ValidationError("--size",
+                               fmt::format("'{}' is not WxH (or N for N×N) with 1 ≤ W, H ≤ 16384", shown_value(text)));
   }
   return {w, h};
 }
