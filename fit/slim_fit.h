@@ -254,10 +254,12 @@ struct SlimFitStats {
   int repair_rounds = 0;
   /// Per verification round, how far its model was from the contract: the share of points
   /// beyond E + the share of surface samples beyond surface_factor·E + the share of the data's
-  /// area outside every ball (mesh data). The fit keeps the model of the round with the least
-  /// since the points last changed (kept_round, 0-based): a repair can make things worse where E
-  /// is far below the data's sampling.
+  /// area outside every ball (mesh data), and its breaches of the bound: points beyond E plus
+  /// surface samples beyond surface_factor·E. Of the rounds since the points last changed the
+  /// fit keeps the model with the fewest breaches, among those the least failures (kept_round,
+  /// 0-based): a repair can make things worse where E is far below the data's sampling.
   std::vector<double> round_failures;
+  std::vector<std::size_t> round_breaches;
   int kept_round = 0;
   std::size_t hole_points = 0;  ///< points added on faces outside every ball (cover_face_holes)
   /// Where such spots were too many to join the points (E far below the sampling): faces that

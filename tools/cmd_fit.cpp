@@ -149,6 +149,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"within_bound", s.blend_failures == 0 && s.surface_failures == 0},
                                             {"repair_rounds", s.repair_rounds},
                                             {"round_failures", s.round_failures},
+                                            {"round_breaches", s.round_breaches},
                                             {"kept_round", s.kept_round},
                                             {"hole_points", s.hole_points},
                                             {"hole_face_patches", s.hole_face_patches},
