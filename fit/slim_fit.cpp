@@ -514,11 +514,18 @@ void SlimFitter::verify_and_repair() {
       log::debug("fit_slim: round {}: {} balls changed; tracing {} of {} point probes, {} of {} patches", round + 1,
                  changed.centres.size(), np, P_.size(), nk, slims.size());
     }
+    auto t_check = Clock::now();
     st_.blend_failures = verify_points(scene, centre_index, stale_points, at_fault);
+    const double t_points = seconds_since(t_check);
+    t_check = Clock::now();
     shrink_.clear();
     st_.surface_failures = opt_.check_surface ? verify_surface(scene, stale_patches, at_fault) : 0;
+    const double t_surface = seconds_since(t_check);
+    t_check = Clock::now();
     std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes;
     if (can_add_points_ && opt_.cover_face_holes) holes = face_holes(centre_index, changed_balls ? &*changed_balls : nullptr);
+    log::debug("fit_slim: round {}: points {:.2f} s, surface {:.2f} s, face holes {:.2f} s", round + 1, t_points, t_surface,
+               seconds_since(t_check));
     st_.face_holes = holes.size();
     std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen;
     if (can_add_points_ && opt_.cover_face_holes && face_prisms()) {
@@ -606,6 +613,7 @@ void SlimFitter::verify_and_repair() {
       }
       break;
     }
+    const auto t_fill = Clock::now();
     if (improved) best = snapshot(round, score);
     // The model just verified: what changes from here on (face patches below, the repair) is
     // traced again next round.
@@ -683,13 +691,16 @@ void SlimFitter::verify_and_repair() {
       if (!fresh.empty()) ++fill_rounds;
     }
     ++st_.repair_rounds;
+    log::debug("fit_slim: round {}: fills {:.2f} s", round + 1, seconds_since(t_fill));
     log::debug("fit_slim: repair round {}: {} points beyond E, {} surface samples beyond {}E, {} face spots outside every "
                "ball (failures {:.3g})", round + 1, st_.blend_failures, st_.surface_failures, opt_.surface_factor, st_.face_holes, score);
     // The late round's face patches are verified on the model as it is: a repair there opens
     // new spots that no later round may fill (bunny at 1e-4: 219 → 946).
+    const auto t_repair = Clock::now();
     if (!(late && face_fill)) repair(at_fault);
     prune();
     build_model();
+    log::debug("fit_slim: round {}: repair {:.2f} s", round + 1, seconds_since(t_repair));
   }
 }
 
