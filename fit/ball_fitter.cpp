@@ -242,9 +242,19 @@ std::optional<Ball> BallFitter::face_patch(std::uint32_t f) const {
 // The local form of the surface side: the patch's zero set inside its ball stays within
 // local_surface_factor·E of the data (no fins, no second sheets, no extrapolation past an
 // open boundary).
+std::pair<int, int> BallFitter::surface_lattice(double R) const {
+  if (verify_lattice) {
+    const int grid = std::clamp(static_cast<int>(std::ceil(2.0 * R / (opt.verify_spacing * E))), opt.verify_surface_grid,
+                                opt.verify_max_grid);
+    if (grid > opt.local_surface_grid << opt.local_surface_depth) return {grid, 1};
+  }
+  return {opt.local_surface_grid, opt.local_surface_depth};
+}
+
 bool BallFitter::surface_ok(const Ball& b) const {
+  const auto [grid, depth] = surface_lattice(b.R);
   return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clips, std::nullopt, std::nullopt}, *data,
-                         opt.local_surface_factor * E, opt.local_surface_grid, opt.local_surface_depth) == 0.0;
+                         opt.local_surface_factor * E, grid, depth) == 0.0;
 }
 
 // A ball at (ci, R) whose points are within E and whose zero set passes surface_ok: the
@@ -321,7 +331,8 @@ Ball BallFitter::settle(Ball b, Scratch& s) const {
   // side (finer where a sample could not vouch for its cell).
   const auto passed = [&](Ball c) {
     c.settled = true;
-    c.surface_lattice = opt.local_surface_grid << opt.local_surface_depth;
+    const auto [grid, depth] = surface_lattice(c.R);
+    c.surface_lattice = depth == 1 && grid > opt.local_surface_grid << opt.local_surface_depth ? grid : opt.local_surface_grid << opt.local_surface_depth;
     return c;
   };
   if (surface_ok(b)) return passed(b);

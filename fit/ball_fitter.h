@@ -100,6 +100,11 @@ struct BallFitter {
   const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
   const FaceSet* faces = nullptr;     // face patches (SlimFitOptions::face_patches)
   double diagonal = 0;
+  /// surface_ok on verification's lattice (fine in world units, as SlimFitter::verify_surface
+  /// checks each patch alone) where that is finer than its own: set for the repairs' candidates.
+  bool verify_lattice = false;
+  /// The lattice surface_ok checks a ball of radius R on: lines per side, refinement levels.
+  std::pair<int, int> surface_lattice(double R) const;
 
   struct Scratch {
     std::vector<Neighbour> nb;
