@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <random>
+#include <tuple>
 
 #include <Eigen/Geometry>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
@@ -146,9 +147,79 @@ std::optional<FileKind> known_file_kind(const fs::path& path) {
   return has_faces ? FileKind::mesh : FileKind::points;
 }
 
+std::size_t orient_faces_coherently(PolygonMesh& mesh) {
+  const std::size_t F = mesh.face_count();
+  struct Use {
+    int lo, hi;
+    std::uint32_t face;
+    bool forward;  // the face runs lo → hi
+  };
+  std::vector<Use> uses;
+  uses.reserve(mesh.indices.size());
+  for (std::size_t f = 0; f < F; ++f) {
+    const auto vs = mesh.face(f);
+    for (std::size_t k = 0; k < vs.size(); ++k) {
+      const int a = vs[k], b = vs[(k + 1) % vs.size()];
+      if (a != b) uses.push_back({std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(f), a < b});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) { return std::tie(x.lo, x.hi, x.face) < std::tie(y.lo, y.hi, y.face); });
+  // Faces across each edge used by exactly two faces: same = they run it the same way.
+  struct Link {
+    std::uint32_t other;
+    bool same;
+  };
+  std::vector<std::vector<Link>> links(F);
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].lo == uses[i].lo && uses[j].hi == uses[i].hi) ++j;
+    if (j - i == 2 && uses[i].face != uses[i + 1].face) {
+      const bool same = uses[i].forward == uses[i + 1].forward;
+      links[uses[i].face].push_back({uses[i + 1].face, same});
+      links[uses[i + 1].face].push_back({uses[i].face, same});
+    }
+    i = j;
+  }
+  const auto area = [&](std::size_t f) {
+    const auto vs = mesh.face(f);
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < vs.size(); ++k) n += mesh.vertices[vs[k]].cross(mesh.vertices[vs[(k + 1) % vs.size()]]);
+    return std::isfinite(n.norm()) ? n.norm() : 0.0;
+  };
+  std::vector<std::int8_t> turn(F, -1);  // -1: not reached
+  std::vector<std::uint32_t> part, queue;
+  std::size_t turned = 0;
+  for (std::size_t seed = 0; seed < F; ++seed) {
+    if (turn[seed] >= 0) continue;
+    part.clear();
+    queue.assign(1, static_cast<std::uint32_t>(seed));
+    turn[seed] = 0;
+    while (!queue.empty()) {
+      const std::uint32_t f = queue.back();
+      queue.pop_back();
+      part.push_back(f);
+      for (const Link& l : links[f])
+        if (turn[l.other] < 0) turn[l.other] = static_cast<std::int8_t>(turn[f] ^ (l.same ? 1 : 0)), queue.push_back(l.other);
+    }
+    double kept = 0, flipped = 0;
+    for (const auto f : part) (turn[f] ? flipped : kept) += area(f);
+    const bool invert = flipped > kept;
+    for (const auto f : part) {
+      if ((turn[f] != 0) == invert) continue;
+      std::reverse(mesh.indices.begin() + mesh.offsets[f] + 1, mesh.indices.begin() + mesh.offsets[f + 1]);
+      ++turned;
+    }
+  }
+  return turned;
+}
+
 PolygonMesh read_mesh(const fs::path& path) {
   PolygonMesh mesh = read_surface(path, format_of(path)).mesh;
   if (mesh.face_count() == 0) throw FormatError(fmt::format("{}: the mesh has no faces", path.string()));
+  if (const std::size_t turned = orient_faces_coherently(mesh); turned > 0)
+    log::warn("{}: {} of {} faces were wound against their neighbours (an edge run the same way by both of its "
+              "faces); turned to agree with them",
+              path.string(), turned, mesh.face_count());
   if (const std::size_t refused = count_non_manifold_faces(mesh); refused > 0)
     log::warn("{}: {} of {} faces are non-manifold or degenerate (complex edge or vertex, repeated vertex); they "
               "are kept, but OpenMesh's halfedge mesh would drop them",
@@ -190,6 +261,9 @@ PointCloud read_surface_points(const fs::path& path) {
     if (s.mesh.vertices.empty()) throw FormatError(fmt::format("{}: no points", path.string()));
     return {std::move(s.mesh.vertices), std::move(s.normals), std::move(s.mesh.colours)};
   }
+  if (const std::size_t turned = orient_faces_coherently(s.mesh); turned > 0)
+    log::warn("{}: {} of {} faces were wound against their neighbours; turned to agree with them", path.string(), turned,
+              s.mesh.face_count());
   PointCloud cloud = points_from_mesh(s.mesh);
   if (cloud.points.empty()) throw FormatError(fmt::format("{}: no face has a non-zero area", path.string()));
   if (cloud.points.size() < s.mesh.vertices.size())

@@ -59,6 +59,15 @@ PointCloud read_points(const std::filesystem::path& path);
 /// its faces (points_from_mesh); any other file is read_points.
 PointCloud read_surface_points(const std::filesystem::path& path);
 
+/// Turns faces wound against their neighbours so that each edge-connected part of the mesh is
+/// wound one way: across every edge shared by exactly two faces, the two faces run it in opposite
+/// directions. Per part, the faces of the smaller set (by area) are turned; a face keeps its first
+/// vertex (v0 v1 … vn → v0 vn … v1), so a non-planar face keeps its fan of triangles. Parts that
+/// cannot be wound one way (a Möbius strip) keep what the search first reached. Returns how many
+/// faces were turned. (Hand-written: CGAL's orient_polygon_soup also splits non-manifold
+/// vertices, renumbering the mesh, and costs a CGAL translation unit.)
+std::size_t orient_faces_coherently(PolygonMesh& mesh);
+
 /// Whether a closed or nearly closed mesh (at most 0.5 % of its edges not on exactly two faces:
 /// a scan with a few holes, like bunny.ply: 0.2 %) encloses a negative signed volume, i.e. its faces
 /// are wound clockwise seen from outside. Open sheets: false (their winding is taken as it is).

@@ -202,6 +202,71 @@ TEST(IoKit, ClosedMeshNormalsPointOutwardWhateverTheWinding) {
   EXPECT_NEAR(c.normals[0].norm(), 1.0, 1e-15);
 }
 
+// A UV sphere with every other face wound the wrong way (a mesh assembled from parts exported
+// apart): its vertices' face normals cancelled, and a fit of it drew a hole at every turned face
+// (a quarter of its silhouette) and exited 0. The reader turns them to agree with their
+// neighbours, the smaller set turned; non-planar quads keep their first vertex (so their fans).
+TEST(IoKit, FacesWoundAgainstTheirNeighboursAreTurned) {
+  PolygonMesh m;
+  const int rings = 10, segments = 16;
+  m.vertices.emplace_back(0, 0, 1);
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double th = M_PI * i / rings, ph = 2 * M_PI * j / segments;
+      // Rings slightly twisted: the quads are not planar.
+      m.vertices.emplace_back(std::sin(th) * std::cos(ph + 0.05 * i), std::sin(th) * std::sin(ph + 0.05 * i), std::cos(th));
+    }
+  m.vertices.emplace_back(0, 0, -1);
+  const int south = int(m.vertices.size()) - 1;
+  const auto at = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
+  for (int j = 0; j < segments; ++j) m.add_face(std::array<int, 3>{0, at(1, j), at(1, j + 1)});
+  for (int i = 1; i + 1 < rings; ++i)
+    for (int j = 0; j < segments; ++j) m.add_face(std::array<int, 4>{at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+  for (int j = 0; j < segments; ++j) m.add_face(std::array<int, 3>{south, at(rings - 1, j + 1), at(rings - 1, j)});
+  const PolygonMesh good = m;
+  ASSERT_EQ(orient_faces_coherently(m), 0u);
+  EXPECT_EQ(m.indices, good.indices);
+  std::size_t wrong = 0;
+  // Turned keeping their first vertex, as the reader turns them.
+  const auto turn = [&](std::size_t f) { std::reverse(m.indices.begin() + m.offsets[f] + 1, m.indices.begin() + m.offsets[f + 1]); };
+  for (std::size_t f = 0; f < m.face_count(); f += 2, ++wrong) turn(f);
+  // Wound the wrong way, most of the area: the rest is turned to agree with it.
+  for (std::size_t f = 1; f < m.face_count(); f += 4, ++wrong) turn(f);
+  EXPECT_EQ(orient_faces_coherently(m), m.face_count() - wrong);  // the kept ones were the fewer
+  // Every face is now the good one reversed, with the same first vertex: the same fan.
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const auto a = m.face(f), b = good.face(f);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(a[0], b[0]) << f;
+    for (std::size_t k = 1; k < a.size(); ++k) EXPECT_EQ(a[k], b[a.size() - k]) << f;
+  }
+  // Normals from the faces: outward at every vertex, none cancelled.
+  const PointCloud c = points_from_mesh(m);
+  ASSERT_EQ(c.points.size(), m.vertices.size());
+  for (std::size_t i = 0; i < c.points.size(); ++i) EXPECT_GT(c.normals[i].dot(c.points[i]), 0.9) << i;
+  // Through the reader, with the file's name in the warning's place.
+  ScratchDir dir("io-kit");
+  PolygonMesh mixed = good;
+  for (std::size_t f = 0; f < mixed.face_count(); f += 3)
+    std::reverse(mixed.indices.begin() + mixed.offsets[f] + 1, mixed.indices.begin() + mixed.offsets[f + 1]);
+  write_mesh(mixed, dir / "mixed.obj");
+  const PolygonMesh r = read_mesh(dir / "mixed.obj");
+  EXPECT_EQ(r.indices, good.indices);
+  // A Möbius strip cannot be wound one way: the reader turns what it can and returns.
+  PolygonMesh strip;
+  const int n = 12;
+  for (int k = 0; k < n; ++k) {
+    const double t = 2 * M_PI * k / n;
+    for (const double w : {-0.2, 0.2})
+      strip.vertices.emplace_back((1 + w * std::cos(t / 2)) * std::cos(t), (1 + w * std::cos(t / 2)) * std::sin(t), w * std::sin(t / 2));
+  }
+  for (int k = 0; k < n; ++k) {
+    const int a = 2 * k, b = 2 * k + 1, c2 = k + 1 < n ? 2 * k + 2 : 1, d = k + 1 < n ? 2 * k + 3 : 0;  // the twist
+    strip.add_face(std::array<int, 4>{a, c2, d, b});
+  }
+  EXPECT_LE(orient_faces_coherently(strip), strip.face_count());
+}
+
 // A strip of small triangles beside one triangle 10x larger: only the large one gets a lattice,
 // every sample lies on its face with the face's normal, and no point of the large face is farther
 // than about the small faces' size from a sample or a corner.
