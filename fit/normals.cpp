@@ -131,4 +131,57 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   return out;
 }
 
+GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                                      std::size_t neighbours, std::size_t samples) {
+  GivenNormalsCheck out;
+  const std::size_t n = points.size();
+  if (n < 4 || normals.size() != n || samples == 0) return out;
+  const PointIndex index(points);
+  const std::size_t k = std::clamp<std::size_t>(neighbours, 3, n - 1);
+  const std::size_t m = std::min(n, samples);
+  std::vector<std::uint8_t> off(m, 0), against(m, 0), used(m, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<Neighbour> nb;
+    for (std::size_t s = range.begin(); s != range.end(); ++s) {
+      const std::size_t i = s * n / m;
+      const double nn = normals[i].norm();
+      if (!(nn > 0)) continue;
+      const Eigen::Vector3d ni = normals[i] / nn;
+      index.nearest(points[i], k + 1, nb);
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const auto& [j, d2] : nb) mean += points[j];
+      mean /= double(nb.size());
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (const auto& [j, d2] : nb) C += (points[j] - mean) * (points[j] - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+      if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 0)) continue;  // collinear or coincident
+      used[s] = 1;
+      off[s] = std::abs(ni.dot(es.eigenvectors().col(0))) < 0.5;
+      // Orientation: the 8 nearest distinct neighbours.
+      double rough = 0;
+      std::size_t seen = 0;
+      for (const auto& [j, d2] : nb) {
+        if (!(d2 > 0) || seen == 8) continue;
+        ++seen;
+        if (ni.dot(normals[j]) >= 0) rough = std::max(rough, std::abs(ni.dot(points[j] - points[i])));
+      }
+      std::size_t on_sheet = 0, opposed = 0;
+      seen = 0;
+      for (const auto& [j, d2] : nb) {
+        if (!(d2 > 0) || seen == 8) continue;
+        ++seen;
+        const double h = std::abs(ni.dot(points[j] - points[i]));
+        if (h > 0.5 * std::sqrt(d2)) continue;  // more than 30° off the tangent plane
+        const bool opp = ni.dot(normals[j]) < 0;
+        if (opp && h > 2.0 * rough) continue;  // off the sheet its agreeing neighbours lie on
+        ++on_sheet;
+        opposed += opp;
+      }
+      against[s] = 3 * opposed > on_sheet;
+    }
+  });
+  for (std::size_t s = 0; s < m; ++s) out.points += used[s], out.off_plane += off[s], out.against += against[s];
+  return out;
+}
+
 }  // namespace quadrix

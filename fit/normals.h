@@ -28,4 +28,21 @@ struct NormalEstimation {
 NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points,
                                   const NormalEstimationOptions& options = {});
 
+/// How a cloud's own normals agree with its points, on up to `samples` points spread over the
+/// cloud. A point is off its plane when its normal lies more than 60° from the PCA normal of its
+/// `neighbours` nearest points (random or badly estimated normals: noisy ones, such as CGAL's
+/// sphere_20k_normal with normals up to 30° off, pass). It is against its neighbours when more
+/// than a third of its 8 nearest that lie on its sheet have normals pointing the other way (not
+/// oriented consistently: a scanner's unoriented normals). A neighbour with an opposed normal
+/// lies on the point's sheet when the direction to it is within 30° of the tangent plane and it
+/// lies no farther off that plane than twice the farthest agreeing neighbour does, so the other
+/// side of a thin plate does not count.
+struct GivenNormalsCheck {
+  std::size_t points = 0, off_plane = 0, against = 0;
+  double off_plane_share() const { return points ? double(off_plane) / double(points) : 0.0; }
+  double against_share() const { return points ? double(against) / double(points) : 0.0; }
+};
+GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                                      std::size_t neighbours = 16, std::size_t samples = 20000);
+
 }  // namespace quadrix

@@ -251,6 +251,7 @@ struct SlimFitStats {
   std::size_t surface_samples = 0;   ///< zero-set samples seen through the blend (surface side)
   std::size_t surface_failures = 0;  ///< of those, farther than surface_factor·E from the data
   double surface_max = 0, surface_p999 = 0;  ///< their distances to the data, world units
+  std::size_t normals_turned = 0;  ///< the cloud's own normals turned to agree with their neighbours'
   int repair_rounds = 0;
   /// Per verification round, how far its model was from the contract: the share of points
   /// beyond E + the share of surface samples beyond surface_factor·E + the share of the data's

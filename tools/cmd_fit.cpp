@@ -130,6 +130,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                         nlohmann::json j = {{"points", s.points},
                                             {"patches", s.patches},
                                             {"normals", s.normals_estimated ? "estimated" : "given"},
+                                            {"normals_turned", s.normals_turned},
                                             {"max_error_abs", s.max_error_abs},
                                             {"max_error_rel", s.max_error_abs / s.diagonal},
                                             {"diagonal", s.diagonal},
@@ -167,7 +168,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                                          {"cover", s.time_cover},
                                                          {"verify", s.time_verify},
                                                          {"total", s.time_total}}}};
-                        if (s.normals_estimated)
+                        if (s.normals_estimated && !cloud.has_normals())
                           log::warn("{}: no normals in the file; estimated them (PCA + MST orientation)", a->points);
                         if (!held.points.empty()) {
                           const SlimError e = evaluate_slim(r.model, held);

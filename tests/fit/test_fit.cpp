@@ -151,6 +151,55 @@ TEST(FitSlim, AbsoluteErrorAndFewerPatchesForLargerError) {
   EXPECT_LT(coarse.stats.patches, fine.stats.patches);
 }
 
+// A cloud's own normals that do not agree with its points: random ones fitted a sphere with a
+// patch per point and a hole at half its pixels, half of them flipped a patch per 1.5 points and
+// pinholes; both ended "within", the checks judging the surface by the same normals. Random
+// normals are replaced by estimated ones, flipped ones turned; normals tilted 25° by noise, and
+// the two sides of a thin plate (opposed normals a hair apart), are kept as given.
+TEST(FitSlim, GivenNormalsThatDisagreeWithThePointsAreMended) {
+  const PointCloud clean = sphere(4000, 1.0, 8);
+  const auto reference = fit_slim(clean, {.max_error = 1e-3});
+  std::mt19937_64 rng(80);
+  std::normal_distribution<double> G(0.0, 1.0);
+  PointCloud random = clean, flipped = clean, tilted = clean;
+  for (std::size_t i = 0; i < clean.points.size(); ++i) {
+    random.normals[i] = Eigen::Vector3d(G(rng), G(rng), G(rng)).normalized();
+    if (i % 2) flipped.normals[i] = -flipped.normals[i];
+    // Tilted by 25° about a random tangent axis.
+    const Eigen::Vector3d axis = clean.normals[i].cross(Eigen::Vector3d(G(rng), G(rng), G(rng))).normalized();
+    tilted.normals[i] = Eigen::AngleAxisd(25.0 * M_PI / 180.0, axis) * clean.normals[i];
+  }
+  const auto r = fit_slim(random, {.max_error = 1e-3});
+  EXPECT_TRUE(r.stats.normals_estimated);
+  const auto f = fit_slim(flipped, {.max_error = 1e-3});
+  EXPECT_FALSE(f.stats.normals_estimated);
+  EXPECT_EQ(f.stats.normals_turned, clean.points.size() / 2);
+  EXPECT_EQ(f.stats.patches, reference.stats.patches);  // the same normals, so the same fit
+  for (const auto* fit : {&r, &f}) {
+    EXPECT_EQ(fit->stats.blend_failures + fit->stats.surface_failures, 0u);
+    EXPECT_LE(fit->stats.patches, 2 * reference.stats.patches + 10);
+    // Every point of the clean sphere is met near the sphere: no holes.
+    const SlimError e = evaluate_slim(fit->model, clean);
+    EXPECT_EQ(e.misses, 0u);
+    EXPECT_LE(e.max, 1e-3 * diagonal(clean));
+  }
+  const auto t = fit_slim(tilted, {.max_error = 1e-3});
+  EXPECT_FALSE(t.stats.normals_estimated);
+  EXPECT_EQ(t.stats.normals_turned, 0u);
+  // A plate 1e-3 thick, 2 × 2, both faces sampled with outward normals: kept.
+  PointCloud plate;
+  for (int side : {-1, 1})
+    for (int i = 0; i < 40; ++i)
+      for (int j = 0; j < 40; ++j) {
+        plate.points.emplace_back(-1 + 2 * (i + 0.5) / 40 + 0.01 * side, -1 + 2 * (j + 0.5) / 40, 0.5e-3 * side);
+        plate.normals.emplace_back(0, 0, side);
+      }
+  for (int k = 0; k < 4; ++k) plate.points.emplace_back(0.2 * k, 0, 0.3), plate.normals.emplace_back(0, 0, 1);  // not coplanar
+  const GivenNormalsCheck pc = check_given_normals(plate.points, plate.normals);
+  EXPECT_LT(pc.against_share(), 0.05);
+  EXPECT_LT(pc.off_plane_share(), 0.05);
+}
+
 TEST(FitSlim, NoisyInputWithinErrorPlusNoise) {
   PointCloud c = sphere(5000, 1.0, 6);
   const double E = 2e-3 * diagonal(c), noise = 0.5 * E;
