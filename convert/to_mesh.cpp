@@ -1298,6 +1298,23 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
             return std::nullopt;
           },
           box, so);
+    // A mesh with no triangle (the grid passed between the parts of a surface thinner than its
+    // spacing): every drawn pixel is beyond it, at no finite distance.
+    bool any = false;
+    for (std::size_t f = 0; f < mesh.face_count() && !any; ++f) {
+      const auto vs = mesh.face(f);
+      const Eigen::Vector3d &a = mesh.vertices[vs[0]], &b = mesh.vertices[vs[1]], &c = mesh.vertices[vs[2]];
+      any = !is_sliver((b - a).cross(c - a).norm(), std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()}));
+    }
+    if (!any) {
+      SurfaceError none;
+      for (const auto& t : views->t)
+        for (const double d : t) none.pixels += d >= 0;
+      none.beyond = none.pixels;
+      none.share_beyond = none.pixels ? 1.0 : 0.0;
+      none.max = none.p999 = none.p99 = none.rms = none.pixels ? std::numeric_limits<double>::infinity() : 0.0;
+      return none;
+    }
     SurfaceError se = measure_surface_error(*views, DataSurface::from_mesh(mesh), so);
     log::debug("mesh: surface -> mesh measured in {:.2f} s: {} pixels beyond the bound, max {:.3g}", seconds_since(t0),
                se.beyond, se.max);

@@ -63,7 +63,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                              "surface->mesh {:.3g}), {}",
                              a.out, r.mesh.face_count(), r.mesh.vertices.size(), r.mesh.colours.empty() ? "" : " with colours",
                              r.max_error(), r.bound, r.mesh_to_surface.max, r.surface_to_mesh.max,
-                             r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges));
+                             r.mesh.face_count() == 0 ? "empty" : r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges));
   if (r.within) return kOk;
   const std::string what = fmt::format(
       "{}: the mesh is outside the bound {:.3g} after {} refinements (max error {:.3g}, {} samples whose normal met no "

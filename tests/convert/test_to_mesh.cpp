@@ -227,6 +227,25 @@ TEST(ToMesh, SlimSphereWithinItsBoundOfTheDrawnBlend) {
   EXPECT_EQ(r.mesh.colours.size(), r.mesh.vertices.size());
 }
 
+// A SLIM wire (a cylinder 6e-4 of its ball's radius across, as `fit` makes of a thin wire
+// fitted at an E of its radius) slips between every grid's nodes: the mesh comes out empty.
+// `mesh` refused the model it could not measure against ("DataSurface: the mesh has no faces",
+// exit 3, a valid model); now every drawn pixel counts as beyond the bound, at no finite distance.
+TEST(ToMesh, AnEmptyMeshOfADrawnSurfaceIsOutsideTheBound) {
+  Model m;
+  SlimPatch wire;
+  wire.radius = 1.0;
+  wire.local.A.diagonal() = Eigen::Vector3d(1, 1, 0);  // x² + y² = r²
+  wire.local.c = -1e-7;
+  m.slims.push_back(wire);
+  const ToMeshResult r = mesh_model(m, {.max_error = 1e-3, .progress = {}});
+  ASSERT_EQ(r.mesh.face_count(), 0u) << "the grid found the wire: the case no longer tests an empty mesh";
+  EXPECT_FALSE(r.within);
+  EXPECT_GT(r.surface_to_mesh.samples, 0u);
+  EXPECT_EQ(r.surface_to_mesh.beyond, r.surface_to_mesh.samples);
+  EXPECT_TRUE(std::isinf(r.surface_to_mesh.max));
+}
+
 TEST(ToMesh, FittedTorusClosedAndWithinItsBoundOfTheDrawnBlendAwayFromItsCracks) {
   const SlimFitResult fit = fit_slim(torus_points(8000, 1.0, 0.35, 7), {.max_error = 1e-3});
   // Default bound (1e-3 of the diagonal), no refinement: seconds.
