@@ -115,4 +115,12 @@ void write_file_atomically(const std::filesystem::path& path, const std::functio
   }
 }
 
+void check_output_folder(const std::filesystem::path& path) {
+  const std::filesystem::path folder = path.parent_path();
+  if (folder.empty()) return;
+  std::error_code ec;
+  if (!std::filesystem::is_directory(folder, ec))
+    throw IoError(fmt::format("{}: cannot write here: {} is not an existing folder", path.string(), folder.string()));
+}
+
 }  // namespace quadrix

@@ -19,6 +19,10 @@ namespace quadrix {
 ///         rethrows whatever write throws.
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& write);
 
+/// Whether path can be written as far as its folder goes: the folder exists and is a folder.
+/// \throws IoError naming the path and its folder otherwise.
+void check_output_folder(const std::filesystem::path& path);
+
 /// Groups the writes made while it is open (by any thread) so that they land together: commit()
 /// renames every temporary file into place; destruction without commit removes them all and
 /// leaves every target untouched. One open transaction at a time.

@@ -108,6 +108,11 @@ int main(int argc, char** argv) {
       report.json["command"] = c.app->get_name();
       for (const CLI::App* a = c.app; a && a != &app; a = a->get_parent())
         command_name = a->get_name() + (command_name.empty() ? "" : " " + command_name);
+      // An output into a folder that does not exist fails now, before the work (a fit of
+      // minutes failed at its end). `bench` writes into a folder of its own making.
+      if (!command_name.starts_with("bench"))
+        if (const CLI::Option* o = c.app->get_option_no_throw("--out"); o && o->count() > 0)
+          check_output_folder(o->as<std::string>());
       rc = c.run(common, report);
       kind = nullptr;
       break;

@@ -189,6 +189,10 @@ TEST(Cli, MissingFilesAndUnwritableOutputsFailCleanly) {
   // Writing into a folder that does not exist: exit 5, and nothing half-written anywhere.
   r = quadrix_run("synth sphere -o " + q(dir / "missing" / "s.qxm"));
   EXPECT_EQ(r.code, 5) << r.out;
+  // Found before the work: a fit's output folder is checked before its input is read.
+  r = quadrix_run("fit " + q(dir / "nope.xyz") + " -o " + q(dir / "missing" / "f.qxm"));
+  EXPECT_EQ(r.code, 5) << r.out;
+  EXPECT_NE(r.out.find("is not an existing folder"), std::string::npos) << r.out;
   // An existing output survives a failed run untouched.
   const auto model = dir / "s.qxm";
   ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
