@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/limits.h"
 #include "core/log.h"
 #include "core/model_io.h"
 #include "core/points_io.h"
@@ -100,6 +101,16 @@ void add_fit(CLI::App& root, Commands& commands) {
                           cloud = points_from_mesh(*mesh);
                         } else {
                           cloud = read_points(a->points);
+                        }
+                        {
+                          // The fit holds far from the origin, but `render` cannot place what it makes.
+                          Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+                          for (const auto& p : cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+                          try {
+                            check_drawable_extent(lo, hi, a->points);
+                          } catch (const InvalidInput& e) {
+                            log::warn("{}; the model is fitted, but `render` will refuse it", e.what());
+                          }
                         }
                         PointCloud held;
                         if (a->holdout > 0) {

@@ -181,6 +181,26 @@ TEST(Cli, InfoJsonSaysWhyAFileIsInvalid) {
   EXPECT_EQ(quadrix_run("info " + q(bad)).out.find("\"valid\""), std::string::npos);
 }
 
+// A cloud 1e11 from the origin and 2 across fits, but no renderer can place it: `fit` says so
+// up front (it used to exit 0 in silence, and `render` refused the model it wrote).
+TEST(Cli, FitWarnsOfACloudTooFarOutToRender) {
+  ScratchDir dir("cli-far");
+  const auto cloud = dir / "far.xyz";
+  {
+    std::ofstream out(cloud);
+    for (int i = 0; i < 40; ++i)
+      for (int j = 0; j < 40; ++j) {
+        const double th = 2 * M_PI * i / 40, ph = M_PI * (j + 0.5) / 40;
+        const double x = std::sin(ph) * std::cos(th), y = std::sin(ph) * std::sin(th), z = std::cos(ph);
+        out << fmt::format("{:.17g} {:.17g} {:.17g} {} {} {}\n", 1e11 + x, y, z, x, y, z);
+      }
+  }
+  const CmdResult r = quadrix_run("fit " + q(cloud) + " -o " + q(dir / "far.qxm") + " --max-error 1e-2");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("`render` will refuse it"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("far.xyz"), std::string::npos) << r.out;
+}
+
 TEST(Cli, MissingFilesAndUnwritableOutputsFailCleanly) {
   ScratchDir dir("cli-io");
   CmdResult r = quadrix_run("info " + q(dir / "nope.qxm"));
