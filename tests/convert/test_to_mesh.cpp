@@ -594,9 +594,10 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
   EXPECT_GT(with.fin_rounds, 0);
   EXPECT_LE(with.surface_to_mesh.max, 2.5 * with.bound);
   EXPECT_LT(with.surface_to_mesh.beyond * 4, without.surface_to_mesh.beyond);
-  // Its faces over cracks between balls left out: the mesh's own samples nearer, fewer beyond
-  // (0.0039 against 0.0047; 767 against 805 samples).
-  EXPECT_LT(with.mesh_to_surface.max, without.mesh_to_surface.max);
+  // Its faces over cracks between balls left out: the mesh's own samples no farther, fewer
+  // beyond (the 640-patch fit: 0.0039 against 0.0047, 767 against 805 samples; the 641-patch
+  // fit: 0.00376 both, its worst sample over no crack, 775 against 786).
+  EXPECT_LE(with.mesh_to_surface.max, without.mesh_to_surface.max);
   EXPECT_LT(with.mesh_to_surface.beyond, without.mesh_to_surface.beyond);
   // The vertices of the faces left out went with them.
   std::vector<char> used(with.mesh.vertices.size(), 0);

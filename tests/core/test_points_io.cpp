@@ -108,6 +108,27 @@ TEST(PointsXyz, MalformedFiles) {
   expect_format_error(dir / "empty.xyz", "no points");
   write_bytes(dir / "count.pts", "3\n1 2 3\n4 5 6\n");
   expect_format_error(dir / "count.pts", "declares 3 points");
+  // Line numbers count CR LF and lone CR (classic Mac OS) as one line end each.
+  write_bytes(dir / "crlf.xyz", "1 2 3\r\n4 5 6\r\n1 two 3\r\n");
+  expect_format_error(dir / "crlf.xyz", ":3:3: 'two' is not a number");
+  write_bytes(dir / "cr.xyz", "1 2 3\r4 5 6\r1 two 3\r");
+  expect_format_error(dir / "cr.xyz", ":3:3: 'two' is not a number");
+}
+
+// Windows editors start a UTF-8 file with a byte order mark; classic Mac OS ends lines with CR.
+// Both were refused ("'\xef\xbb\xbf0.0199' is not a number"; 30,000 values on line 1).
+TEST(PointsXyz, ByteOrderMarkAndCarriageReturnLines) {
+  ScratchDir dir("points-io");
+  write_bytes(dir / "bom.xyz", "\xEF\xBB\xBF" "1 2 3 0 0 1\n4 5 6 0 1 0\n");
+  write_bytes(dir / "cr.xyz", "1 2 3 0 0 1\r4 5 6 0 1 0\r");
+  write_bytes(dir / "bom_cr.xyz", "\xEF\xBB\xBF" "1 2 3 0 0 1\r\n4 5 6 0 1 0");
+  for (const char* name : {"bom.xyz", "cr.xyz", "bom_cr.xyz"}) {
+    SCOPED_TRACE(name);
+    const PointCloud c = read_points(dir / name);
+    ASSERT_EQ(c.points.size(), 2u);
+    EXPECT_EQ(c.points[0], Eigen::Vector3d(1, 2, 3));
+    EXPECT_EQ(c.normals[1], Eigen::Vector3d(0, 1, 0));
+  }
 }
 
 TEST(PointsXyz, WriteReadRoundTripIsExact) {
