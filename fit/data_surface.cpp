@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
@@ -412,6 +413,7 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
       }
     }
   }
+  std::size_t met = 0;  // zero-set points the lattice met inside the ball
   while (!stack.empty()) {
     const Cell c = stack.back();
     stack.pop_back();
@@ -430,6 +432,7 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     for (int k = 0; k < roots.count; ++k) {
       const Eigen::Vector3d u = line.at(roots.t[k]);
       if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) continue;
+      ++met;
       const Eigen::Vector3d x = patch.centre + patch.radius * u;
       const Eigen::Vector3d g = patch.local.gradient(u);
       const bool may_split = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach && c.depth < max_depth;
@@ -442,6 +445,41 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     const double q = 0.25 * c.h;
     for (const double da : {-q, q})
       for (const double db : {-q, q}) stack.push_back({c.axis, c.a + da, c.b + db, 0.5 * c.h, c.depth + 1});
+  }
+  // A zero set thinner than the lattice's spacing falls between its lines: a wire fitted at an E
+  // of its radius came out as a cylinder 1/500 of its ball across that ran 2 units (100 bounds)
+  // past the data's ends, and the check met nothing. Where the lattice met (almost) nothing,
+  // lines along each principal axis of the quadratic part, through the planes of the other axes
+  // at the quadric's centre, spaced bound/2, meet such a tube or needle wherever it runs.
+  if (met < 4 && !patch.local.A.isZero(0.0)) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(patch.local.A);
+    const Eigen::Vector3d lambda = es.eigenvalues();
+    const Eigen::Matrix3d V = es.eigenvectors();
+    const double big = lambda.cwiseAbs().maxCoeff();
+    // The centre, A c = −b, over the axes that bend within the ball (|λ| above 1e-3 of the largest).
+    Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(patch.local.b) / lambda[i]);
+    if (c0.allFinite() && c0.squaredNorm() < 1.0) {
+      const double step = std::max(0.5 * bound / patch.radius, 2.0 / 4096.0);
+      const int lines = static_cast<int>(std::ceil(2.0 / step));
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          if (i == j) continue;
+          for (int m = 0; m < lines; ++m) {
+            const Ray line{c0 + (-1.0 + (m + 0.5) * step) * V.col(j), V.col(i)};
+            if (line.origin.squaredNorm() >= 1.0) continue;
+            const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
+            for (int k = 0; k < roots.count; ++k) {
+              const Eigen::Vector3d u = line.at(roots.t[k]);
+              if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) continue;
+              const Eigen::Vector3d x = patch.centre + patch.radius * u;
+              const double d = data.distance(x, bound, bound);
+              if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
+            }
+          }
+        }
+    }
   }
   return 0.0;
 }

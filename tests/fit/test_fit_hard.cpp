@@ -188,6 +188,34 @@ TEST(FitSlimHard, ThinCylinderFinger) {
   expect_two_sided(fit_and_measure(s, kE));
 }
 
+// A wire fitted at an E of its radius comes out as a cylinder a few hundredths of its ball
+// across: every lattice line of the lone-patch check passed between its sides, so a tube
+// running 2 units (100 bounds) past the wire's ends was never seen (a new user's wire of radius
+// 0.01 and length 10, exit 0 with "0 surface samples"). Lines along the quadric's principal axes
+// through its centre meet it: unclipped it runs past the data, clipped at the wire's ends it
+// does not.
+TEST(FitSlimHard, AWireThinnerThanTheLatticeIsChecked) {
+  const double r = 0.01, half = 1.0, R = 3.0;
+  std::vector<Eigen::Vector3d> P, N;
+  for (int i = 0; i < 400; ++i)
+    for (int j = 0; j < 16; ++j) {
+      const double a = 2 * std::numbers::pi * (j + 0.5 * (i % 2)) / 16, z = -half + 2 * half * (i + 0.5) / 400;
+      P.emplace_back(r * std::cos(a), r * std::sin(a), z);
+      N.emplace_back(std::cos(a), std::sin(a), 0.0);
+    }
+  const DataSurface data = DataSurface::from_points(P, N);
+  SlimPatch wire;
+  wire.radius = R;
+  wire.local.A.diagonal() = Eigen::Vector3d(1, 1, 0);
+  wire.local.c = -(r / R) * (r / R);
+  const double bound = 0.015;
+  EXPECT_GT(zero_set_excess(wire, data, bound, 6, 2), bound) << "the tube past the wire's ends went unseen";
+  SlimPatch clipped = wire;
+  clipped.clips = ClipPlanes::of(ClipPlane{Eigen::Vector3d(0, 0, -1), half / R});
+  clipped.clips.add(ClipPlane{Eigen::Vector3d(0, 0, 1), half / R});
+  EXPECT_EQ(zero_set_excess(clipped, data, bound, 6, 2), 0.0);
+}
+
 // Both used to fail (surface p99.9 14E and 3.6E): a clip plane cut slightly askew across an open
 // boundary leaves a wedge of surface past it, thinner than the verification lattice; the curve
 // where the zero set meets its clip plane is now sampled densely (fit/data_surface.h
