@@ -5,6 +5,7 @@
 #include <random>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "core/error.h"
 #include "core/limits.h"
@@ -217,10 +218,15 @@ void add_fit(CLI::App& root, Commands& commands) {
                         }
                         write_model(r.model, a->out, a->write);
                         report.json["fit"] = j;
+                        // Holes the fit counted and left, as the report has them.
+                        std::vector<std::string> holes;
+                        if (s.point_holes > 0) holes.push_back(fmt::format("{} points' coverage discs not held", s.point_holes));
+                        if (s.face_holes > 0) holes.push_back(fmt::format("{} face spots outside every ball", s.face_holes));
+                        if (s.view_holes > 0) holes.push_back(fmt::format("{} faces seen through", s.view_holes));
                         report.summary = fmt::format(
                             "wrote {}: {} patches for {} points; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
-                            "(E = {:.3g})", a->out, s.patches, s.points, s.max_blend, s.surface_max, s.surface_p999,
-                            s.max_error_abs);
+                            "(E = {:.3g}{})", a->out, s.patches, s.points, s.max_blend, s.surface_max, s.surface_p999,
+                            s.max_error_abs, holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
                         if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;
                         const auto what = fmt::format(
                             "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "

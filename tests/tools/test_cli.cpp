@@ -280,6 +280,21 @@ TEST(Cli, RenderReportRecordsTheCameraThatReproducesTheView) {
   EXPECT_GE(double(agree) / counted, 0.98) << agree << " of " << counted << " pixels agree";
 }
 
+// Holes a fit counts and leaves are in its one-line summary, not only in the report (a new
+// user's unevenly sampled torus showed holes along its seam while the summary said nothing).
+TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
+  const std::string kitten = std::string(QUADRIX_DATASETS) + "/points/kitten.xyz";
+  if (!std::filesystem::exists(kitten)) GTEST_SKIP() << "dataset missing: " << kitten;
+  ScratchDir dir("cli-fit-holes");
+  const auto report = dir / "r.json";
+  const CmdResult r = quadrix_run("fit " + q(kitten) + " -o " + q(dir / "k.qxm") + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = read_json(report);
+  const auto holes = j["fit"]["point_holes"].get<std::size_t>();
+  ASSERT_GT(holes, 0u) << "the kitten's fit no longer leaves holes: pick another case";
+  EXPECT_NE(r.out.find(fmt::format("holes left: {} points' coverage discs not held", holes)), std::string::npos) << r.out;
+}
+
 TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
   // Two open sheets facing each other 3E apart, without repair rounds: the fit cannot keep its
   // surface-side promise there (fins at the sheets' edges), says so, and still writes the model.
