@@ -89,6 +89,7 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
     }
   }
   out.components = members.size();
+  out.component.assign(comp.begin(), comp.end());
 
   // Prim's MST per component (weight 1 − |nᵢ·nⱼ|), propagating orientation from parent to child.
   std::vector<std::uint8_t> done(n, 0);
@@ -158,13 +159,15 @@ GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, s
       used[s] = 1;
       off[s] = std::abs(ni.dot(es.eigenvectors().col(0))) < 0.5;
       // Orientation: the 8 nearest distinct neighbours.
-      double rough = 0;
-      std::size_t seen = 0;
+      double agreeing[8];
+      std::size_t seen = 0, agree = 0;
       for (const auto& [j, d2] : nb) {
         if (!(d2 > 0) || seen == 8) continue;
         ++seen;
-        if (ni.dot(normals[j]) >= 0) rough = std::max(rough, std::abs(ni.dot(points[j] - points[i])));
+        if (ni.dot(normals[j]) >= 0) agreeing[agree++] = std::abs(ni.dot(points[j] - points[i]));
       }
+      std::nth_element(agreeing, agreeing + agree / 2, agreeing + agree);
+      const double rough = agree > 0 ? agreeing[agree / 2] : 0.0;
       std::size_t on_sheet = 0, opposed = 0;
       seen = 0;
       for (const auto& [j, d2] : nb) {

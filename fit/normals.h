@@ -3,6 +3,7 @@
 /// neighbours, orientation propagated along a minimum spanning tree of the kNN graph
 /// (Hoppe et al. 1992, weight 1 − |nᵢ·nⱼ|), then made outward globally.
 #include <cstddef>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -19,6 +20,7 @@ struct NormalEstimation {
   std::vector<Eigen::Vector3d> normals;  ///< one unit normal per point, outward
   std::size_t components = 0;            ///< connected components of the kNN graph (each seeded separately)
   std::size_t flipped_components = 0;    ///< components turned round by the global outward test
+  std::vector<std::uint32_t> component;  ///< each point's component of the kNN graph
 };
 
 /// Unit outward normals for points (N×3, world units). Each kNN-graph component is seeded at its
@@ -35,8 +37,8 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points,
 /// than a third of its 8 nearest that lie on its sheet have normals pointing the other way (not
 /// oriented consistently: a scanner's unoriented normals). A neighbour with an opposed normal
 /// lies on the point's sheet when the direction to it is within 30° of the tangent plane and it
-/// lies no farther off that plane than twice the farthest agreeing neighbour does, so the other
-/// side of a thin plate does not count.
+/// lies no farther off that plane than twice the median agreeing neighbour does, so the other
+/// side of a thin plate, even a noisy one, mostly does not count.
 struct GivenNormalsCheck {
   std::size_t points = 0, off_plane = 0, against = 0;
   double off_plane_share() const { return points ? double(off_plane) / double(points) : 0.0; }

@@ -42,7 +42,7 @@ using Clock = std::chrono::steady_clock;
 // A cloud's own normals are replaced by estimated ones when more than this share lies more than
 // 60° off their neighbours' plane, and turned by an estimated orientation when more than this
 // share points against their neighbours (check_given_normals).
-constexpr double kGivenNormalsOffPlane = 0.25, kGivenNormalsAgainst = 0.05;
+constexpr double kGivenNormalsOffPlane = 0.25, kGivenNormalsAgainst = 0.10;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -132,7 +132,8 @@ void SlimFitter::setup() {
     // and left 47 % of its silhouette open; half of them flipped, 6,586 patches and pinholes;
     // both exited 0, the checks judging the surface by the same normals. Noisy normals (CGAL's
     // sphere_20k_normal: up to 30° off; 13.7 % off the plane, 1.8 % against) fit better than
-    // estimated ones (7,177 patches at 1e-2 against 9,435) and are kept.
+    // estimated ones (7,177 patches at 1e-2 against 9,435) and are kept; so are the two sides of
+    // a noisy thin plate (a share of their neighbours across the plate count as against).
     if (!surface_) {
       const GivenNormalsCheck c = check_given_normals(P_, N_);
       log::debug("fit_slim: given normals: {:.3g} % off their neighbours' plane, {:.3g} % against their neighbours",
@@ -144,14 +145,16 @@ void SlimFitter::setup() {
                   "estimated them instead (PCA over {} neighbours, MST orientation)",
                   100 * c.off_plane_share(), opt_.normal_neighbours);
       } else if (c.against_share() > kGivenNormalsAgainst) {
-        const auto est = estimate_normals(P_, {.neighbours = opt_.normal_neighbours}).normals;
-        std::size_t disagree = 0;
-        for (std::size_t i = 0; i < n; ++i) disagree += N_[i].dot(est[i]) < 0;
-        // The sign that turns fewer of the cloud's normals (an open sheet has no outside).
-        const double sign = 2 * disagree > n ? -1.0 : 1.0;
+        const NormalEstimation est = estimate_normals(P_, {.neighbours = opt_.normal_neighbours});
+        // Per part of the points (the estimate orients each away from its own centroid, wrong for
+        // a shell's inner wall or an open sheet): the sign that turns fewer of its normals.
+        std::vector<std::ptrdiff_t> votes(est.components, 0);
+        for (std::size_t i = 0; i < n; ++i) votes[est.component[i]] += N_[i].dot(est.normals[i]) < 0 ? -1 : 1;
         std::size_t turned = 0;
-        for (std::size_t i = 0; i < n; ++i)
-          if (N_[i].dot(sign * est[i]) < 0) N_[i] = -N_[i], ++turned;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double sign = votes[est.component[i]] < 0 ? -1.0 : 1.0;
+          if (N_[i].dot(sign * est.normals[i]) < 0) N_[i] = -N_[i], ++turned;
+        }
         st_.normals_turned = turned;
         log::warn("fit_slim: {:.3g} % of the cloud's normals point against their neighbours'; {} of {} turned to "
                   "agree with an orientation propagated over the points (MST)",

@@ -186,6 +186,14 @@ std::size_t orient_faces_coherently(PolygonMesh& mesh) {
     for (std::size_t k = 0; k < vs.size(); ++k) n += mesh.vertices[vs[k]].cross(mesh.vertices[vs[(k + 1) % vs.size()]]);
     return std::isfinite(n.norm()) ? n.norm() : 0.0;
   };
+  // Twice the signed volume the face's fan adds (closed parts: positive when wound outward).
+  const auto volume = [&](std::size_t f) {
+    const auto vs = mesh.face(f);
+    double v = 0;
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k)
+      v += mesh.vertices[vs[0]].dot(mesh.vertices[vs[k]].cross(mesh.vertices[vs[k + 1]]));
+    return std::isfinite(v) ? v : 0.0;
+  };
   std::vector<std::int8_t> turn(F, -1);  // -1: not reached
   std::vector<std::uint32_t> part, queue;
   std::size_t turned = 0;
@@ -194,16 +202,35 @@ std::size_t orient_faces_coherently(PolygonMesh& mesh) {
     part.clear();
     queue.assign(1, static_cast<std::uint32_t>(seed));
     turn[seed] = 0;
+    bool orientable = true, closed = true;
     while (!queue.empty()) {
       const std::uint32_t f = queue.back();
       queue.pop_back();
       part.push_back(f);
-      for (const Link& l : links[f])
-        if (turn[l.other] < 0) turn[l.other] = static_cast<std::int8_t>(turn[f] ^ (l.same ? 1 : 0)), queue.push_back(l.other);
+      const auto vs = mesh.face(f);
+      std::size_t edges = 0;
+      for (std::size_t k = 0; k < vs.size(); ++k) edges += vs[k] != vs[(k + 1) % vs.size()];
+      closed = closed && links[f].size() == edges;
+      for (const Link& l : links[f]) {
+        const auto want = static_cast<std::int8_t>(turn[f] ^ (l.same ? 1 : 0));
+        if (turn[l.other] < 0) turn[l.other] = want, queue.push_back(l.other);
+        else orientable = orientable && turn[l.other] == want;
+      }
     }
-    double kept = 0, flipped = 0;
-    for (const auto f : part) (turn[f] ? flipped : kept) += area(f);
-    const bool invert = flipped > kept;
+    // A part that cannot be wound one way (a Möbius strip) is left as it is; so is one that is.
+    if (!orientable || std::none_of(part.begin(), part.end(), [&](std::uint32_t f) { return turn[f] != 0; })) continue;
+    // Which set turns: a closed part ends wound outward (positive volume); an open one keeps the
+    // winding of the larger area.
+    bool invert;
+    if (closed) {
+      double v = 0;
+      for (const auto f : part) v += turn[f] ? -volume(f) : volume(f);
+      invert = v < 0;
+    } else {
+      double kept = 0, flipped = 0;
+      for (const auto f : part) (turn[f] ? flipped : kept) += area(f);
+      invert = flipped > kept;
+    }
     for (const auto f : part) {
       if ((turn[f] != 0) == invert) continue;
       std::reverse(mesh.indices.begin() + mesh.offsets[f] + 1, mesh.indices.begin() + mesh.offsets[f + 1]);

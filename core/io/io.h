@@ -61,11 +61,12 @@ PointCloud read_surface_points(const std::filesystem::path& path);
 
 /// Turns faces wound against their neighbours so that each edge-connected part of the mesh is
 /// wound one way: across every edge shared by exactly two faces, the two faces run it in opposite
-/// directions. Per part, the faces of the smaller set (by area) are turned; a face keeps its first
-/// vertex (v0 v1 … vn → v0 vn … v1), so a non-planar face keeps its fan of triangles. Parts that
-/// cannot be wound one way (a Möbius strip) keep what the search first reached. Returns how many
-/// faces were turned. (Hand-written: CGAL's orient_polygon_soup also splits non-manifold
-/// vertices, renumbering the mesh, and costs a CGAL translation unit.)
+/// directions. A closed part ends wound outward (positive volume); in an open part the faces of
+/// the smaller area turn. A face keeps its first vertex (v0 v1 … vn → v0 vn … v1), so a
+/// non-planar face keeps its fan of triangles. A part already wound one way is left as it is
+/// (inward or not), and so is one that cannot be (a Möbius strip). Returns how many faces were
+/// turned. (Hand-written: CGAL's orient_polygon_soup also splits non-manifold vertices,
+/// renumbering the mesh, and costs a CGAL translation unit.)
 std::size_t orient_faces_coherently(PolygonMesh& mesh);
 
 /// Whether a closed or nearly closed mesh (at most 0.5 % of its edges not on exactly two faces:

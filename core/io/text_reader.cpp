@@ -17,16 +17,18 @@ TextReader::TextReader(std::string_view text, std::filesystem::path path, char c
     : text_(text), path_(std::move(path)), comment_(comment) {
   // A UTF-8 byte order mark (Windows editors write one) is not part of the first token.
   if (text_.starts_with("\xEF\xBB\xBF")) next_ = 3;
+  // Lines end at LF (a CR before it is a blank); a text without any LF ends them at CR (classic
+  // Mac OS), so a doubled CR CR LF still counts one line.
+  if (text_.find('\n') == std::string_view::npos && text_.find('\r') != std::string_view::npos) eol_ = '\r';
 }
 
 bool TextReader::next_line() {
   while (next_ < text_.size()) {
-    // Lines end at LF, CR LF or a lone CR (classic Mac OS files).
-    std::size_t end = text_.find_first_of("\n\r", next_);
+    std::size_t end = text_.find(eol_, next_);
     if (end == std::string_view::npos) end = text_.size();
     line_start_ = next_;
     line_ = text_.substr(next_, end - next_);
-    next_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
+    next_ = end + 1;
     ++line_no_;
     if (comment_ != '\0')
       if (const auto c = line_.find(comment_); c != std::string_view::npos) line_ = line_.substr(0, c);

@@ -58,6 +58,7 @@ public:
 private:
   std::string_view text_;
   std::filesystem::path path_;
+  char eol_ = '\n';  // '\r' for a text without any LF
   char comment_;
   std::size_t next_ = 0;        // start of the line after the current one
   std::size_t line_start_ = 0;  // start of the current line in text_

@@ -205,7 +205,8 @@ TEST(IoKit, ClosedMeshNormalsPointOutwardWhateverTheWinding) {
 // A UV sphere with every other face wound the wrong way (a mesh assembled from parts exported
 // apart): its vertices' face normals cancelled, and a fit of it drew a hole at every turned face
 // (a quarter of its silhouette) and exited 0. The reader turns them to agree with their
-// neighbours, the smaller set turned; non-planar quads keep their first vertex (so their fans).
+// neighbours: a closed part ends outward, an open one keeps the larger area's winding; turned
+// faces keep their first vertex (so a twisted quad its fan); a Möbius strip is left alone.
 TEST(IoKit, FacesWoundAgainstTheirNeighboursAreTurned) {
   PolygonMesh m;
   const int rings = 10, segments = 16;
@@ -223,36 +224,50 @@ TEST(IoKit, FacesWoundAgainstTheirNeighboursAreTurned) {
   for (int i = 1; i + 1 < rings; ++i)
     for (int j = 0; j < segments; ++j) m.add_face(std::array<int, 4>{at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
   for (int j = 0; j < segments; ++j) m.add_face(std::array<int, 3>{south, at(rings - 1, j + 1), at(rings - 1, j)});
-  const PolygonMesh good = m;
+  // Turned keeping their first vertex, as the reader turns them.
+  const auto turn = [](PolygonMesh& mesh, std::size_t f) {
+    std::reverse(mesh.indices.begin() + mesh.offsets[f] + 1, mesh.indices.begin() + mesh.offsets[f + 1]);
+  };
+  const auto turn_all = [&](PolygonMesh mesh) {
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) turn(mesh, f);
+    return mesh;
+  };
+  if (mesh_wound_inward(m)) m = turn_all(m);
+  const PolygonMesh good = m;  // wound outward
+  ASSERT_FALSE(mesh_wound_inward(good));
   ASSERT_EQ(orient_faces_coherently(m), 0u);
   EXPECT_EQ(m.indices, good.indices);
+  // A closed mesh wound inward throughout is left as it is (its readers turn its normals).
+  PolygonMesh inward = turn_all(good);
+  EXPECT_EQ(orient_faces_coherently(inward), 0u);
+  // Most of the area wound the wrong way: a closed mesh still ends wound outward.
   std::size_t wrong = 0;
-  // Turned keeping their first vertex, as the reader turns them.
-  const auto turn = [&](std::size_t f) { std::reverse(m.indices.begin() + m.offsets[f] + 1, m.indices.begin() + m.offsets[f + 1]); };
-  for (std::size_t f = 0; f < m.face_count(); f += 2, ++wrong) turn(f);
-  // Wound the wrong way, most of the area: the rest is turned to agree with it.
-  for (std::size_t f = 1; f < m.face_count(); f += 4, ++wrong) turn(f);
-  EXPECT_EQ(orient_faces_coherently(m), m.face_count() - wrong);  // the kept ones were the fewer
-  // Every face is now the good one reversed, with the same first vertex: the same fan.
-  for (std::size_t f = 0; f < m.face_count(); ++f) {
-    const auto a = m.face(f), b = good.face(f);
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(a[0], b[0]) << f;
-    for (std::size_t k = 1; k < a.size(); ++k) EXPECT_EQ(a[k], b[a.size() - k]) << f;
-  }
+  for (std::size_t f = 0; f < m.face_count(); f += 2, ++wrong) turn(m, f);
+  for (std::size_t f = 1; f < m.face_count(); f += 4, ++wrong) turn(m, f);
+  EXPECT_EQ(orient_faces_coherently(m), wrong);
+  EXPECT_EQ(m.indices, good.indices);
   // Normals from the faces: outward at every vertex, none cancelled.
   const PointCloud c = points_from_mesh(m);
   ASSERT_EQ(c.points.size(), m.vertices.size());
   for (std::size_t i = 0; i < c.points.size(); ++i) EXPECT_GT(c.normals[i].dot(c.points[i]), 0.9) << i;
+  // Open (the south cap left out): the winding of the larger area wins.
+  PolygonMesh open;
+  open.vertices = good.vertices;
+  for (std::size_t f = 0; f + segments < good.face_count(); ++f) open.add_face(good.face(f));
+  const PolygonMesh open_good = open;
+  std::size_t open_wrong = 0;
+  for (std::size_t f = 0; f < open.face_count(); f += 2, ++open_wrong) turn(open, f);
+  for (std::size_t f = 1; f < open.face_count(); f += 4, ++open_wrong) turn(open, f);
+  EXPECT_EQ(orient_faces_coherently(open), open.face_count() - open_wrong);  // the kept ones were the fewer
+  EXPECT_EQ(open.indices, turn_all(open_good).indices);  // every face the good one reversed: the same fans
   // Through the reader, with the file's name in the warning's place.
   ScratchDir dir("io-kit");
   PolygonMesh mixed = good;
-  for (std::size_t f = 0; f < mixed.face_count(); f += 3)
-    std::reverse(mixed.indices.begin() + mixed.offsets[f] + 1, mixed.indices.begin() + mixed.offsets[f + 1]);
+  for (std::size_t f = 0; f < mixed.face_count(); f += 3) turn(mixed, f);
   write_mesh(mixed, dir / "mixed.obj");
   const PolygonMesh r = read_mesh(dir / "mixed.obj");
   EXPECT_EQ(r.indices, good.indices);
-  // A Möbius strip cannot be wound one way: the reader turns what it can and returns.
+  // A Möbius strip cannot be wound one way: left as it is, nothing turned.
   PolygonMesh strip;
   const int n = 12;
   for (int k = 0; k < n; ++k) {
@@ -264,7 +279,11 @@ TEST(IoKit, FacesWoundAgainstTheirNeighboursAreTurned) {
     const int a = 2 * k, b = 2 * k + 1, c2 = k + 1 < n ? 2 * k + 2 : 1, d = k + 1 < n ? 2 * k + 3 : 0;  // the twist
     strip.add_face(std::array<int, 4>{a, c2, d, b});
   }
-  EXPECT_LE(orient_faces_coherently(strip), strip.face_count());
+  const PolygonMesh strip_before = strip;
+  EXPECT_EQ(orient_faces_coherently(strip), 0u);
+  EXPECT_EQ(strip.indices, strip_before.indices);
+  turn(strip, 5);  // one face more against its neighbours: still nothing to gain
+  EXPECT_EQ(orient_faces_coherently(strip), 0u);
 }
 
 // A strip of small triangles beside one triangle 10x larger: only the large one gets a lattice,

@@ -108,8 +108,8 @@ TEST(PointsXyz, MalformedFiles) {
   expect_format_error(dir / "empty.xyz", "no points");
   write_bytes(dir / "count.pts", "3\n1 2 3\n4 5 6\n");
   expect_format_error(dir / "count.pts", "declares 3 points");
-  // Line numbers count CR LF and lone CR (classic Mac OS) as one line end each.
-  write_bytes(dir / "crlf.xyz", "1 2 3\r\n4 5 6\r\n1 two 3\r\n");
+  // Line numbers count CR LF (and a doubled CR CR LF) and a lone CR (classic Mac OS) as one line end each.
+  write_bytes(dir / "crlf.xyz", "1 2 3\r\n4 5 6\r\r\n1 two 3\r\n");
   expect_format_error(dir / "crlf.xyz", ":3:3: 'two' is not a number");
   write_bytes(dir / "cr.xyz", "1 2 3\r4 5 6\r1 two 3\r");
   expect_format_error(dir / "cr.xyz", ":3:3: 'two' is not a number");
