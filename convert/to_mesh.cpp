@@ -1335,14 +1335,10 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   };
   const auto measure_surface_side = [&](ToMeshResult& r, std::size_t keep = 0) {
     std::vector<Eigen::Vector3d> beyond;
-    if (r.mesh.face_count() > 0) {
-      const SurfaceError se = surface_error(r.mesh, keep);
-      set_surface_side(r, se);
-      for (const auto& b : se.beyond_points) beyond.push_back(b.point);
-    } else {  // nothing meshed: the drawn surface is nowhere near it
-      const double inf = std::numeric_limits<double>::infinity();
-      r.surface_to_mesh = {inf, inf, inf, 0, 0, 0};
-    }
+    // With nothing meshed, every drawn pixel counts as beyond it (surface_error).
+    const SurfaceError se = surface_error(r.mesh, keep);
+    set_surface_side(r, se);
+    for (const auto& b : se.beyond_points) beyond.push_back(b.point);
     r.within = r.mesh_to_surface.misses == 0 && r.max_error() <= bound && r.mesh.face_count() > 0;
     return beyond;
   };
