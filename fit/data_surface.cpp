@@ -143,6 +143,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   const std::vector<std::uint32_t> order = morton_order(m.points);
   const std::size_t needed = std::max({options.spacing_neighbour, options.boundary_neighbours, options.candidates}) + 1;
   m.candidate_reach.assign(m.points.size(), kInf);
+  std::vector<double> reach(m.points.size(), 0.0);  // the farthest same-sheet neighbour asked
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.points.size(), 1024), [&](const auto& r) {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> same;  // tangential offsets of same-sheet neighbours
@@ -165,6 +166,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       // The candidates-th nearest other point (nb[0] is the point itself); none: all are candidates.
       m.candidate_reach[i] = nb.size() > options.candidates ? std::sqrt(nb[options.candidates].second) : kInf;
       if (same.empty()) continue;
+      reach[i] = dist.back();
       m.disc[i] = options.disc_factor * dist[std::min(options.spacing_neighbour, dist.size()) - 1];
       const std::size_t kb = std::min(options.boundary_neighbours, same.size());
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -175,10 +177,57 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       if (centroid.norm() > options.boundary_offset * mean) m.inward[i] = centroid.normalized();
     }
   });
+  confirm_boundaries(m, reach);
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) m.boundary.push_back({m.points[i], m.inward[i]});
   m.index_boundary();
   return s;
+}
+
+// A point whose nearest neighbours lie to one side is on an open boundary only if the other
+// side holds no data either. Where the sampling density changes (a scan's overlap, a part
+// scanned closer), a sparse point's nearest neighbours are all on the dense side: it would be
+// taken for a boundary (its disc short towards its sparse neighbours) and its disc sized by the
+// dense side's spacing, leaving the surface between the sparse points outside the data's
+// surface. So the other side is searched out to 16 times the neighbourhood's reach for a point
+// on the same sheet (normal within 60°, within 30° of the tangent plane, within 60° of the empty
+// direction) whose own spacing reaches back (at most gap_spacings of it away: the far rim of a
+// hole in a scan is sampled at its own, finer spacing); where one is found the point is not on
+// a boundary, and its disc reaches 3/4 of the way across the gap.
+void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) {
+  constexpr double gap_spacings = 3.0;
+  const std::vector<double> spacing0 = [&] {
+    std::vector<double> v(m.disc.size());
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = m.disc[i] / m.options.disc_factor;
+    return v;
+  }();
+  std::vector<std::uint32_t> flagged;
+  for (std::size_t i = 0; i < m.points.size(); ++i)
+    if (m.inward[i].squaredNorm() > 0) flagged.push_back(std::uint32_t(i));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, flagged.size(), 64), [&](const auto& r) {
+    std::vector<Neighbour> nb;
+    for (std::size_t f = r.begin(); f != r.end(); ++f) {
+      const std::uint32_t i = flagged[f];
+      const Eigen::Vector3d &p = m.points[i], &n = m.normals[i], &dir = m.inward[i];
+      double found = kInf;
+      for (double R = 2.0 * reach[i]; R <= 16.0 * reach[i] && !(found < kInf); R *= 2.0) {
+        m.index->radius(p, R, nb);
+        for (const auto& [j, d2] : nb) {
+          if (j == i || m.normals[j].dot(n) < 0.5) continue;
+          const Eigen::Vector3d v = m.points[j] - p;
+          const double h = n.dot(v);
+          const Eigen::Vector3d t = v - h * n;
+          const double tn = t.norm();
+          if (!(tn > 0) || std::abs(h) > 0.58 * tn || t.dot(dir) > -0.5 * tn) continue;
+          if (tn <= gap_spacings * spacing0[j]) found = std::min(found, tn);
+        }
+      }
+      if (found < kInf) {
+        m.inward[i] = Eigen::Vector3d::Zero();
+        m.disc[i] = std::max(m.disc[i], 0.75 * found);
+      }
+    }
+  });
 }
 
 DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {

@@ -78,6 +78,7 @@ private:
   DataSurface();
   struct Impl;
   static void from_mesh_boundary(const PolygonMesh& mesh, Impl& m);  // open edges, winding
+  static void confirm_boundaries(Impl& m, const std::vector<double>& reach);  // points
   std::unique_ptr<Impl> impl_;
 };
 

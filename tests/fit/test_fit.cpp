@@ -719,6 +719,47 @@ TEST(DataSurface, WithinGoodAnswersAsTheFullSearchOnPoints) {
   EXPECT_LT(within, asked * 3 / 4 + asked / 5);
 }
 
+// Where the sampling density steps (a scan's overlap, a part scanned closer), the sparse side's
+// points nearest the step have only dense neighbours among their nearest: they are no open
+// boundary, and the data's surface has no hole between them. A unit sphere sampled ten times
+// more densely above its equator than below: no boundary sample anywhere, and every point of the
+// sphere within the discs' own sag of the data's surface. A hemisphere's rim stays a boundary, and
+// its discs do not reach across the missing half.
+TEST(DataSurface, AStepInTheSamplingDensityIsNeitherABoundaryNorAHole) {
+  std::mt19937_64 rng(41);
+  std::normal_distribution<double> G(0.0, 1.0);
+  const auto on_sphere = [&] {
+    for (;;)
+      if (const Eigen::Vector3d v(G(rng), G(rng), G(rng)); v.norm() > 1e-9) return Eigen::Vector3d(v.normalized());
+  };
+  std::vector<Eigen::Vector3d> points, upper;
+  std::size_t dense = 0, sparse = 0;
+  while (dense < 18000 || sparse < 1800) {
+    const Eigen::Vector3d v = on_sphere();
+    if (v.z() > 0 && dense < 18000) points.push_back(v), upper.push_back(v), ++dense;
+    else if (v.z() <= 0 && sparse < 1800 && (rng() % 10 == 0)) points.push_back(v), ++sparse;
+  }
+  const DataSurface step = DataSurface::from_points(points, points);
+  std::vector<DataSurface::BoundarySample> edge;
+  step.boundary_near(Eigen::Vector3d::Zero(), 2.0, edge);
+  EXPECT_EQ(edge.size(), 0u) << "boundary samples on a closed sphere";
+  double worst = 0, worst_z = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Eigen::Vector3d x = on_sphere();
+    if (const double d = step.distance(x); d > worst) worst = d, worst_z = x.z();
+  }
+  // The sparse side's spacing is about 0.06: discs 1.5 spacings wide sag about 0.005 off the sphere.
+  std::printf("density step: farthest point of the sphere from the discs %.4f (z %.2f)\n", worst, worst_z);
+  EXPECT_LT(worst, 0.008);
+
+  const DataSurface half = DataSurface::from_points(upper, upper);
+  half.boundary_near(Eigen::Vector3d::Zero(), 2.0, edge);
+  EXPECT_GT(edge.size(), 100u);
+  for (const auto& e : edge) EXPECT_LT(e.point.z(), 0.05);
+  EXPECT_GT(half.distance(Eigen::Vector3d(0, 0.8, -0.6)), 0.3);
+  EXPECT_GT(half.distance(Eigen::Vector3d(0.6, 0, -0.8)), 0.3);
+}
+
 // A random patch for view_holes' shortcuts (trial picks its curvature and clipping: planes to
 // tight curvature and saddles) and a spot: a random point in the ball moved onto the zero set
 // (Newton along the gradient), then off it by up to 2 % of the radius. False: no usable spot.
