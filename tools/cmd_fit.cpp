@@ -14,6 +14,7 @@
 #include "core/points_io.h"
 #include "fit/data_surface.h"
 #include "fit/evaluate.h"
+#include "fit/outliers.h"
 #include "fit/patch_error.h"
 #include "fit/slim_fit.h"
 #include "fit/slim_hierarchy.h"
@@ -30,6 +31,7 @@ void add_fit(CLI::App& root, Commands& commands) {
     double max_error_abs = 0;
     double holdout = 0;
     bool allow_exceed = false;
+    bool keep_outliers = false;
     int lod_levels = 0;
     SlimHierarchyOptions lod;
     std::string lod_rule = "fits";
@@ -49,6 +51,11 @@ void add_fit(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 0.9}));
   app->add_flag("--allow-exceed", a->allow_exceed,
                 "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
+  app->add_flag("--keep-outliers", a->keep_outliers,
+                "Point clouds: fit every point, the stray ones too (by default a point alone off the surface - "
+                "farther than 5 of the nearest surface points' spacings and off their planes, or over 2 spacings "
+                "off its neighbours' plane - is left out of the fit and its bound, with a warning: each got a "
+                "patch of its own, a speck beside the surface)");
   app->add_flag("!--no-surface-check", a->options.check_surface,
                 "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
   app->add_flag("!--no-face-prisms", a->options.face_prisms,
@@ -113,6 +120,29 @@ void add_fit(CLI::App& root, Commands& commands) {
                             log::warn("{}; the model is fitted, but `render` will refuse it", e.what());
                           }
                         }
+                        // Stray points of a cloud (a mesh's vertices are its surface): each would get
+                        // a patch of its own, a speck floating beside the surface.
+                        std::vector<std::uint32_t> outliers;
+                        if (!mesh && !a->keep_outliers) {
+                          outliers = find_outliers(cloud.points);
+                          if (!outliers.empty()) {
+                            std::vector<std::uint8_t> drop(cloud.points.size(), 0);
+                            for (const auto i : outliers) drop[i] = 1;
+                            PointCloud kept;
+                            for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+                              if (drop[i]) continue;
+                              kept.points.push_back(cloud.points[i]);
+                              if (cloud.has_normals()) kept.normals.push_back(cloud.normals[i]);
+                              if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
+                            }
+                            const auto& p = cloud.points[outliers.front()];
+                            log::warn("{}: {} of {} points lie alone off the surface (outliers; the first, point {} in "
+                                      "file order, at ({:.6g}, {:.6g}, {:.6g})); left out of the fit and its bound "
+                                      "(--keep-outliers fits them)",
+                                      a->points, outliers.size(), cloud.points.size(), outliers.front(), p.x(), p.y(), p.z());
+                            cloud = std::move(kept);
+                          }
+                        }
                         PointCloud held;
                         if (a->holdout > 0) {
                           // Fit on a random subset; measure the held-out rest afterwards.
@@ -140,6 +170,10 @@ void add_fit(CLI::App& root, Commands& commands) {
                         r.model.metadata["producer"] = command_line();
                         const auto& s = r.stats;
                         nlohmann::json j = {{"points", s.points},
+                                            {"outliers", {{"left_out", outliers.size()},
+                                                          {"first", std::vector<std::uint32_t>(
+                                                                        outliers.begin(),
+                                                                        outliers.begin() + std::ptrdiff_t(std::min<std::size_t>(outliers.size(), 100)))}}},
                                             {"patches", s.patches},
                                             {"normals", s.normals_estimated ? "estimated" : "given"},
                                             {"normals_turned", s.normals_turned},
@@ -224,9 +258,11 @@ void add_fit(CLI::App& root, Commands& commands) {
                         if (s.face_holes > 0) holes.push_back(fmt::format("{} face spots outside every ball", s.face_holes));
                         if (s.view_holes > 0) holes.push_back(fmt::format("{} faces seen through", s.view_holes));
                         report.summary = fmt::format(
-                            "wrote {}: {} patches for {} points; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
-                            "(E = {:.3g}{})", a->out, s.patches, s.points, s.max_blend, s.surface_max, s.surface_p999,
-                            s.max_error_abs, holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
+                            "wrote {}: {} patches for {} points{}; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
+                            "(E = {:.3g}{})", a->out, s.patches, s.points,
+                            outliers.empty() ? "" : fmt::format(" ({} outliers left out)", outliers.size()), s.max_blend,
+                            s.surface_max, s.surface_p999, s.max_error_abs,
+                            holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
                         if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;
                         const auto what = fmt::format(
                             "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "

@@ -17,6 +17,7 @@
 #include "fit/data_surface.h"
 #include "fit/evaluate.h"
 #include "fit/normals.h"
+#include "fit/outliers.h"
 #include "fit/slim_fit.h"
 #include "fit/slim_fitter.h"
 #include "fit/slim_hierarchy.h"
@@ -758,6 +759,74 @@ TEST(DataSurface, AStepInTheSamplingDensityIsNeitherABoundaryNorAHole) {
   for (const auto& e : edge) EXPECT_LT(e.point.z(), 0.05);
   EXPECT_GT(half.distance(Eigen::Vector3d(0, 0.8, -0.6)), 0.3);
   EXPECT_GT(half.distance(Eigen::Vector3d(0.6, 0, -0.8)), 0.3);
+}
+
+// Stray points are found wherever they float (far from the surface, among each other, inside a
+// closed shape), and no point of a surface is taken for one, however it is sampled: a 10×
+// density step, lines of a scanner's sweep with gaps 12 times their spacing, a noisy plane whose
+// noise is twice its spacing, a thin plate's two sides, a box's corners, a wire, a cone's tip.
+TEST(Outliers, StrayPointsFoundAndNoSurfacePointTakenForOne) {
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> G(0.0, 1.0);
+  const auto on_sphere = [&] {
+    for (;;)
+      if (const Eigen::Vector3d v(G(rng), G(rng), G(rng)); v.norm() > 1e-9) return Eigen::Vector3d(v.normalized());
+  };
+  // A sphere of 20,000 points with 1 % strays in the box around it, none within 0.1 of it.
+  std::vector<Eigen::Vector3d> cloud;
+  for (int i = 0; i < 20000; ++i) cloud.push_back(on_sphere());
+  const std::size_t first_stray = cloud.size();
+  while (cloud.size() < first_stray + 200)
+    if (const Eigen::Vector3d x(3 * U(rng) - 1.5, 3 * U(rng) - 1.5, 3 * U(rng) - 1.5); std::abs(x.norm() - 1) > 0.1)
+      cloud.push_back(x);
+  const std::vector<std::uint32_t> found = find_outliers(cloud);
+  std::size_t strays = 0, wrong = 0;
+  for (const auto i : found) (i >= first_stray ? strays : wrong) += 1;
+  std::printf("sphere with 200 strays: %zu found, %zu surface points taken\n", strays, wrong);
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GE(strays, 185u);  // 188 at this seed
+
+  const auto none = [&](const char* what, const std::vector<Eigen::Vector3d>& pts) {
+    EXPECT_EQ(find_outliers(pts).size(), 0u) << what;
+  };
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 18000; ++i)
+    if (const Eigen::Vector3d v = on_sphere(); v.z() > 0 || i % 10 == 0) pts.push_back(v);
+  none("density step", pts);
+  pts.clear();
+  for (int line = 0; line < 40; ++line)  // scan lines 0.08 apart, points 0.0067 apart along them
+    for (int k = 0; k < 300; ++k) {
+      const double th = 0.4 + 0.08 * line / 1.0, ph = 2.0 * k / 300.0;
+      pts.push_back(Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+    }
+  for (int i = 0; i < 300; ++i) {  // lone samples between the lines
+    const double th = 0.44 + 0.08 * (i % 39), ph = 2.0 * U(rng);
+    pts.push_back(Eigen::Vector3d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+  }
+  none("scan lines", pts);
+  pts.clear();
+  for (int i = 0; i < 20000; ++i) pts.push_back(Eigen::Vector3d(U(rng), U(rng), 0.014 * G(rng)));
+  none("noisy plane", pts);
+  pts.clear();
+  for (int i = 0; i < 20000; ++i) pts.push_back(Eigen::Vector3d(U(rng), U(rng), i % 2 ? 0.004 : 0.0));
+  none("thin plate", pts);
+  pts.clear();
+  for (int i = 0; i < 20000; ++i) {
+    Eigen::Vector3d p(U(rng), U(rng), U(rng));
+    p[i % 3] = (i / 3) % 2;
+    pts.push_back(p);
+  }
+  none("box", pts);
+  pts.clear();
+  for (int i = 0; i < 3000; ++i) pts.push_back(Eigen::Vector3d(std::cos(0.01 * i), std::sin(0.01 * i), 0.001 * i));
+  none("helix", pts);
+  pts.clear();
+  for (int i = 0; i < 10000; ++i) {
+    const double h = std::sqrt(U(rng)), a = 2 * std::numbers::pi * U(rng);
+    pts.push_back(Eigen::Vector3d(0.15 * h * std::cos(a), 0.15 * h * std::sin(a), 1 - h));
+  }
+  none("cone", pts);
 }
 
 // A random patch for view_holes' shortcuts (trial picks its curvature and clipping: planes to

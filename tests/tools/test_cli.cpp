@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <set>
 #include <sstream>
 
@@ -293,6 +294,48 @@ TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
   const auto holes = j["fit"]["point_holes"].get<std::size_t>();
   ASSERT_GT(holes, 0u) << "the kitten's fit no longer leaves holes: pick another case";
   EXPECT_NE(r.out.find(fmt::format("holes left: {} points' coverage discs not held", holes)), std::string::npos) << r.out;
+}
+
+// Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
+// speck floating beside the surface. --keep-outliers fits them all.
+TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
+  ScratchDir dir("cli-fit-outliers");
+  const auto xyz = dir / "sphere.xyz";
+  std::vector<Eigen::Vector3d> strays;
+  {
+    std::ofstream out(xyz);
+    out.precision(9);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> G(0.0, 1.0);
+    std::uniform_real_distribution<double> U(-1.5, 1.5);
+    for (int i = 0; i < 8000; ++i) {
+      const Eigen::Vector3d v = Eigen::Vector3d(G(rng), G(rng), G(rng)).normalized();
+      out << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    }
+    while (strays.size() < 40)
+      if (const Eigen::Vector3d x(U(rng), U(rng), U(rng)); std::abs(x.norm() - 1.0) > 0.3) {
+        strays.push_back(x);
+        out << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+      }
+  }
+  const auto report = dir / "r.json";
+  CmdResult r = quadrix_run("fit " + q(xyz) + " -o " + q(dir / "s.qxm") + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = read_json(report);
+  const auto left_out = j["fit"]["outliers"]["left_out"].get<std::size_t>();
+  EXPECT_EQ(left_out, 40u) << r.out;
+  EXPECT_EQ(j["fit"]["points"].get<std::size_t>(), 8040u - left_out);
+  EXPECT_NE(r.out.find(fmt::format("({} outliers left out)", left_out)), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--keep-outliers"), std::string::npos) << r.out;
+  for (const auto i : j["fit"]["outliers"]["first"]) EXPECT_GE(i.get<std::size_t>(), 8000u);
+  const auto patches = j["fit"]["patches"].get<std::size_t>();
+  r = quadrix_run("fit " + q(xyz) + " -o " + q(dir / "k.qxm") + " --keep-outliers --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto k = read_json(report);
+  EXPECT_EQ(k["fit"]["outliers"]["left_out"].get<std::size_t>(), 0u);
+  EXPECT_EQ(k["fit"]["points"].get<std::size_t>(), 8040u);
+  std::printf("sphere with 40 strays: %zu patches, %zu with them\n", patches, k["fit"]["patches"].get<std::size_t>());
+  EXPECT_GE(k["fit"]["patches"].get<std::size_t>(), patches + 40);  // a patch per stray at least
 }
 
 TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
