@@ -131,6 +131,7 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
   constexpr double kRim2 = 0.8 * 0.8;
   const int fine = grid * kRimRefine;
   const double step = 2.0 / fine;
+  const std::size_t first = out.size();
   for (int axis = 0; axis < 3; ++axis) {
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     for (int i = 0; i < fine; ++i)
@@ -155,6 +156,41 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
         }
       }
   }
+  if (out.size() - first < 4)
+    for_thin_zero_set(patch, step / 16.0, [&](const Eigen::Vector3d& u) {
+      const Eigen::Vector3d g = patch.local.gradient(u);
+      if (const double gn = g.norm(); gn > 0.0) out.push_back({patch.centre + patch.radius * u, g / gn, u.norm()});
+      return true;
+    });
+}
+
+void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<bool(const Eigen::Vector3d&)>& f) {
+  if (patch.local.A.isZero(0.0) || !(step > 0.0)) return;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(patch.local.A);
+  const Eigen::Vector3d lambda = es.eigenvalues();
+  const Eigen::Matrix3d V = es.eigenvectors();
+  const double big = lambda.cwiseAbs().maxCoeff();
+  // The centre, A c = −b, over the axes that bend within the ball (|λ| above 1e-3 of the largest).
+  Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(patch.local.b) / lambda[i]);
+  if (!c0.allFinite() || !(c0.squaredNorm() < 1.0)) return;
+  const int lines = static_cast<int>(std::ceil(2.0 / std::max(step, 2.0 / 4096.0)));
+  const double h = 2.0 / lines;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      if (i == j) continue;
+      for (int m = 0; m < lines; ++m) {
+        const Ray line{c0 + (-1.0 + (m + 0.5) * h) * V.col(j), V.col(i)};
+        if (line.origin.squaredNorm() >= 1.0) continue;
+        const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
+        for (int k = 0; k < roots.count; ++k) {
+          const Eigen::Vector3d u = line.at(roots.t[k]);
+          if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) continue;
+          if (!f(u)) return;
+        }
+      }
+    }
 }
 
 void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out) {

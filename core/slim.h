@@ -2,6 +2,7 @@
 /// SLIM surfaces (Ohtake, Belyaev, Alexa 2005; [Stoll06] §5.1.1): the per-ray blend of
 /// sphere-bounded quadric patches, as the GPU's three passes compute it (DESIGN §2, §6).
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <span>
@@ -64,8 +65,17 @@ struct SlimSurfaceSample {
 /// Samples a patch's zero set: lines parallel to the three local axes through a grid × grid
 /// lattice over the ball's cross-section, every root (either facing) inside the ball and clip
 /// plane, appended to out; pieces wider than 2R/grid are always hit. The rim (r > 0.8), where a
-/// sheet leaves the ball and extrapolates farthest, is sampled on a 3× finer lattice.
+/// sheet leaves the ball and extrapolates farthest, is sampled on a 3× finer lattice. Where the
+/// lattice met fewer than 4 points, a zero set thinner than it is sought (for_thin_zero_set,
+/// 16 lines per rim-lattice spacing): a wire's tube came out with no sample to check.
 void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurfaceSample>& out);
+
+/// Points of a patch's zero set thinner than a lattice's spacing (a tube or needle a lattice of
+/// lines met nowhere): lines along each principal axis of its quadratic part, through the planes
+/// of the other axes at the quadric's centre, `step` apart (ball units), each root inside the ball
+/// and clip planes passed to f (ball units) until f returns false. Nothing for a plane or a
+/// quadric whose centre lies outside the ball.
+void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<bool(const Eigen::Vector3d&)>& f);
 
 /// Samples a patch's rim, where its zero set meets its sphere (r → 1; inside the clip planes):
 /// meridians from the pole along the centre's gradient, one every `spacing` (world units) of the

@@ -17,6 +17,7 @@
 #include "core/io/io.h"
 #include "core/morton.h"
 #include "core/ray.h"
+#include "core/slim.h"
 #include "fit/point_index.h"
 
 namespace quadrix {
@@ -500,35 +501,16 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
   // past the data's ends, and the check met nothing. Where the lattice met (almost) nothing,
   // lines along each principal axis of the quadratic part, through the planes of the other axes
   // at the quadric's centre, spaced bound/2, meet such a tube or needle wherever it runs.
-  if (met < 4 && !patch.local.A.isZero(0.0)) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(patch.local.A);
-    const Eigen::Vector3d lambda = es.eigenvalues();
-    const Eigen::Matrix3d V = es.eigenvectors();
-    const double big = lambda.cwiseAbs().maxCoeff();
-    // The centre, A c = −b, over the axes that bend within the ball (|λ| above 1e-3 of the largest).
-    Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
-    for (int i = 0; i < 3; ++i)
-      if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(patch.local.b) / lambda[i]);
-    if (c0.allFinite() && c0.squaredNorm() < 1.0) {
-      const double step = std::max(0.5 * bound / patch.radius, 2.0 / 4096.0);
-      const int lines = static_cast<int>(std::ceil(2.0 / step));
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          if (i == j) continue;
-          for (int m = 0; m < lines; ++m) {
-            const Ray line{c0 + (-1.0 + (m + 0.5) * step) * V.col(j), V.col(i)};
-            if (line.origin.squaredNorm() >= 1.0) continue;
-            const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
-            for (int k = 0; k < roots.count; ++k) {
-              const Eigen::Vector3d u = line.at(roots.t[k]);
-              if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) continue;
-              const Eigen::Vector3d x = patch.centre + patch.radius * u;
-              const double d = data.distance(x, bound, bound);
-              if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
-            }
-          }
-        }
-    }
+  if (met < 4) {
+    double excess = 0.0;
+    for_thin_zero_set(patch, 0.5 * bound / patch.radius, [&](const Eigen::Vector3d& u) {
+      const Eigen::Vector3d x = patch.centre + patch.radius * u;
+      const double d = data.distance(x, bound, bound);
+      if (d <= bound) return true;
+      excess = std::isnan(d) ? kInf : data.distance(x);
+      return false;
+    });
+    if (excess > 0) return excess;
   }
   return 0.0;
 }

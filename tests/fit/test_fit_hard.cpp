@@ -214,6 +214,18 @@ TEST(FitSlimHard, AWireThinnerThanTheLatticeIsChecked) {
   clipped.clips = ClipPlanes::of(ClipPlane{Eigen::Vector3d(0, 0, -1), half / R});
   clipped.clips.add(ClipPlane{Eigen::Vector3d(0, 0, 1), half / R});
   EXPECT_EQ(zero_set_excess(clipped, data, bound, 6, 2), 0.0);
+  // The verification's samples (core/slim.h sample_slim_patch) meet the tube too: it had none.
+  for (const SlimPatch* p : {&wire, &clipped}) {
+    std::vector<SlimSurfaceSample> zero;
+    sample_slim_patch(*p, 6, zero);
+    EXPECT_GT(zero.size(), 100u);
+    double off_axis = 0, far_end = 0;
+    for (const auto& z : zero)
+      off_axis = std::max(off_axis, std::abs(z.point.head<2>().norm() - r)), far_end = std::max(far_end, std::abs(z.point.z()));
+    EXPECT_LT(off_axis, 1e-9);
+    if (p == &clipped) EXPECT_LE(far_end, half * (1 + 1e-9));
+    else EXPECT_GT(far_end, 2.0);
+  }
 }
 
 // Both used to fail (surface p99.9 14E and 3.6E): a clip plane cut slightly askew across an open
