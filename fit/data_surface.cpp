@@ -190,18 +190,19 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
 // scanned closer), a sparse point's nearest neighbours are all on the dense side: it would be
 // taken for a boundary (its disc short towards its sparse neighbours) and its disc sized by the
 // dense side's spacing, leaving the surface between the sparse points outside the data's
-// surface. So the other side is searched out to 16 times the neighbourhood's reach for a point
-// on the same sheet (normal within 60°, within 30° of the tangent plane, within 60° of the empty
-// direction) whose own spacing reaches back (at most gap_spacings of it away: the far rim of a
-// hole in a scan is sampled at its own, finer spacing); where one is found the point is not on
-// a boundary, and its disc reaches 3/4 of the way across the gap.
+// surface. So the other side is searched, beyond the neighbourhood the centroid test has judged
+// and out to 8 times its reach, for a point on the same sheet (normal within 60°, within 30° of
+// the tangent plane, within 30° of the empty direction: a jagged rim's own points lie along it)
+// whose own spacing reaches back (at most gap_spacings of it away: the far rim of a hole in a
+// scan is sampled at its own, finer spacing, so a hole stays open where its rim's points are
+// taken for a boundary at all; holes up to about 6 spacings across are not, as before); where
+// one is found the point is not on a boundary, and its disc reaches 3/4 of the way there.
 void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) {
-  constexpr double gap_spacings = 3.0;
-  const std::vector<double> spacing0 = [&] {
-    std::vector<double> v(m.disc.size());
-    for (std::size_t i = 0; i < v.size(); ++i) v[i] = m.disc[i] / m.options.disc_factor;
-    return v;
-  }();
+  constexpr double gap_spacings = 3.0, kReach = 8.0;
+  std::vector<double> spacing0(m.disc.size());
+  double widest = 0;  // no point farther than gap_spacings × this can reach back
+  for (std::size_t i = 0; i < spacing0.size(); ++i)
+    spacing0[i] = m.disc[i] / m.options.disc_factor, widest = std::max(widest, spacing0[i]);
   std::vector<std::uint32_t> flagged;
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) flagged.push_back(std::uint32_t(i));
@@ -210,22 +211,18 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
     for (std::size_t f = r.begin(); f != r.end(); ++f) {
       const std::uint32_t i = flagged[f];
       const Eigen::Vector3d &p = m.points[i], &n = m.normals[i], &dir = m.inward[i];
-      double found = kInf;
-      for (double R = 2.0 * reach[i]; R <= 16.0 * reach[i] && !(found < kInf); R *= 2.0) {
-        m.index->radius(p, R, nb);
-        for (const auto& [j, d2] : nb) {
-          if (j == i || m.normals[j].dot(n) < 0.5) continue;
-          const Eigen::Vector3d v = m.points[j] - p;
-          const double h = n.dot(v);
-          const Eigen::Vector3d t = v - h * n;
-          const double tn = t.norm();
-          if (!(tn > 0) || std::abs(h) > 0.58 * tn || t.dot(dir) > -0.5 * tn) continue;
-          if (tn <= gap_spacings * spacing0[j]) found = std::min(found, tn);
-        }
-      }
-      if (found < kInf) {
+      const double inner2 = reach[i] * reach[i];
+      m.index->radius(p, std::min(kReach * reach[i], gap_spacings * widest), nb, true);
+      for (const auto& [j, d2] : nb) {
+        if (d2 <= inner2 || m.normals[j].dot(n) < 0.5) continue;
+        const Eigen::Vector3d v = m.points[j] - p;
+        const double h = n.dot(v);
+        const Eigen::Vector3d t = v - h * n;
+        const double tn = t.norm();
+        if (!(tn > 0) || std::abs(h) > 0.58 * tn || t.dot(dir) > -0.866 * tn || tn > gap_spacings * spacing0[j]) continue;
         m.inward[i] = Eigen::Vector3d::Zero();
-        m.disc[i] = std::max(m.disc[i], 0.75 * found);
+        m.disc[i] = std::max(m.disc[i], 0.75 * tn);
+        break;
       }
     }
   });

@@ -64,7 +64,8 @@ public:
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
   /// Point i's sample spacing (points only): the distance to its spacing_neighbour-th nearest
-  /// neighbour on the same sheet (disc_radius / disc_factor).
+  /// neighbour on the same sheet, or, at a step in the sampling density, half the gap to the
+  /// sparse side's nearest point where that is wider (disc_radius / disc_factor).
   double spacing(std::size_t i) const;
   /// The data's open boundary near c: samples (position, unit tangent towards the data) within
   /// r of c — boundary points of a cloud, or the vertices and edge midpoints of a mesh's open

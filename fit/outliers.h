@@ -23,7 +23,11 @@ struct OutlierOptions {
   int passes = 4;  ///< each pass without the outliers found before (a scatter of them)
 };
 
-/// Indices of the outliers among points (ascending). Density-adaptive: each point is measured
+/// Exact copies: `position` gets each point's index among the distinct positions, which are
+/// returned as the index of their first copy in the input (ascending).
+std::vector<std::uint32_t> distinct_positions(std::span<const Eigen::Vector3d> points, std::vector<std::uint32_t>& position);
+
+/// Indices of the outliers among points (ascending). Copies of a point are judged once, together. Density-adaptive: each point is measured
 /// against its own neighbours' spacing and roughness, so the sparse side of an unevenly sampled
 /// cloud is no outlier (a global distance threshold, as in CGAL's remove_outliers or Open3D's
 /// statistical filter, drops it), nor is a noisy scan's noise, a thin part's other side (its

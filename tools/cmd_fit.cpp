@@ -1,6 +1,7 @@
 // quadrix fit POINTS -o model.qxm: SLIM surfaces from point clouds (issue 4, DESIGN §2).
 #include <algorithm>
 #include <iostream>
+#include <numeric>
 #include <optional>
 #include <random>
 
@@ -41,7 +42,7 @@ void add_fit(CLI::App& root, Commands& commands) {
   app->add_option("POINTS", a->points, "Point cloud (PLY, XYZ with 3 or 6 columns) or mesh (PLY, OFF, OBJ, STL: its faces give the normals)")->required();
   app->add_option("-o,--out", a->out, "Output .qxm")->required();
   add_encoding_option(*app, a->write);
-  app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal")
+  app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal of the points fitted (stray points left out)")
       ->check(number({.lo = 1e-7, .hi = 0.5}));
   app->add_option("--max-error-abs", a->max_error_abs, "Error bound in world units (overrides --max-error; default: unset)")
       ->check(positive())->default_str("");
@@ -110,21 +111,41 @@ void add_fit(CLI::App& root, Commands& commands) {
                         } else {
                           cloud = read_points(a->points);
                         }
-                        {
-                          // The fit holds far from the origin, but `render` cannot place what it makes.
-                          Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-                          for (const auto& p : cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-                          try {
-                            check_drawable_extent(lo, hi, a->points);
-                          } catch (const InvalidInput& e) {
-                            log::warn("{}; the model is fitted, but `render` will refuse it", e.what());
-                          }
-                        }
                         // Stray points of a cloud (a mesh's vertices are its surface): each would get
                         // a patch of its own, a speck floating beside the surface.
                         std::vector<std::uint32_t> outliers;
+                        // Copies of a point fitted once: estimated normals over copies degenerate (a
+                        // 3,000-point sphere written 7 times fitted 2,994 patches instead of 4), and a
+                        // copy is within E wherever its original is. file_index: each point's row.
+                        std::vector<std::uint32_t> file_index(cloud.points.size());
+                        std::iota(file_index.begin(), file_index.end(), 0u);
+                        std::size_t copies = 0;
+                        if (!mesh) {
+                          std::vector<std::uint32_t> position;
+                          file_index = distinct_positions(cloud.points, position);
+                          copies = cloud.points.size() - file_index.size();
+                          if (copies > 0) {
+                            PointCloud kept;
+                            for (const auto i : file_index) {
+                              kept.points.push_back(cloud.points[i]);
+                              if (cloud.has_normals()) kept.normals.push_back(cloud.normals[i]);
+                              if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
+                            }
+                            log::warn("{}: {} of {} points repeat an earlier point's position exactly; each position is "
+                                      "fitted once (with its first point's normal and colour)",
+                                      a->points, copies, cloud.points.size());
+                            cloud = std::move(kept);
+                          }
+                        }
                         if (!mesh && !a->keep_outliers) {
                           outliers = find_outliers(cloud.points);
+                          // Over a quarter: not strays but a cloud this test misreads (a scatter).
+                          if (4 * outliers.size() > cloud.points.size()) {
+                            log::warn("{}: {} of {} points look like stray points off the surface, too many to be "
+                                      "strays; all are fitted",
+                                      a->points, outliers.size(), cloud.points.size());
+                            outliers.clear();
+                          }
                           if (!outliers.empty()) {
                             std::vector<std::uint8_t> drop(cloud.points.size(), 0);
                             for (const auto i : outliers) drop[i] = 1;
@@ -136,11 +157,22 @@ void add_fit(CLI::App& root, Commands& commands) {
                               if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
                             }
                             const auto& p = cloud.points[outliers.front()];
-                            log::warn("{}: {} of {} points lie alone off the surface (outliers; the first, point {} in "
-                                      "file order, at ({:.6g}, {:.6g}, {:.6g})); left out of the fit and its bound "
-                                      "(--keep-outliers fits them)",
+                            for (auto& o : outliers) o = file_index[o];  // rows of the file from here on
+                            log::warn("{}: {} of {} points lie alone off the surface (outliers; the first is point {}, "
+                                      "counted from 0 in file order, at ({:.6g}, {:.6g}, {:.6g})); left out of the fit "
+                                      "and its bound (--keep-outliers fits them)",
                                       a->points, outliers.size(), cloud.points.size(), outliers.front(), p.x(), p.y(), p.z());
                             cloud = std::move(kept);
+                          }
+                        }
+                        {
+                          // The fit holds far from the origin, but `render` cannot place what it makes.
+                          Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+                          for (const auto& p : cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+                          try {
+                            check_drawable_extent(lo, hi, a->points);
+                          } catch (const InvalidInput& e) {
+                            log::warn("{}; the model is fitted, but `render` will refuse it", e.what());
                           }
                         }
                         PointCloud held;
@@ -170,7 +202,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                         r.model.metadata["producer"] = command_line();
                         const auto& s = r.stats;
                         nlohmann::json j = {{"points", s.points},
-                                            {"outliers", {{"left_out", outliers.size()},
+                                            {"copies_merged", copies},
+                                            {"outliers", {{"checked", !mesh && !a->keep_outliers},
+                                                          {"left_out", outliers.size()},
                                                           {"first", std::vector<std::uint32_t>(
                                                                         outliers.begin(),
                                                                         outliers.begin() + std::ptrdiff_t(std::min<std::size_t>(outliers.size(), 100)))}}},
@@ -260,7 +294,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                         report.summary = fmt::format(
                             "wrote {}: {} patches for {} points{}; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
                             "(E = {:.3g}{})", a->out, s.patches, s.points,
-                            outliers.empty() ? "" : fmt::format(" ({} outliers left out)", outliers.size()), s.max_blend,
+                            outliers.empty() ? ""
+                                              : fmt::format(" ({} outlier{} left out)", outliers.size(), outliers.size() == 1 ? "" : "s"),
+                            s.max_blend,
                             s.surface_max, s.surface_p999, s.max_error_abs,
                             holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
                         if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;

@@ -336,6 +336,24 @@ TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
   EXPECT_EQ(k["fit"]["points"].get<std::size_t>(), 8040u);
   std::printf("sphere with 40 strays: %zu patches, %zu with them\n", patches, k["fit"]["patches"].get<std::size_t>());
   EXPECT_GE(k["fit"]["patches"].get<std::size_t>(), patches + 40);  // a patch per stray at least
+
+  // Copies of each point (a merged scan) are fitted once: the normals estimated over copies
+  // degenerated (a 3,000-point sphere written 7 times: 2,994 patches instead of 4), and the
+  // strays among them are found as before.
+  const auto copies = dir / "copies.xyz";
+  {
+    std::ifstream in(xyz);
+    std::ofstream out(copies);
+    for (std::string line; std::getline(in, line);)
+      for (int c = 0; c < 3; ++c) out << line << '\n';
+  }
+  r = quadrix_run("fit " + q(copies) + " -o " + q(dir / "c.qxm") + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto c = read_json(report);
+  EXPECT_EQ(c["fit"]["copies_merged"].get<std::size_t>(), 2u * 8040u);
+  EXPECT_EQ(c["fit"]["outliers"]["left_out"].get<std::size_t>(), 40u);
+  EXPECT_EQ(c["fit"]["patches"].get<std::size_t>(), patches);
+  for (const auto i : c["fit"]["outliers"]["first"]) EXPECT_GE(i.get<std::size_t>(), 3u * 8000u);  // rows of the file
 }
 
 TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
