@@ -124,6 +124,11 @@ void add_fit(CLI::App& root, Commands& commands) {
                           std::vector<std::uint32_t> position;
                           file_index = distinct_positions(cloud.points, position);
                           copies = cloud.points.size() - file_index.size();
+                          if (file_index.size() == 1 && cloud.points.size() > 1)
+                            throw InvalidInput(fmt::format("{}: fit_slim: all {} points coincide", a->points, cloud.points.size()));
+                          if (copies > 0 && file_index.size() < 10)
+                            throw InvalidInput(fmt::format("{}: fit_slim: {} distinct positions among {} points; at least 10 are needed",
+                                                           a->points, file_index.size(), cloud.points.size()));
                           if (copies > 0) {
                             PointCloud kept;
                             for (const auto i : file_index) {
