@@ -29,19 +29,24 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> nb;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      index.nearest(points[i], std::max(k, km + 1), nb);
-      const std::size_t kk = std::min(k, nb.size());
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
-      mean /= double(kk);
-      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      for (std::size_t j = 0; j < kk; ++j) {
-        const Eigen::Vector3d d = points[nb[j].first] - mean;
-        C += d * d.transpose();
+      for (std::size_t scale = 1; scale <= 4; scale *= 2) {
+        const std::size_t want = std::min(scale * k, n);
+        index.nearest(points[i], std::max(want, km + 1), nb);
+        const std::size_t kk = std::min(want, nb.size());
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
+        mean /= double(kk);
+        Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+        for (std::size_t j = 0; j < kk; ++j) {
+          const Eigen::Vector3d d = points[nb[j].first] - mean;
+          C += d * d.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+        out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
+        if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
+        if (spreads_over_a_plane(eig.eigenvalues()) || want == n) break;
       }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
-      out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
-      if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
+      if (nb.size() > std::max(k, km + 1)) nb.resize(std::max(k, km + 1));  // the graph: the nearest km
       std::uint8_t d = 0;
       for (std::size_t j = 0; j < nb.size() && d < km; ++j)
         if (nb[j].first != i) graph[i * km + d++] = nb[j].first;
@@ -140,7 +145,7 @@ GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, s
   const PointIndex index(points);
   const std::size_t k = std::clamp<std::size_t>(neighbours, 3, n - 1);
   const std::size_t m = std::min(n, samples);
-  std::vector<std::uint8_t> off(m, 0), against(m, 0), used(m, 0);
+  std::vector<std::uint8_t> off(m, 0), against(m, 0), used(m, 0), spread(m, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> nb;
     for (std::size_t s = range.begin(); s != range.end(); ++s) {
@@ -157,7 +162,7 @@ GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, s
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
       if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 0)) continue;  // collinear or coincident
       used[s] = 1;
-      off[s] = std::abs(ni.dot(es.eigenvectors().col(0))) < 0.5;
+      if (spreads_over_a_plane(es.eigenvalues())) spread[s] = 1, off[s] = std::abs(ni.dot(es.eigenvectors().col(0))) < 0.5;
       // Orientation: the 8 nearest distinct neighbours.
       double agreeing[8];
       std::size_t seen = 0, agree = 0;
@@ -183,7 +188,8 @@ GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, s
       against[s] = 3 * opposed > on_sheet;
     }
   });
-  for (std::size_t s = 0; s < m; ++s) out.points += used[s], out.off_plane += off[s], out.against += against[s];
+  for (std::size_t s = 0; s < m; ++s)
+    out.points += used[s], out.spread += spread[s], out.off_plane += off[s], out.against += against[s];
   return out;
 }
 

@@ -11,8 +11,14 @@
 
 namespace quadrix {
 
+/// Whether a neighbourhood's covariance eigenvalues (ascending) spread over a plane, not along a
+/// line (a scanner's line, a row of a grid: any plane through it fits).
+inline bool spreads_over_a_plane(const Eigen::Vector3d& eigenvalues) { return eigenvalues[1] > 0.02 * eigenvalues[2]; }
+
 struct NormalEstimationOptions {
-  std::size_t neighbours = 16;  ///< k for the PCA covariance (≥ 3)
+  /// k for the PCA covariance (≥ 3); where those neighbours lie along a line (a scanner's lines
+  /// farther apart than their points), 2k, then 4k
+  std::size_t neighbours = 16;
   std::size_t mst_neighbours = 8;  ///< k for the orientation graph (≥ 2)
 };
 
@@ -38,10 +44,13 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points,
 /// oriented consistently: a scanner's unoriented normals). A neighbour with an opposed normal
 /// lies on the point's sheet when the direction to it is within 30° of the tangent plane and it
 /// lies no farther off that plane than twice the median agreeing neighbour does, so the other
-/// side of a thin plate, even a noisy one, mostly does not count.
+/// side of a thin plate, even a noisy one, mostly does not count. Only points whose neighbours
+/// spread over a plane are checked for being off it (`spread`): along a scanner's line, or a row
+/// of a grid, every plane through the line fits them (a wave scanned in lines 15 times farther
+/// apart than their points lost its exact normals: "99.5 % off their neighbours' plane").
 struct GivenNormalsCheck {
-  std::size_t points = 0, off_plane = 0, against = 0;
-  double off_plane_share() const { return points ? double(off_plane) / double(points) : 0.0; }
+  std::size_t points = 0, spread = 0, off_plane = 0, against = 0;
+  double off_plane_share() const { return spread ? double(off_plane) / double(spread) : 0.0; }
   double against_share() const { return points ? double(against) / double(points) : 0.0; }
 };
 GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
