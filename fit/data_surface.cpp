@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
@@ -98,6 +99,7 @@ struct DataSurface::Impl {
   // Points: positions, normals, disc radii, kd-tree. Mesh: triangle corners and their BVH.
   std::vector<Eigen::Vector3d> points, normals;
   std::vector<double> disc;
+  std::vector<double> spacing;  // points: the sample spacing (DataSurface::spacing)
   // Per point: the distance to its `candidates`-th nearest other point. A query x nearer than
   // half that has the point among its `candidates` nearest (every point nearer to x lies
   // within twice that distance of it).
@@ -136,6 +138,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.normals.assign(normals.begin(), normals.end());
   m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
   m.disc.assign(m.points.size(), 0.0);
+  m.spacing.assign(m.points.size(), 0.0);
   m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
   // Visited in Morton order (neighbouring queries share the tree's cache lines: a 1M-point cloud
   // in random order spent 39 s here). Neighbours on the same sheet only (normals within 60°):
@@ -168,7 +171,40 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       m.candidate_reach[i] = nb.size() > options.candidates ? std::sqrt(nb[options.candidates].second) : kInf;
       if (same.empty()) continue;
       reach[i] = dist.back();
-      m.disc[i] = options.disc_factor * dist[std::min(options.spacing_neighbour, dist.size()) - 1];
+      m.spacing[i] = dist[std::min(options.spacing_neighbour, dist.size()) - 1];
+      m.disc[i] = options.disc_factor * m.spacing[i];
+      // Sampled more sparsely one way (a scanner's lines farther apart than their points): the
+      // disc reaches 3/4 of the way to the nearest point in each 60° sector of the tangent plane
+      // that holds one (a line-scanned wave's discs, sized along its lines, left the strips
+      // between them off the data: 4,293 patches at 1e-3 where a grid of as many points needs 63).
+      // Where the nearest points fill fewer than four sectors (all along the point's own line),
+      // four times as many are asked.
+      {
+        const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+        std::array<double, 6> nearest;
+        const auto fill = [&](const std::vector<Neighbour>& from) {
+          nearest.fill(kInf);
+          int filled = 0;
+          for (std::size_t j = 1; j < from.size(); ++j) {
+            if (m.normals[from[j].first].dot(n) < 0.5) continue;
+            const Eigen::Vector3d v = m.points[from[j].first] - m.points[i];
+            const double a = std::atan2(v.dot(w), v.dot(u));
+            const int sector = std::clamp(int(std::floor((a + std::numbers::pi) / (std::numbers::pi / 3.0))), 0, 5);
+            filled += nearest[sector] == kInf;
+            nearest[sector] = std::min(nearest[sector], std::sqrt(from[j].second));
+          }
+          return filled;
+        };
+        if (fill(nb) < 4 && nb.size() >= needed) {
+          std::vector<Neighbour> wide;
+          m.index->nearest(m.points[i], 4 * needed, wide);
+          fill(wide);
+        }
+        double widest = 0;
+        for (const double d : nearest)
+          if (d < kInf) widest = std::max(widest, d);
+        m.disc[i] = std::max(m.disc[i], options.sector_reach * widest);
+      }
       const std::size_t kb = std::min(options.boundary_neighbours, same.size());
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       double mean = 0;
@@ -202,7 +238,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
   std::vector<double> spacing0(m.disc.size());
   double widest = 0;  // no point farther than gap_spacings × this can reach back
   for (std::size_t i = 0; i < spacing0.size(); ++i)
-    spacing0[i] = m.disc[i] / m.options.disc_factor, widest = std::max(widest, spacing0[i]);
+    spacing0[i] = m.spacing[i], widest = std::max(widest, spacing0[i]);
   std::vector<std::uint32_t> flagged;
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) flagged.push_back(std::uint32_t(i));
@@ -222,6 +258,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
         if (!(tn > 0) || std::abs(h) > 0.58 * tn || t.dot(dir) > -0.866 * tn || tn > gap_spacings * spacing0[j]) continue;
         m.inward[i] = Eigen::Vector3d::Zero();
         m.disc[i] = std::max(m.disc[i], 0.75 * tn);
+        m.spacing[i] = std::max(m.spacing[i], 0.5 * tn);
         break;
       }
     }
@@ -293,7 +330,7 @@ void DataSurface::from_mesh_boundary(const PolygonMesh& mesh, Impl& m) {
 
 bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
 double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
-double DataSurface::spacing(std::size_t i) const { return impl_->disc.at(i) / impl_->options.disc_factor; }
+double DataSurface::spacing(std::size_t i) const { return impl_->spacing.at(i); }
 void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const {
   out.clear();
   const auto& m = *impl_;

@@ -24,6 +24,9 @@ struct DataSurfaceOptions {
   /// spacing; random samplings leave gaps of up to about 1.5 spacings).
   std::size_t spacing_neighbour = 6;
   double disc_factor = 1.5;
+  /// ... and at least sector_reach × the distance to the nearest same-sheet point in whichever
+  /// 60° sector of its tangent plane has it farthest (of those that have one: not past a boundary)
+  double sector_reach = 0.75;
   /// Points (nearest first) whose discs are tried per distance query.
   std::size_t candidates = 12;
   /// Open boundaries: a point whose boundary_neighbours nearest neighbours have their tangential
@@ -65,7 +68,7 @@ public:
   double disc_radius(std::size_t i) const;
   /// Point i's sample spacing (points only): the distance to its spacing_neighbour-th nearest
   /// neighbour on the same sheet, or, at a step in the sampling density, half the gap to the
-  /// sparse side's nearest point where that is wider (disc_radius / disc_factor).
+  /// sparse side's nearest point where that is wider (not the sectors' reach of its disc).
   double spacing(std::size_t i) const;
   /// The data's open boundary near c: samples (position, unit tangent towards the data) within
   /// r of c — boundary points of a cloud, or the vertices and edge midpoints of a mesh's open
