@@ -249,14 +249,18 @@ TEST(FitSlimHard, SharpCrease) {
   expect_two_sided(fit_and_measure(s, kE));
 }
 
+// A sphere sampled 10× more densely on one side.
+Shape uneven_sphere() {
+  return make({{[](double u, double v) {
+                  const double th = std::acos(1 - 2 * u), ph = 2 * std::numbers::pi * v;
+                  return Vec(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+                },
+                1, 150}},
+              15000, 6, [](const Vec& p) { return p.x() > 0 ? 1.0 : 0.1; });
+}
+
 TEST(FitSlimHard, UnevenDensity) {
-  // A sphere sampled 10× more densely on one side.
-  const Shape s = make({{[](double u, double v) {
-                           const double th = std::acos(1 - 2 * u), ph = 2 * std::numbers::pi * v;
-                           return Vec(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-                         },
-                         1, 150}},
-                       15000, 6, [](const Vec& p) { return p.x() > 0 ? 1.0 : 0.1; });
+  const Shape s = uneven_sphere();
   expect_two_sided(fit_and_measure(s, kE));
 }
 
@@ -266,12 +270,7 @@ TEST(FitSlimHard, UnevenDensity) {
 // the surface running off the data: 84 patches in 8 s (24 in 6 s now; a sphere evenly sampled as
 // sparsely as the sparse side needs 22, its discs sagging off the sphere).
 TEST(FitSlimHard, UnevenDensityPointsOnly) {
-  const Shape s = make({{[](double u, double v) {
-                           const double th = std::acos(1 - 2 * u), ph = 2 * std::numbers::pi * v;
-                           return Vec(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-                         },
-                         1, 150}},
-                       15000, 6, [](const Vec& p) { return p.x() > 0 ? 1.0 : 0.1; });
+  const Shape s = uneven_sphere();
   const Outcome o = fit_and_measure(s, kE, {}, false, false);
   expect_two_sided(o);
   EXPECT_LE(o.fit.stats.patches, 30u);  // a sphere evenly sampled as sparsely: 22
