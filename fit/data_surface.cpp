@@ -82,6 +82,13 @@ struct Hints {
   }
 };
 
+// Which of six 60° sectors of the tangent plane (basis u, w = n × u, u = n.unitOrthogonal())
+// the tangential offset v points into.
+int tangent_sector(const Eigen::Vector3d& v, const Eigen::Vector3d& u, const Eigen::Vector3d& w) {
+  const double a = std::atan2(v.dot(w), v.dot(u));
+  return std::clamp(int(std::floor((a + std::numbers::pi) / (std::numbers::pi / 3.0))), 0, 5);
+}
+
 }  // namespace
 
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
@@ -105,6 +112,9 @@ struct DataSurface::Impl {
   // within twice that distance of it).
   std::vector<double> candidate_reach;
   std::vector<Eigen::Vector3d> inward;  // boundary points: unit tangent towards the data; else 0
+  // Points: the farthest neighbour asked in each 60° sector of the tangent plane (tangent_sector);
+  // a boundary point's disc reaches no farther than that plus boundary_reach of it there.
+  std::vector<std::array<float, 6>> sector_far;
   std::vector<std::array<Eigen::Vector3d, 3>> triangles;
   bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
@@ -139,6 +149,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
   m.disc.assign(m.points.size(), 0.0);
   m.spacing.assign(m.points.size(), 0.0);
+  m.sector_far.assign(m.points.size(), std::array<float, 6>{});
   m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
   // Visited in Morton order (neighbouring queries share the tree's cache lines: a 1M-point cloud
   // in random order spent 39 s here). Neighbours on the same sheet only (normals within 60°):
@@ -182,16 +193,17 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       {
         const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
         std::array<double, 6> nearest;
+        auto& farthest = m.sector_far[i];
         const auto fill = [&](const std::vector<Neighbour>& from) {
           nearest.fill(kInf);
+          farthest.fill(0.0f);
           int filled = 0;
-          for (std::size_t j = 1; j < from.size(); ++j) {
-            if (m.normals[from[j].first].dot(n) < 0.5) continue;
-            const Eigen::Vector3d v = m.points[from[j].first] - m.points[i];
-            const double a = std::atan2(v.dot(w), v.dot(u));
-            const int sector = std::clamp(int(std::floor((a + std::numbers::pi) / (std::numbers::pi / 3.0))), 0, 5);
+          for (const auto& [j, d2] : from) {
+            if (j == i || !(d2 > 0) || m.normals[j].dot(n) < 0.5) continue;
+            const int sector = tangent_sector(m.points[j] - m.points[i], u, w);
             filled += nearest[sector] == kInf;
-            nearest[sector] = std::min(nearest[sector], std::sqrt(from[j].second));
+            nearest[sector] = std::min(nearest[sector], std::sqrt(d2));
+            farthest[sector] = std::max(farthest[sector], float(std::sqrt(d2)));
           }
           return filled;
         };
@@ -400,9 +412,19 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     const Eigen::Vector3d v = x - m.points[i];
     const double h = m.normals[i].dot(v);
     Eigen::Vector3d t = v - h * m.normals[i];
-    if (const double o = -t.dot(m.inward[i]); o > 0)  // beyond a boundary: the disc is short there
-      t += (o / m.options.boundary_reach - o) * -m.inward[i];
-    const double out = std::max(0.0, t.norm() - m.disc[i]);
+    double out = 0;
+    if (m.inward[i].squaredNorm() > 0) {
+      // A boundary point's disc, past its farthest neighbour in t's sector, reaches on only
+      // boundary_reach of its radius: along an open sheet's edge towards a corner the edge
+      // points' discs ran a spacing past the corner (blobs at a square's corners, ~9E at 1e-3).
+      const Eigen::Vector3d u = m.normals[i].unitOrthogonal(), w = m.normals[i].cross(u);
+      const double r = std::min(m.disc[i], double(m.sector_far[i][tangent_sector(t, u, w)]) +
+                                               m.options.boundary_reach * m.disc[i]);
+      out = std::max(0.0, t.norm() - r);
+      if (const double o = -t.dot(m.inward[i]); o > 0)  // beyond a boundary: the disc is short there
+        t += (o / m.options.boundary_reach - o) * -m.inward[i];
+    }
+    out = std::max(out, t.norm() - m.disc[i]);
     return std::sqrt(h * h + out * out);
   };
   // As for a mesh: queries come in runs along one patch, so the discs nearest this thread's last

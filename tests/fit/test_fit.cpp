@@ -785,6 +785,36 @@ TEST(DataSurface, AStepInTheSamplingDensityIsNeitherABoundaryNorAHole) {
   EXPECT_GT(holed.distance(Eigen::Vector3d(0.5, 0.5, 0)), 0.01);
 }
 
+// An open sheet's data surface stops at its corners as along its edges: the discs of the edge
+// points next to a corner reached a spacing and more past it along the edge (a square grid's
+// corners grew blobs in its fits, about 9E at 1e-3). Now a boundary point's disc reaches past its
+// farthest neighbour in each sector by boundary_reach of its radius only.
+TEST(DataSurface, AnOpenSheetStopsAtItsCorners) {
+  const double s = 0.025;
+  std::vector<Eigen::Vector3d> P, N;
+  for (int i = 0; i < 80; ++i)
+    for (int j = 0; j < 80; ++j) P.emplace_back((i + 0.5) * s, (j + 0.5) * s, 0), N.emplace_back(0, 0, 1);
+  const DataSurface square = DataSurface::from_points(P, N);
+  // Beyond the edge y = 0 of the square [0, 2]², d spacings out: near the corners and along the middle.
+  const auto covered = [&](double d, bool near_corner) {
+    int n = 0;
+    for (int k = 0; k < 400; ++k) {
+      const double a = k / 200.0;
+      if ((a < 3 * s || a > 2 - 3 * s) == near_corner) n += square.distance(Eigen::Vector3d(a, -d * s, 0)) < 1e-9;
+    }
+    return n;
+  };
+  std::printf("corners: %d, %d of 30 covered 1 and 1.5 spacings out (21 and 14 before); middle: %d of 370 at 1\n",
+              covered(1.0, true), covered(1.5, true), covered(1.0, false));
+  EXPECT_EQ(covered(1.0, true), 0);
+  EXPECT_EQ(covered(1.5, true), 0);
+  EXPECT_LT(covered(1.0, false), 20);
+  EXPECT_EQ(covered(0.25, false), 370);  // the edge itself stays on the data
+  // Inside, every point of the sheet lies on a disc.
+  for (int k = 0; k < 1000; ++k)
+    ASSERT_LT(square.distance(Eigen::Vector3d(0.05 + 1.9 * (k % 37) / 36.0, 0.05 + 1.9 * (k / 37) / 27.0, 0)), 1e-9) << k;
+}
+
 // Stray points are found wherever they float (far from the surface, among each other, inside a
 // closed shape), and no point of a surface is taken for one, however it is sampled: a 10×
 // density step, lines of a scanner's sweep with gaps 12 times their spacing, a noisy plane whose
