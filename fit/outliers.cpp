@@ -163,4 +163,44 @@ std::vector<std::uint32_t> find_outliers(std::span<const Eigen::Vector3d> points
   return result;
 }
 
+std::vector<std::vector<std::uint32_t>> outlier_clumps(std::span<const Eigen::Vector3d> points,
+                                                       std::span<const std::uint32_t> outliers, std::size_t least) {
+  if (outliers.size() < std::max<std::size_t>(least, 2)) return {};
+  std::vector<std::uint8_t> is_out(points.size(), 0);
+  for (const auto i : outliers) is_out[i] = 1;
+  std::vector<Eigen::Vector3d> kept, strays;
+  std::vector<std::uint32_t> stray_id;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    (is_out[i] ? strays : kept).push_back(points[i]);
+    if (is_out[i]) stray_id.push_back(std::uint32_t(i));
+  }
+  if (kept.empty()) return {};
+  const PointIndex kept_index(kept), stray_index(strays);
+  std::vector<double> to_kept(strays.size());
+  std::vector<Neighbour> nb;
+  for (std::size_t a = 0; a < strays.size(); ++a) {
+    kept_index.nearest(strays[a], 1, nb);
+    to_kept[a] = std::sqrt(nb[0].second);
+  }
+  // Linked: nearer each other than a fifth of their distance to the rest (strays scattered at
+  // random lie about as far from each other as from the surface).
+  constexpr double kTight = 0.2;
+  std::vector<std::uint32_t> parent(strays.size());
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto root = [&](std::uint32_t a) {
+    while (parent[a] != a) a = parent[a] = parent[parent[a]];
+    return a;
+  };
+  for (std::size_t a = 0; a < strays.size(); ++a) {
+    stray_index.radius(strays[a], kTight * to_kept[a], nb);
+    for (const auto& [b, d2] : nb)
+      if (b != a && std::sqrt(d2) < kTight * std::min(to_kept[a], to_kept[b])) parent[root(std::uint32_t(a))] = root(b);
+  }
+  std::vector<std::vector<std::uint32_t>> groups(strays.size());
+  for (std::size_t a = 0; a < strays.size(); ++a) groups[root(std::uint32_t(a))].push_back(stray_id[a]);
+  std::erase_if(groups, [&](const auto& g) { return g.size() < least; });
+  std::sort(groups.begin(), groups.end(), [](const auto& x, const auto& y) { return x.size() > y.size(); });
+  return groups;
+}
+
 }  // namespace quadrix

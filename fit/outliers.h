@@ -34,4 +34,10 @@ std::vector<std::uint32_t> distinct_positions(std::span<const Eigen::Vector3d> p
 /// neighbours straddle both) or a point on a wire (its neighbours span no plane).
 std::vector<std::uint32_t> find_outliers(std::span<const Eigen::Vector3d> points, const OutlierOptions& options = {});
 
+/// Outliers nearer each other than a fifth of their distance to any other point, linked into clumps (a small separate
+/// object, or a burst of stray returns: a neighbourhood test cannot tell them apart). Each clump
+/// of at least `least` outliers, largest first, as indices into points.
+std::vector<std::vector<std::uint32_t>> outlier_clumps(std::span<const Eigen::Vector3d> points,
+                                                       std::span<const std::uint32_t> outliers, std::size_t least = 5);
+
 }  // namespace quadrix

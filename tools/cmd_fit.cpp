@@ -162,6 +162,20 @@ void add_fit(CLI::App& root, Commands& commands) {
                               if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
                             }
                             const auto& p = cloud.points[outliers.front()];
+                            // Clumps of them may be a small separate object: say so.
+                            const auto clumps = outlier_clumps(cloud.points, outliers);
+                            if (!clumps.empty()) {
+                              Eigen::Vector3d c = Eigen::Vector3d::Zero();
+                              for (const auto i : clumps.front()) c += cloud.points[i];
+                              c /= double(clumps.front().size());
+                              std::size_t in = 0;
+                              for (const auto& g : clumps) in += g.size();
+                              log::warn("{}: {} of the outliers form {} clump{} of 5 or more, far nearer each other than "
+                                        "the rest (the largest: {} points around ({:.6g}, {:.6g}, {:.6g})): a small separate "
+                                        "object? --keep-outliers fits them",
+                                        a->points, in, clumps.size(), clumps.size() == 1 ? "" : "s", clumps.front().size(),
+                                        c.x(), c.y(), c.z());
+                            }
                             for (auto& o : outliers) o = file_index[o];  // rows of the file from here on
                             log::warn("{}: {} of {} points lie alone off the surface (outliers; the first is point {}, "
                                       "counted from 0 in file order, at ({:.6g}, {:.6g}, {:.6g})); left out of the fit "

@@ -354,6 +354,25 @@ TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
   EXPECT_EQ(c["fit"]["outliers"]["left_out"].get<std::size_t>(), 40u);
   EXPECT_EQ(c["fit"]["patches"].get<std::size_t>(), patches);
   for (const auto i : c["fit"]["outliers"]["first"]) EXPECT_GE(i.get<std::size_t>(), 3u * 8000u);  // rows of the file
+  EXPECT_EQ(r.out.find("clump"), std::string::npos) << "strays scattered at random are no clump: " << r.out;
+
+  // A small separate object (12 points on a sphere of radius 0.05, 3 units away) is left out as
+  // strays are, and the warning says it may be an object.
+  const auto object = dir / "object.xyz";
+  {
+    std::ifstream in(xyz);
+    std::ofstream out(object);
+    out.precision(9);
+    for (std::string line; std::getline(in, line);) out << line << '\n';
+    for (int k = 0; k < 12; ++k) {
+      const double z = -1 + (k + 0.5) / 6.0, a = 2.4 * k, rr = std::sqrt(1 - z * z);
+      out << 3 + 0.05 * rr * std::cos(a) << ' ' << 0.05 * rr * std::sin(a) << ' ' << 0.05 * z << '\n';
+    }
+  }
+  r = quadrix_run("fit " + q(object) + " -o " + q(dir / "o.qxm"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("form 1 clump of 5 or more"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("the largest: 12 points around (3"), std::string::npos) << r.out;
 }
 
 TEST(Cli, FitOutsideItsBoundWritesTheModelAndExitsSeven) {
