@@ -13,6 +13,38 @@
 
 namespace quadrix {
 
+namespace {
+
+// The PCA of the `want` points nearest p (p itself among them when it is a point of the cloud),
+// widened to 2 and 4 times as many where they lie along a line (a scanner's lines farther apart
+// than their points: any plane through the line fits them). nb: the last neighbourhood asked, at
+// least `ask` points, nearest first.
+Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> neighbourhood_pca(const PointIndex& index,
+                                                                 std::span<const Eigen::Vector3d> points,
+                                                                 const Eigen::Vector3d& p, std::size_t want,
+                                                                 std::size_t ask, std::vector<Neighbour>& nb) {
+  const std::size_t n = points.size();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  for (std::size_t scale = 1; scale <= 4; scale *= 2) {
+    const std::size_t w = std::min(scale * want, n);
+    index.nearest(p, std::max(w, ask), nb);
+    const std::size_t kk = std::min(w, nb.size());
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
+    mean /= double(kk);
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    for (std::size_t j = 0; j < kk; ++j) {
+      const Eigen::Vector3d d = points[nb[j].first] - mean;
+      C += d * d.transpose();
+    }
+    eig.compute(C);
+    if (eig.info() != Eigen::Success || spreads_over_a_plane(eig.eigenvalues()) || w == n) break;
+  }
+  return eig;
+}
+
+}  // namespace
+
 NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const NormalEstimationOptions& options) {
   const std::size_t n = points.size();
   if (n < 3) throw InvalidInput(fmt::format("estimate_normals: {} points; at least 3 are needed", n));
@@ -29,23 +61,9 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> nb;
     for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      for (std::size_t scale = 1; scale <= 4; scale *= 2) {
-        const std::size_t want = std::min(scale * k, n);
-        index.nearest(points[i], std::max(want, km + 1), nb);
-        const std::size_t kk = std::min(want, nb.size());
-        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-        for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
-        mean /= double(kk);
-        Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-        for (std::size_t j = 0; j < kk; ++j) {
-          const Eigen::Vector3d d = points[nb[j].first] - mean;
-          C += d * d.transpose();
-        }
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
-        out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
-        if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
-        if (spreads_over_a_plane(eig.eigenvalues()) || want == n) break;
-      }
+      const auto eig = neighbourhood_pca(index, points, points[i], k, km + 1, nb);
+      out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
+      if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
       if (nb.size() > std::max(k, km + 1)) nb.resize(std::max(k, km + 1));  // the graph: the nearest km
       std::uint8_t d = 0;
       for (std::size_t j = 0; j < nb.size() && d < km; ++j)
@@ -153,13 +171,7 @@ GivenNormalsCheck check_given_normals(std::span<const Eigen::Vector3d> points, s
       const double nn = normals[i].norm();
       if (!(nn > 0)) continue;
       const Eigen::Vector3d ni = normals[i] / nn;
-      index.nearest(points[i], k + 1, nb);
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const auto& [j, d2] : nb) mean += points[j];
-      mean /= double(nb.size());
-      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      for (const auto& [j, d2] : nb) C += (points[j] - mean) * (points[j] - mean).transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+      const auto es = neighbourhood_pca(index, points, points[i], k + 1, k + 1, nb);
       if (es.info() != Eigen::Success || !(es.eigenvalues()[1] > 0)) continue;  // collinear or coincident
       used[s] = 1;
       if (spreads_over_a_plane(es.eigenvalues())) spread[s] = 1, off[s] = std::abs(ni.dot(es.eigenvectors().col(0))) < 0.5;

@@ -44,10 +44,11 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points,
 /// oriented consistently: a scanner's unoriented normals). A neighbour with an opposed normal
 /// lies on the point's sheet when the direction to it is within 30° of the tangent plane and it
 /// lies no farther off that plane than twice the median agreeing neighbour does, so the other
-/// side of a thin plate, even a noisy one, mostly does not count. Only points whose neighbours
-/// spread over a plane are checked for being off it (`spread`): along a scanner's line, or a row
-/// of a grid, every plane through the line fits them (a wave scanned in lines 15 times farther
-/// apart than their points lost its exact normals: "99.5 % off their neighbours' plane").
+/// side of a thin plate, even a noisy one, mostly does not count. Where the nearest points lie
+/// along a line (a scanner's line: every plane through it fits them; a wave scanned in lines 15
+/// times farther apart than their points lost its exact normals, "99.5 % off their neighbours'
+/// plane"), 2 and 4 times as many are asked, as estimate_normals does; only points whose
+/// neighbourhood then spreads over a plane are checked for being off it (`spread`).
 struct GivenNormalsCheck {
   std::size_t points = 0, spread = 0, off_plane = 0, against = 0;
   double off_plane_share() const { return spread ? double(off_plane) / double(spread) : 0.0; }

@@ -120,8 +120,10 @@ void add_fit(CLI::App& root, Commands& commands) {
                         std::vector<std::uint32_t> file_index(cloud.points.size());
                         std::iota(file_index.begin(), file_index.end(), 0u);
                         std::size_t copies = 0;
+                        const std::size_t rows = cloud.points.size();
+                        std::vector<std::uint32_t> position(rows);  // each row's point once copies are merged
+                        std::iota(position.begin(), position.end(), 0u);
                         if (!mesh) {
-                          std::vector<std::uint32_t> position;
                           file_index = distinct_positions(cloud.points, position);
                           copies = cloud.points.size() - file_index.size();
                           if (file_index.size() == 1 && cloud.points.size() > 1)
@@ -176,11 +178,16 @@ void add_fit(CLI::App& root, Commands& commands) {
                                         a->points, in, clumps.size(), clumps.size() == 1 ? "" : "s", clumps.front().size(),
                                         c.x(), c.y(), c.z());
                             }
-                            for (auto& o : outliers) o = file_index[o];  // rows of the file from here on
+                            // Rows of the file from here on: every copy of an outlier's position.
+                            std::vector<std::uint8_t> stray(cloud.points.size(), 0);
+                            for (const auto o : outliers) stray[o] = 1;
+                            outliers.clear();
+                            for (std::size_t r = 0; r < rows; ++r)
+                              if (stray[position[r]]) outliers.push_back(std::uint32_t(r));
                             log::warn("{}: {} of {} points lie alone off the surface (outliers; the first is point {}, "
                                       "counted from 0 in file order, at ({:.6g}, {:.6g}, {:.6g})); left out of the fit "
                                       "and its bound (--keep-outliers fits them)",
-                                      a->points, outliers.size(), cloud.points.size(), outliers.front(), p.x(), p.y(), p.z());
+                                      a->points, outliers.size(), rows, outliers.front(), p.x(), p.y(), p.z());
                             cloud = std::move(kept);
                           }
                         }

@@ -299,6 +299,19 @@ TEST(FitSlimHard, LineScannedWaveKeepsItsNormalsAndFitsAsAGrid) {
     EXPECT_EQ(r.stats.surface_failures, 0u) << E;
     EXPECT_LE(r.stats.patches, E > 5e-3 ? 40u : 120u) << E;
   }
+  // Random normals on the same lines are still judged off the plane (over the wider
+  // neighbourhood) and replaced: skipping line neighbourhoods kept them, 12,876 patches.
+  {
+    PointCloud bad = c;
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> G(0.0, 1.0);
+    for (auto& nrm : bad.normals) nrm = Vec(G(rng), G(rng), G(rng)).normalized();
+    const SlimFitResult r = fit_slim(bad, {.max_error = 1e-2});
+    std::printf("line-scanned wave with random normals at 0.01: %zu patches (normals %s)\n", r.stats.patches,
+                r.stats.normals_estimated ? "estimated" : "given");
+    EXPECT_TRUE(r.stats.normals_estimated);
+    EXPECT_LE(r.stats.patches, 200u);
+  }
   // Without normals they are estimated over wider neighbourhoods where 16 points lie on a line.
   c.normals.clear();
   const SlimFitResult r = fit_slim(c, {.max_error = 1e-3});
