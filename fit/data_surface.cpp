@@ -247,10 +247,10 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
 // one is found the point is not on a boundary, and its disc reaches 3/4 of the way there.
 void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) {
   constexpr double gap_spacings = 3.0, kReach = 8.0;
-  std::vector<double> spacing0(m.disc.size());
-  double widest = 0;  // no point farther than gap_spacings × this can reach back
-  for (std::size_t i = 0; i < spacing0.size(); ++i)
-    spacing0[i] = m.spacing[i], widest = std::max(widest, spacing0[i]);
+  // The spacings before any is widened below (read by every thread while flagged points' change).
+  const std::vector<double> spacing0 = m.spacing;
+  // No point farther than gap_spacings × the widest spacing can reach back.
+  const double widest = spacing0.empty() ? 0.0 : *std::max_element(spacing0.begin(), spacing0.end());
   std::vector<std::uint32_t> flagged;
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) flagged.push_back(std::uint32_t(i));

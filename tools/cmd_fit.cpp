@@ -133,11 +133,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                                            a->points, file_index.size(), cloud.points.size()));
                           if (copies > 0) {
                             PointCloud kept;
-                            for (const auto i : file_index) {
-                              kept.points.push_back(cloud.points[i]);
-                              if (cloud.has_normals()) kept.normals.push_back(cloud.normals[i]);
-                              if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
-                            }
+                            for (const auto i : file_index) kept.push_back_from(cloud, i);
                             log::warn("{}: {} of {} points repeat an earlier point's position exactly; each position is "
                                       "fitted once (with its first point's normal and colour)",
                                       a->points, copies, cloud.points.size());
@@ -157,12 +153,8 @@ void add_fit(CLI::App& root, Commands& commands) {
                             std::vector<std::uint8_t> drop(cloud.points.size(), 0);
                             for (const auto i : outliers) drop[i] = 1;
                             PointCloud kept;
-                            for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-                              if (drop[i]) continue;
-                              kept.points.push_back(cloud.points[i]);
-                              if (cloud.has_normals()) kept.normals.push_back(cloud.normals[i]);
-                              if (cloud.has_colours()) kept.colours.push_back(cloud.colours[i]);
-                            }
+                            for (std::size_t i = 0; i < cloud.points.size(); ++i)
+                              if (!drop[i]) kept.push_back_from(cloud, i);
                             const auto& p = cloud.points[outliers.front()];
                             // Clumps of them may be a small separate object: say so.
                             const auto clumps = outlier_clumps(cloud.points, outliers);
@@ -207,12 +199,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                           std::mt19937_64 rng(a->options.seed);
                           std::bernoulli_distribution out(a->holdout);
                           PointCloud kept;
-                          for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-                            PointCloud& dst = out(rng) ? held : kept;
-                            dst.points.push_back(cloud.points[i]);
-                            if (cloud.has_normals()) dst.normals.push_back(cloud.normals[i]);
-                            if (cloud.has_colours()) dst.colours.push_back(cloud.colours[i]);
-                          }
+                          for (std::size_t i = 0; i < cloud.points.size(); ++i) (out(rng) ? held : kept).push_back_from(cloud, i);
                           cloud = std::move(kept);
                         }
                         SlimFitOptions o = a->options;

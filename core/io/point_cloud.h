@@ -16,6 +16,12 @@ struct PointCloud {
   std::vector<std::array<std::uint8_t, 3>> colours;
   bool has_normals() const { return !normals.empty(); }
   bool has_colours() const { return !colours.empty(); }
+  /// Appends src's point i with its normal and colour (where src has them).
+  void push_back_from(const PointCloud& src, std::size_t i) {
+    points.push_back(src.points[i]);
+    if (src.has_normals()) normals.push_back(src.normals[i]);
+    if (src.has_colours()) colours.push_back(src.colours[i]);
+  }
 };
 
 }  // namespace quadrix
