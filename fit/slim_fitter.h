@@ -109,6 +109,15 @@ private:
   std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
                               std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
+  // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp) that no other patch
+  // holds, where the blend shows nothing just past it along the sheet's normal, is followed across
+  // the plane along the patch's own zero set to where another patch holds it; the plane moves
+  // there (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in
+  // chosen_), its moved plane; `open` gets the slit samples found (crease gaps).
+  std::vector<std::pair<std::size_t, ClipPlanes>> crease_slits(const PointIndex& centres, const ReferenceScene& scene,
+                                                               std::size_t& open) const;
+  // Each such patch's ball replaced in chosen_ by a copy with the moved planes (pinned).
+  void relax_clips(const std::vector<std::pair<std::size_t, ClipPlanes>>& relaxed);
   // Whether candidate b's centre lies within half the radius of a ball taken in this fill; b taken
   // (its centre's cap lowered to it, kept through pruning) and added to them.
   bool near_taken(std::uint32_t b, const std::vector<std::uint32_t>& taken) const;
@@ -176,6 +185,8 @@ private:
     int round = -1;  // -1: none
     double score = 0;  // failures() of that model
     std::size_t point_holes = 0;
+    std::size_t crease_gaps = 0;
+    bool point_holes_fresh = false;  // point_holes was counted on this model
   };
   double failures() const;
   Verified snapshot(int round, double score) const;
@@ -232,6 +243,7 @@ private:
   std::vector<std::uint8_t> corner_known_;            // per point: corner_mask_ computed
   std::vector<std::uint32_t> point_order_;            // the points in Morton order (point_holes)
   bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
+  bool point_holes_fresh_ = false;                    // st_.point_holes was counted on the model just verified
   std::vector<std::uint8_t> disc_shrunk_;             // per point: the repair shrank its disc patch (its hole stays)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
   std::vector<std::uint8_t> view_tried_;              // per face: seen through before (view_balls)

@@ -360,6 +360,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"point_holes", fit.stats.point_holes},
                                 {"point_hole_balls", fit.stats.point_hole_balls},
                                 {"disc_patches", fit.stats.disc_patches},
+                                {"clips_relaxed", fit.stats.clips_relaxed},
+                                {"crease_gaps", fit.stats.crease_gaps},
                                 {"cover_fraction", fit.stats.cover_fraction},
                                 {"normals_vs_points",
                                  {{"p50_deg", se.normal_p50_deg},

