@@ -40,6 +40,8 @@ struct Ball {
   bool on_data = false;
   // A disc patch (SlimFitOptions::cover_point_holes): a point's tangent plane, kept through repair.
   bool disc = false;
+  // Its crease plane moved across a slit (SlimFitter::crease_slits).
+  bool relaxed = false;
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
     return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));

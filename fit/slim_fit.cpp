@@ -638,7 +638,7 @@ void SlimFitter::verify_and_repair() {
     // two verifying rounds remain; counted in every round.
     std::vector<std::pair<std::size_t, ClipPlanes>> relaxed;
     if (opt_.relax_clips && !surface_) {
-      relaxed = crease_slits(centre_index, scene, st_.crease_gaps);
+      relaxed = crease_slits(centre_index, scene, at_fault, st_.crease_gaps);
       if (round + 2 >= budget) relaxed.clear();
     }
     if (!fill_point_holes_) gaps.clear();
@@ -770,7 +770,6 @@ void SlimFitter::verify_and_repair() {
     }
     if (!relaxed.empty()) {
       relax_clips(relaxed);
-      st_.clips_relaxed += relaxed.size();
       log::debug("fit_slim: round {}: {} slit samples at creases; {} clipped patches' planes moved across them", round + 1,
                  st_.crease_gaps, relaxed.size());
     }
@@ -893,6 +892,7 @@ void SlimFitter::finish() {
     for (const double e : patch_errors_[chosen_[k]]) result_.surface_error_per_patch[k] = std::max(result_.surface_error_per_patch[k], e);
   st_.settled_candidates = std::size_t(std::count_if(balls_.begin(), balls_.end(), [](const Ball& b) { return b.settled; }));
   st_.patches = chosen_.size();
+  st_.clips_relaxed = std::size_t(std::count_if(chosen_.begin(), chosen_.end(), [&](std::uint32_t b) { return balls_[b].relaxed; }));
 
   auto& md = result_.model.metadata;
   auto num = [](double v) { return fmt::format("{:.6g}", v); };

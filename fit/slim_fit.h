@@ -278,7 +278,7 @@ struct SlimFitStats {
   std::size_t point_holes = 0;  ///< points whose coverage disc is not held by the model returned (cover_point_holes)
   std::size_t point_hole_balls = 0;  ///< candidate balls added on points with a hole
   std::size_t disc_patches = 0;      ///< disc patches added on points with a hole
-  std::size_t clips_relaxed = 0;     ///< clipped patches whose planes moved across slits at creases (relax_clips)
+  std::size_t clips_relaxed = 0;     ///< patches of the model returned whose crease plane moved across a slit (relax_clips)
   std::size_t crease_gaps = 0;       ///< slit samples at creases left at the end (relax_clips)
   std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries
   // Wall-clock seconds per stage.

@@ -276,6 +276,7 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
 // the armadillo, 50–140 patches moved, mostly where a smooth surface's spot lies off the data,
 // and their sheets ran up to 3.5E off the points' discs.)
 std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const PointIndex& centres, const ReferenceScene& scene,
+                                                                         const std::vector<std::uint8_t>& at_fault,
                                                                          std::size_t& open) const {
   open = 0;
   TraceOptions trace;
@@ -328,7 +329,10 @@ std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const P
   for (std::size_t k = 0; k < slims.size(); ++k) {
     const Ball& ball = balls_[chosen_[k]];
     const SlimPatch& sp = slims[k];
-    if (ball.other.isZero() || sp.clips.size() != 1) continue;
+    // Crease patches only: try_sharp's two sheets within 120° (not the two sides of a thin part,
+    // which try_both_sides splits the same way), and not a patch the repair is about to replace.
+    if (ball.other.isZero() || sp.clips.size() != 1 || ball.sheet.dot(ball.other) < -0.5) continue;
+    if (k < at_fault.size() && at_fault[k]) continue;
     const ClipPlane& c = *sp.clips.begin();
     const double step = 0.5 * E_ / sp.radius;
     double needed = 0;
@@ -347,7 +351,7 @@ std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const P
       }
       // Across the plane along the sheet: −n with the gradient's part taken out.
       Eigen::Vector3d y = u;
-      for (int m = 1; m <= 64 && m * step <= 0.5; ++m) {
+      for (int m = 1; m <= 64 && m * step <= 0.5; ++m) {  // up to 32E, at most half the radius
         const Eigen::Vector3d gy = sp.local.gradient(y).normalized();
         const Eigen::Vector3d w = -c.n + c.n.dot(gy) * gy;
         if (!(w.norm() > 1e-6)) return;
@@ -367,13 +371,16 @@ std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const P
     // The moved plane's own cut edge must stay on the data wherever no other patch holds it:
     // else the sheet runs on past a rounded crease as a fin (bunny from 50,000 points at 1e-3,
     // moved without this: 1.7× the surface beyond 2E of the mesh).
+    // (A plane moved out of the ball's inner 0.9 has no edge left there to check: not moved.)
     const ClipPlane moved_plane{c.n, c.d + needed};
     bool on_data = true;
+    std::size_t checked = 0;
     edge_points(sp, moved_plane, [&](const Eigen::Vector3d& u) {
       const Eigen::Vector3d x = sp.centre + sp.radius * u;
+      ++checked;
       if (on_data && !held_by_other(k, x) && !(data_->distance(x, 2.0 * E_) <= E_)) on_data = false;
     });
-    if (on_data) out.emplace_back(k, ClipPlanes::of(moved_plane));
+    if (on_data && checked > 0) out.emplace_back(k, ClipPlanes::of(moved_plane));
   }
   return out;
 }
@@ -383,6 +390,10 @@ void SlimFitter::relax_clips(const std::vector<std::pair<std::size_t, ClipPlanes
     const std::uint32_t b = chosen_[k];
     Ball c = balls_[b];
     c.clips = clips;
+    c.relaxed = true;
+    // The strip the plane uncovers has not been checked alone: verify_surface samples the zero
+    // set's lattice again (settle's lattice is the old planes').
+    c.surface_lattice = 0;
     balls_.push_back(std::move(c));
     grow_candidate_arrays();
     const auto nb = std::uint32_t(balls_.size() - 1);

@@ -109,13 +109,14 @@ private:
   std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
                               std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
-  // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp) that no other patch
-  // holds, where the blend shows nothing just past it along the sheet's normal, is followed across
-  // the plane along the patch's own zero set to where another patch holds it; the plane moves
-  // there (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in
-  // chosen_), its moved plane; `open` gets the slit samples found (crease gaps).
+  // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp, sheets within 120°,
+  // not at fault) that no other patch holds, where the blend shows nothing within 2E just past
+  // it along the sheet's normal, is followed across the plane along the patch's own zero set to
+  // where another patch holds it (its zero set within E, inside its planes); the plane moves there
+  // (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in chosen_),
+  // its moved plane; `open` gets the slit samples found (crease gaps).
   std::vector<std::pair<std::size_t, ClipPlanes>> crease_slits(const PointIndex& centres, const ReferenceScene& scene,
-                                                               std::size_t& open) const;
+                                                               const std::vector<std::uint8_t>& at_fault, std::size_t& open) const;
   // Each such patch's ball replaced in chosen_ by a copy with the moved planes (pinned).
   void relax_clips(const std::vector<std::pair<std::size_t, ClipPlanes>>& relaxed);
   // Whether candidate b's centre lies within half the radius of a ball taken in this fill; b taken

@@ -97,8 +97,10 @@ TEST(FitSlimScans, SparseCloudsHolesBetweenThePointsAreFilled) {
 // there (try_sharp), the planes parting, and no coverage disc reaching the gap. A clipped
 // patch's cut edge that no other patch holds, where the blend shows nothing just past it, now
 // moves across the slit along the patch's own zero set (crease_slits). Seen from 0.08 in front of
-// the spot, a 9 × 9 grid of rays over 8 mm around it (the kitten is about 1.3 across) must all
-// meet the surface there, not the far side. With relax_clips off the centre rays go through.
+// the spot, a 9 × 9 grid of rays over a square 0.008 (6E) wide around it (the kitten is about
+// 0.65 × 1.0 × 0.59) must all meet the surface there (within 10E of the spot's depth), not the
+// far side. With relax_clips off the centre rays go through (the case this test is about: the
+// first expectation fails when an unrelated change closes the slit too; then pick another).
 TEST(FitSlimScans, KittensMouthShowsNoSlitThroughToTheFarSide) {
   const std::string file = std::string(QUADRIX_DATASETS) + "/points/kitten.xyz";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
@@ -118,13 +120,14 @@ TEST(FitSlimScans, KittensMouthShowsNoSlitThroughToTheFarSide) {
         const Eigen::Vector3d target = spot + 0.001 * (i * a + j * b);
         const Eigen::Vector3d dir = (target - eye).normalized();
         const auto hit = scene.trace(Ray{eye, dir}, 0.0, 1e9, trace);
-        if (!hit || hit->t > (target - eye).norm() + 10 * E) ++far;
+        if (!hit || std::abs(hit->t - (target - eye).norm()) > 10 * E) ++far;
       }
     std::cerr << "  relax " << relax << ": " << r.stats.patches << " patches, " << r.stats.clips_relaxed
               << " planes moved, " << r.stats.crease_gaps << " slit samples left; " << far << " of 81 rays past the surface; "
               << r.stats.blend_failures << " points beyond E, " << r.stats.surface_failures << " surface samples beyond 2E\n";
     EXPECT_EQ(r.stats.blend_failures, 0u);
     EXPECT_EQ(r.stats.surface_failures, 0u);
+    if (relax) EXPECT_GT(r.stats.clips_relaxed, 0u);  // closed by a moved plane, not by another round's repair
     return far;
   };
   EXPECT_GT(through(false), 0);  // the case
