@@ -445,9 +445,15 @@ std::optional<Ball> BallFitter::try_sharp(std::uint32_t ci, double R, Scratch& s
     if (s.n[j].dot(na) >= s.n[j].dot(nb)) pa += s.u[j], ++ca;
     else pb += s.u[j], ++cb;
   pa /= double(ca), pb /= double(cb);
+  // The plane keeps dA(u) ≥ dB(u) (signed distances to the two tangent planes): sheet A's side
+  // at a convex crease, where the surface is max(dA, dB) = 0. At a concave one (sheet B's points
+  // above A's plane) the surface is min(dA, dB) = 0 and A's side is dA ≤ dB: the plane turned.
+  // (Unturned, a valley's centre was never its own patch's: a V-groove of 20,000 points at 1e-3
+  // fitted 132 patches with --sharp as without, where the same ridge drops from 141 to 75.)
   ClipPlane clip;
   clip.n = na - nb;
   clip.d = -(na.dot(pa) - nb.dot(pb));
+  if (na.dot(pb - pa) > 0) clip.n = -clip.n, clip.d = -clip.d;
   const double len = clip.n.norm();
   clip.n /= len, clip.d /= len;
   Ball probe_ball;
