@@ -14,6 +14,7 @@
 
 #include "core/log.h"
 #include "core/morton.h"
+#include "core/ray.h"
 #include "fit/evaluate.h"
 
 // The fitter's checks (fit/slim_fitter.h): the points and the drawn surface against their bounds,
@@ -309,20 +310,10 @@ std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const P
     for (int family = 0; family < 2; ++family) {
       const Eigen::Vector3d f = family == 0 ? e1 : e2, across = family == 0 ? e2 : e1;
       for (int j = 0; j < 8; ++j) {
-        const Eigen::Vector3d q = o + half * (-1.0 + (2.0 * j + 1.0) / 8.0) * across;
-        // g(q + t f) = a t² + b t + c0
-        const double a = f.dot(sp.local.A * f), b = 2.0 * f.dot(sp.local.A * q + sp.local.b), c0 = sp.local.eval(q);
-        std::array<double, 2> roots{};
-        int n_roots = 0;
-        if (std::abs(a) < 1e-12) {
-          if (std::abs(b) > 1e-12) roots[n_roots++] = -c0 / b;
-        } else if (const double disc = b * b - 4.0 * a * c0; disc >= 0) {
-          const double r = std::sqrt(disc), t0 = (-b - std::copysign(r, b)) / (2.0 * a);
-          roots[n_roots++] = t0;
-          if (t0 != 0) roots[n_roots++] = c0 / (a * t0);
-        }
-        for (int r = 0; r < n_roots; ++r)
-          if (const Eigen::Vector3d u = q + roots[r] * f; u.squaredNorm() < 0.81) visit(u);
+        const Ray line{o + half * (-1.0 + (2.0 * j + 1.0) / 8.0) * across, f};
+        const Roots roots = solve_ray_quadratic(ray_quadratic(sp.local, line));  // core's solver
+        for (int r = 0; r < roots.count; ++r)
+          if (const Eigen::Vector3d u = line.at(roots.t[r]); u.squaredNorm() < 0.81) visit(u);
       }
     }
   };
