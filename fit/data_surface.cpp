@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numbers>
 
 #include <Eigen/Eigenvalues>
@@ -122,6 +123,48 @@ struct DataSurface::Impl {
   std::vector<DataSurface::BoundarySample> boundary;  // open-boundary samples
   std::vector<Eigen::Vector3d> boundary_points;       // their positions (boundary_index's span)
   std::unique_ptr<PointIndex> boundary_index;
+  // Points: a BVH over the tangent discs' boxes, built on the first ray cast (the fit asks only
+  // distances of a cloud; measuring what a view sees of it casts rays).
+  mutable std::once_flag disc_bvh_once;
+  mutable Bvh disc_bvh;
+
+  // How far x's tangential offset from point i lies outside its disc (0: over the disc), and its
+  // height above the disc's plane. A boundary point's disc, past its farthest neighbour in the
+  // offset's sector, reaches on only boundary_reach of its radius: along an open sheet's edge
+  // towards a corner the edge points' discs ran a spacing past the corner (blobs at a square's
+  // corners, ~9E at 1e-3). The one disc shape for distances and ray casts.
+  double disc_excess(std::uint32_t i, const Eigen::Vector3d& x, double& h) const {
+    const Eigen::Vector3d v = x - points[i];
+    h = normals[i].dot(v);
+    Eigen::Vector3d t = v - h * normals[i];
+    double out = 0;
+    if (inward[i].squaredNorm() > 0) {
+      const Eigen::Vector3d u = normals[i].unitOrthogonal(), w = normals[i].cross(u);
+      const double r = std::min(disc[i], double(sector_far[i][tangent_sector(t, u, w)]) + options.boundary_reach * disc[i]);
+      out = std::max(0.0, t.norm() - r);
+      if (const double o = -t.dot(inward[i]); o > 0)  // beyond a boundary: the disc is short there
+        t += (o / options.boundary_reach - o) * -inward[i];
+    }
+    return std::max(out, t.norm() - disc[i]);
+  }
+  double disc_distance(std::uint32_t i, const Eigen::Vector3d& x) const {
+    double h = 0;
+    const double out = disc_excess(i, x, h);
+    return std::sqrt(h * h + out * out);
+  }
+  const Bvh& discs() const {
+    std::call_once(disc_bvh_once, [&] {
+      std::vector<Box3> boxes(points.size());
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        // A disc of radius r about p with unit normal n spans r·√(1 − nₐ²) along axis a.
+        const Eigen::Vector3d half = disc[i] * (Eigen::Vector3d::Ones() - normals[i].cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
+        boxes[i].extend(points[i] - half);
+        boxes[i].extend(points[i] + half);
+      }
+      disc_bvh = Bvh(boxes);
+    });
+    return disc_bvh;
+  }
 
   void index_boundary() {
     boundary_points.clear();
@@ -407,26 +450,7 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     hints.remember(best_id);
     return std::sqrt(best);
   }
-  // The distance to point i's disc (short beyond a boundary).
-  const auto disc_distance = [&](std::uint32_t i) {
-    const Eigen::Vector3d v = x - m.points[i];
-    const double h = m.normals[i].dot(v);
-    Eigen::Vector3d t = v - h * m.normals[i];
-    double out = 0;
-    if (m.inward[i].squaredNorm() > 0) {
-      // A boundary point's disc, past its farthest neighbour in t's sector, reaches on only
-      // boundary_reach of its radius: along an open sheet's edge towards a corner the edge
-      // points' discs ran a spacing past the corner (blobs at a square's corners, ~9E at 1e-3).
-      const Eigen::Vector3d u = m.normals[i].unitOrthogonal(), w = m.normals[i].cross(u);
-      const double r = std::min(m.disc[i], double(m.sector_far[i][tangent_sector(t, u, w)]) +
-                                               m.options.boundary_reach * m.disc[i]);
-      out = std::max(0.0, t.norm() - r);
-      if (const double o = -t.dot(m.inward[i]); o > 0)  // beyond a boundary: the disc is short there
-        t += (o / m.options.boundary_reach - o) * -m.inward[i];
-    }
-    out = std::max(out, t.norm() - m.disc[i]);
-    return std::sqrt(h * h + out * out);
-  };
+  const auto disc_distance = [&](std::uint32_t i) { return m.disc_distance(i, x); };
   // As for a mesh: queries come in runs along one patch, so the discs nearest this thread's last
   // few queries are asked first, and one within good settles "within good?" if its point is
   // surely among x's candidates (the same answer as the search, without it: the kitten's fit
@@ -445,9 +469,38 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
 }
 
 std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* front, double tmax) const {
+  const auto hit = first_hit(ray, tmin, tmax);
+  if (!hit) return std::nullopt;
+  if (front) *front = hit->front;
+  return hit->t;
+}
+
+std::optional<DataSurface::RayHit> DataSurface::first_hit(const Ray& ray, double tmin, double tmax) const {
   const auto& m = *impl_;
-  if (m.triangles.empty()) return std::nullopt;
   double best = tmax;
+  RayHit hit;
+  if (m.triangles.empty()) {
+    // Points: the nearest tangent disc the ray crosses (the union of discs distance() measures
+    // to); front when the disc's normal faces the ray.
+    std::uint32_t best_i = 0;
+    m.discs().traverse(ray, tmin, [&] { return best; }, [&](std::uint32_t i) {
+      const double along = m.normals[i].dot(ray.dir);
+      if (along == 0.0 || !(m.disc[i] > 0)) return;
+      const double d = m.normals[i].dot(m.points[i] - ray.origin) / along;
+      if (!(d > tmin && d < best)) return;
+      double h = 0;
+      if (m.disc_excess(i, ray.at(d), h) <= 0.0) best = d, best_i = i;
+    });
+    if (!(best < tmax)) return std::nullopt;
+    hit.t = best;
+    hit.normal = m.normals[best_i];
+    hit.front = hit.normal.dot(ray.dir) < 0.0;
+    hit.reach = m.disc[best_i];
+    hit.from_sample = (ray.at(best) - m.points[best_i]).norm();
+    hit.spacing = m.spacing[best_i];
+    return hit;
+  }
+  std::uint32_t best_i = 0;
   bool best_front = false;
   m.bvh.traverse(ray, tmin, [&] { return best; }, [&](std::uint32_t i) {
     // Möller–Trumbore in double, both sides.
@@ -464,11 +517,15 @@ std::optional<double> DataSurface::intersect(const Ray& ray, double tmin, bool* 
     const double v = ray.dir.dot(q) * inv;
     if (v < 0.0 || u + v > 1.0) return;
     const double d = e2.dot(q) * inv;
-    if (d > tmin && d < best) best = d, best_front = det > 0.0;
+    if (d > tmin && d < best) best = d, best_front = det > 0.0, best_i = i;
   });
   if (!(best < tmax)) return std::nullopt;
-  if (front) *front = best_front != m.wound_inward;
-  return best;
+  hit.t = best;
+  hit.front = best_front != m.wound_inward;
+  const auto& t = m.triangles[best_i];
+  hit.normal = (t[1] - t[0]).cross(t[2] - t[0]).normalized();
+  if ((hit.normal.dot(ray.dir) < 0.0) != hit.front) hit.normal = -hit.normal;  // outward
+  return hit;
 }
 
 double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth) {

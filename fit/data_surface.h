@@ -58,10 +58,25 @@ public:
   /// before any search. Either way the answer to "≤ good?" is the full query's.
   double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
                   double good = 0) const;
-  /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax); nothing
-  /// for points. front: whether that triangle faces the ray: counter-clockwise seen from the
-  /// ray's origin, or clockwise when the mesh is wound inwards (core/io/io.h mesh_wound_inward).
+  /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax), or for
+  /// points with their tangent discs (the discs distance() measures to: it asks the `candidates`
+  /// nearest points' only, a ray meets any). front: whether that
+  /// triangle faces the ray: counter-clockwise seen from the ray's origin, or clockwise when the
+  /// mesh is wound inwards (core/io/io.h mesh_wound_inward); whether the disc's normal does.
   std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr,
+                                  double tmax = std::numeric_limits<double>::infinity()) const;
+  /// The same hit with what the surface is there.
+  struct RayHit {
+    double t = 0;
+    bool front = false;                                 ///< as intersect's
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();   ///< unit, outward (facing the ray when front)
+    double reach = 0;                                   ///< points: the hit disc's radius; mesh: 0
+    /// Points: how far the hit lies from the disc's own point, and that point's sample spacing
+    /// (a disc stands off a curved surface, and past its contours, more the farther from its
+    /// point); mesh: 0.
+    double from_sample = 0, spacing = 0;
+  };
+  std::optional<RayHit> first_hit(const Ray& ray, double tmin = 0.0,
                                   double tmax = std::numeric_limits<double>::infinity()) const;
   bool has_faces() const;
   /// Tangent-disc radius of point i (points only).

@@ -462,6 +462,8 @@ double SlimFitter::failures() const {
   if (faces_ && st_.view_holes > 0) f += double(st_.view_holes) / double(std::max<std::size_t>(1, face_triangles_));
   // A point whose coverage disc is not held: counted as its whole disc.
   if (fill_point_holes_ && st_.point_holes > 0) f += double(st_.point_holes) / double(std::max<std::size_t>(1, P_.size()));
+  // Below the fill band, a point's hole a view sees: counted as its whole disc.
+  if (see_point_holes_) f += double(st_.seen_point_holes) / double(std::max<std::size_t>(1, P_.size()));
   // A slit sample at a crease (crease_slits): as a point's hole.
   f += double(st_.crease_gaps) / double(std::max<std::size_t>(1, P_.size()));
   return f;
@@ -471,6 +473,7 @@ SlimFitter::Verified SlimFitter::snapshot(int round, double score) const {
   Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, st_.view_holes, round, score};
   v.point_holes = st_.point_holes;
   v.crease_gaps = st_.crease_gaps;
+  v.seen_point_holes = st_.seen_point_holes;
   v.point_holes_fresh = point_holes_fresh_;
   v.patch_errors.reserve(chosen_.size());
   for (const auto b : chosen_) v.patch_errors.push_back(patch_errors_[b]);
@@ -492,6 +495,7 @@ void SlimFitter::restore(Verified&& v) {
   st_.view_holes = v.view_holes;
   st_.point_holes = v.point_holes;
   st_.crease_gaps = v.crease_gaps;
+  st_.seen_point_holes = v.seen_point_holes;
   point_holes_fresh_ = v.point_holes_fresh;
   build_model();
 }
@@ -611,12 +615,12 @@ void SlimFitter::verify_and_repair() {
     std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> gaps;
     // Outside the band where they are filled (decided in the first round), counted once: on 1M
     // points each check costs about a second.
-    if (opt_.cover_point_holes && (round == 0 || fill_point_holes_)) {
+    if (opt_.cover_point_holes && (round == 0 || fill_point_holes_ || see_point_holes_)) {
       const auto t0 = Clock::now();
       gaps = point_holes(centre_index, changed_balls ? &*changed_balls : nullptr);
       if (!surface_) log::debug("fit_slim: round {}: {} points' coverage discs not held by the balls ({:.2f} s)", round + 1, gaps.size(), seconds_since(t0));
     }
-    point_holes_fresh_ = opt_.cover_point_holes && (round == 0 || fill_point_holes_);
+    point_holes_fresh_ = opt_.cover_point_holes && (round == 0 || fill_point_holes_ || see_point_holes_);
     if (point_holes_fresh_) st_.point_holes = gaps.size();
     // Where more than point_hole_share of the points have a hole after the first cover, E is far
     // below what the sampling resolves (kitten at 1e-4: 3,974 of 5,210): what would fill the
@@ -630,6 +634,7 @@ void SlimFitter::verify_and_repair() {
       disc_shrunk_.assign(P_.size(), 0);
       const double share = double(gaps.size()) / double(std::max<std::size_t>(1, P_.size()));
       fill_point_holes_ = share >= opt_.point_hole_least && share <= opt_.point_hole_share;
+      see_point_holes_ = opt_.see_point_holes && !surface_ && share < opt_.point_hole_least;
       if (share > opt_.point_hole_share)
         log::info("fit_slim: {} of {} points have a hole in the surface around them (balls smaller than the points' spacing: "
                   "E below what the sampling resolves); left as they are", gaps.size(), P_.size());
@@ -641,7 +646,20 @@ void SlimFitter::verify_and_repair() {
       relaxed = crease_slits(centre_index, scene, at_fault, st_.crease_gaps);
       if (round + 2 >= budget) relaxed.clear();
     }
-    if (!fill_point_holes_) gaps.clear();
+    // Below the band, the holes a view sees are filled; the others are left (a disc off a crease).
+    if (see_point_holes_) {
+      const auto t0 = Clock::now();
+      gaps = seen_point_holes(gaps, scene);
+      // ... and those between the points that no coverage disc reaches.
+      for (const auto& h : holes_between_points(centre_index, scene))
+        if (!std::binary_search(gaps.begin(), gaps.end(), h, [](const auto& x, const auto& y) { return x.first < y.first; }))
+          gaps.push_back(h);
+      std::sort(gaps.begin(), gaps.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      st_.seen_point_holes = gaps.size();
+      log::debug("fit_slim: round {}: {} of them seen through along the point's normal ({:.2f} s)", round + 1, gaps.size(), seconds_since(t0));
+    } else if (!fill_point_holes_) {
+      gaps.clear();
+    }
     // A point whose disc patch was shrunk (its plane ran off the data) keeps that patch and its
     // hole: counted, not filled again.
     std::erase_if(gaps, [&](const auto& g) { return disc_shrunk_[g.first] != 0; });
@@ -914,6 +932,7 @@ void SlimFitter::finish() {
     md["point_holes"] = std::to_string(st_.point_holes);
     md["disc_patches"] = std::to_string(st_.disc_patches);
     md["clips_relaxed"] = std::to_string(st_.clips_relaxed);
+    md["seen_point_holes"] = std::to_string(st_.seen_point_holes);
   }
   md["patches"] = std::to_string(st_.patches);
   md["candidates"] = std::to_string(st_.candidates);

@@ -207,6 +207,12 @@ struct SlimFitOptions {
   /// corners). Outside that band they are only counted (point_holes); `fit --no-fill-point-holes`
   /// turns it off.
   bool cover_point_holes = true;
+  /// Below point_hole_least, the coverage holes that a view along the point's normal sees (the
+  /// data's tangent discs there, the blend showing nothing or the far side: judge_ray, as bench
+  /// fit counts holes) are filled the same way; the others are only counted. The uneven sphere
+  /// (15,000 points, 10× denser on one half) at 1e-3 left 5 points' holes, 50 of 33,775 pixels
+  /// seen through at 160².
+  bool see_point_holes = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;
@@ -276,6 +282,8 @@ struct SlimFitStats {
   std::size_t view_balls = 0;        ///< regular balls added where a view saw through (view_balls)
   std::size_t view_holes = 0;   ///< fan triangles still seen through from some view at the end
   std::size_t point_holes = 0;  ///< points whose coverage disc is not held by the model returned (cover_point_holes)
+  /// Of point_holes, those a view along the point's normal sees through (see_point_holes)
+  std::size_t seen_point_holes = 0;
   std::size_t point_hole_balls = 0;  ///< candidate balls added on points with a hole
   std::size_t disc_patches = 0;      ///< disc patches added on points with a hole
   std::size_t clips_relaxed = 0;     ///< patches of the model returned whose crease plane moved across a slit (relax_clips)

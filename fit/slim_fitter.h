@@ -115,6 +115,13 @@ private:
   // where another patch holds it (its zero set within E, inside its planes); the plane moves there
   // (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in chosen_),
   // its moved plane; `open` gets the slit samples found (crease gaps).
+  /// Of points' coverage holes, those a view along the point's normal sees (judge_ray).
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_point_holes(
+      const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const ReferenceScene& scene) const;
+  std::optional<Eigen::Vector3d> seen_hole(const Ray& ray, const ReferenceScene& scene, const TraceOptions& trace) const;
+  /// Holes a view sees between a point and its neighbours (one spot per point, at most).
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes_between_points(const PointIndex& centres,
+                                                                            const ReferenceScene& scene) const;
   std::vector<std::pair<std::size_t, ClipPlanes>> crease_slits(const PointIndex& centres, const ReferenceScene& scene,
                                                                const std::vector<std::uint8_t>& at_fault, std::size_t& open) const;
   // Each such patch's ball replaced in chosen_ by a copy with the moved planes (pinned).
@@ -187,6 +194,7 @@ private:
     double score = 0;  // failures() of that model
     std::size_t point_holes = 0;
     std::size_t crease_gaps = 0;
+    std::size_t seen_point_holes = 0;
     bool point_holes_fresh = false;  // point_holes was counted on this model
   };
   double failures() const;
@@ -244,6 +252,7 @@ private:
   std::vector<std::uint8_t> corner_known_;            // per point: corner_mask_ computed
   std::vector<std::uint32_t> point_order_;            // the points in Morton order (point_holes)
   bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
+  bool see_point_holes_ = false;                      // below the fill band: those a view sees are filled
   bool point_holes_fresh_ = false;                    // st_.point_holes was counted on the model just verified
   std::vector<std::uint8_t> disc_shrunk_;             // per point: the repair shrank its disc patch (its hole stays)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)

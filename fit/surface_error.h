@@ -1,9 +1,11 @@
 #pragma once
 /// What a viewer sees, measured against the data (DESIGN §2, the surface side of a fit's
 /// contract): a surface is ray-cast from several views, every covered pixel is back-projected
-/// and its distance to the data's surface measured; with a mesh as the data, pixels the data
-/// shows from the front away from its silhouette but the surface leaves empty are holes. Models (per-ray
-/// SLIM blend of core/reference.h) and triangle meshes are measured the same way.
+/// and its distance to the data's surface measured. Pixels where the data (a mesh, or a cloud's
+/// tangent discs) shows its front away from its silhouette are holes where the surface leaves
+/// them empty or shows something farther than the bound behind the data (the far side through a
+/// slit). Models (per-ray SLIM blend of core/reference.h) and triangle meshes are measured the
+/// same way.
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -30,7 +32,7 @@ struct SurfaceErrorOptions {
   std::size_t keep_hole_points = 0;
   /// Keep where the first this many pixels beyond bound are (the surface's points there).
   std::size_t keep_beyond_points = 0;
-  /// With mesh data: count the holes (the data ray-cast at every pixel); false: skip them.
+  /// Count the holes (the data ray-cast at every pixel); false: skip them.
   bool holes = true;
 };
 
@@ -39,10 +41,11 @@ struct SurfaceError {
   double max = 0, p999 = 0, p99 = 0, rms = 0;  ///< world units
   std::size_t beyond = 0;          ///< pixels farther than bound
   double share_beyond = 0;         ///< beyond / pixels
-  std::size_t data_pixels = 0;     ///< data pixels away from the silhouette (mesh data only)
-  std::size_t holes = 0;           ///< of those, pixels the surface left empty
+  std::size_t data_pixels = 0;     ///< data pixels away from the silhouette
+  std::size_t holes = 0;           ///< of those, pixels the surface left empty or showed behind the data
+  std::size_t see_through = 0;     ///< of the holes, those where the surface showed something behind
   double hole_share = 0;           ///< holes / data_pixels
-  bool has_holes_measure = false;  ///< data had faces
+  bool has_holes_measure = false;  ///< holes were counted (options.holes)
   std::vector<Eigen::Vector3d> hole_points;  ///< up to keep_hole_points, world units
   std::vector<Eigen::Vector3d> hole_dirs;    ///< the view ray's direction at each of hole_points
   struct Beyond {
@@ -51,6 +54,19 @@ struct SurfaceError {
   };
   std::vector<Beyond> beyond_points;  ///< up to keep_beyond_points
 };
+
+/// What one ray shows of the data and of a surface, the way measure_surface_error judges each
+/// pixel. data_t: the data's first front-facing sheet along the ray (a cloud's: the tangent disc
+/// there nearest its own point), −1: none; reach: a cloud's disc radius there (it may stand that
+/// far past a silhouette), else 0. counts: the data there is sure enough to ask for a surface (not
+/// a cloud's disc far from its point, not a ridge the ray only grazes within the bound); hole:
+/// the surface shows nothing (t_surface < 0), or through: something more than the bound behind
+/// the data, nearer its next sheet (for a cloud: where the ray leaves the solid) than its first.
+struct RayVerdict {
+  double data_t = -1, reach = 0;
+  bool counts = false, hole = false, through = false;
+};
+RayVerdict judge_ray(const DataSurface& data, const Ray& ray, double t_surface, double bound);
 
 /// A ray caster: the distance t along the ray (unit dir) to the first visible surface.
 using TraceFn = std::function<std::optional<double>(const Ray&)>;

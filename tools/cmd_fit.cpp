@@ -256,6 +256,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"disc_patches", s.disc_patches},
                                             {"clips_relaxed", s.clips_relaxed},
                                             {"crease_gaps", s.crease_gaps},
+                                            {"seen_point_holes", s.seen_point_holes},
                                             {"height_patches", s.height_patches},
                                             {"clipped_patches", s.clipped_patches},
                                             {"seconds", {{"normals", s.time_normals},
@@ -307,6 +308,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                         if (s.face_holes > 0) holes.push_back(fmt::format("{} face spots outside every ball", s.face_holes));
                         if (s.view_holes > 0) holes.push_back(fmt::format("{} faces seen through", s.view_holes));
                         if (s.crease_gaps > 0) holes.push_back(fmt::format("{} slit samples at creases", s.crease_gaps));
+                        if (s.seen_point_holes > 0) holes.push_back(fmt::format("{} holes between the points seen through", s.seen_point_holes));
                         report.summary = fmt::format(
                             "wrote {}: {} patches for {} points{}; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
                             "(E = {:.3g}{})", a->out, s.patches, s.points,

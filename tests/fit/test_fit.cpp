@@ -21,6 +21,7 @@
 #include "fit/slim_fit.h"
 #include "fit/slim_fitter.h"
 #include "fit/slim_hierarchy.h"
+#include "fit/surface_error.h"
 
 namespace quadrix {
 namespace {
@@ -813,6 +814,135 @@ TEST(DataSurface, AnOpenSheetStopsAtItsCorners) {
   // Inside, every point of the sheet lies on a disc.
   for (int k = 0; k < 1000; ++k)
     ASSERT_LT(square.distance(Eigen::Vector3d(0.05 + 1.9 * (k % 37) / 36.0, 0.05 + 1.9 * (k / 37) / 27.0, 0)), 1e-9) << k;
+}
+
+// A cloud's data surface is ray-cast as the union of the discs distance() measures to: every hit
+// lies on the data (within a twentieth of the spacing: see below), nothing nearer on the ray;
+// nothing is hit past an open boundary, where the discs stop short; a disc seen from behind is
+// not front.
+TEST(DataSurface, RaysMeetACloudsDiscsWhereDistanceSaysTheyAre) {
+  const double s = 0.025;
+  std::vector<Eigen::Vector3d> P, N;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) {
+      const double x = (i + 0.5) * s, y = (j + 0.5) * s;
+      P.emplace_back(x, y, 0.1 * std::sin(3 * x));
+      N.push_back(Eigen::Vector3d(-0.3 * std::cos(3 * x), 0, 1).normalized());
+    }
+  const DataSurface sheet = DataSurface::from_points(P, N);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  int hits = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Vector3d from(0.1 + 0.8 * U(rng), 0.1 + 0.8 * U(rng), 1.0);
+    const Eigen::Vector3d to(0.1 + 0.8 * U(rng), 0.1 + 0.8 * U(rng), -0.5);
+    const Ray ray{from, (to - from).normalized()};
+    const auto hit = sheet.first_hit(ray);
+    ASSERT_TRUE(hit) << k;  // inside the square, the sheet is whole
+    ++hits;
+    // On a disc: distance() asks the 12 nearest points' discs only, the ray meets any (a farther
+    // point's wider disc, standing a little off a curved sheet).
+    EXPECT_LT(sheet.distance(ray.at(hit->t)), 0.05 * s) << k;
+    EXPECT_TRUE(hit->front) << k;
+    EXPECT_GT(hit->reach, s) << k;
+    // Nothing nearer: the data's distance stays positive along the ray before the hit.
+    for (int m = 1; m < 20; ++m) ASSERT_GT(sheet.distance(ray.at(hit->t * m / 20.0)), 0.0) << k << " " << m;
+    // From below, the same disc is met from behind.
+    const auto back = sheet.first_hit(Ray{ray.at(hit->t + 1.0), -ray.dir});
+    ASSERT_TRUE(back) << k;
+    EXPECT_FALSE(back->front) << k;
+  }
+  EXPECT_EQ(hits, 2000);
+  // Past the edge x = 0 by 1.5 spacings, straight down: the discs stop short there.
+  for (int j = 0; j < 40; ++j)
+    EXPECT_FALSE(sheet.first_hit(Ray{Eigen::Vector3d(-1.5 * s, (j + 0.5) * s, 1.0), -Eigen::Vector3d::UnitZ()})) << j;
+}
+
+// The surface side's hole count (bench fit, the fit's own view checks): on two stacked sheets
+// (mesh data, the lower one 0.2 below), a surface that shows the lower sheet through a window
+// in the upper one has holes there, seen through, as many as one that shows nothing there; one a
+// little behind the upper sheet (within the bound) has none; a ray that only grazes a ridge
+// within the bound does not count.
+TEST(SurfaceError, HolesCountWhatIsSeenThroughAsWellAsWhatIsEmpty) {
+  PolygonMesh two;
+  const auto quad = [&](double z) {
+    const int v = int(two.vertices.size());
+    for (const auto& [x, y] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) two.vertices.emplace_back(x, y, z);
+    two.add_face(std::array<int, 4>{v, v + 1, v + 2, v + 3});
+  };
+  quad(0.0);
+  quad(-0.2);
+  const DataSurface data = DataSurface::from_mesh(two);
+  Box3 box;
+  box.extend(Eigen::Vector3d(-1, -1, -0.2));
+  box.extend(Eigen::Vector3d(1, 1, 0));
+  const double bound = 0.01;
+  const auto plane_at = [](const Ray& ray, double z) -> std::optional<double> {
+    if (!(ray.dir.z() < 0)) return std::nullopt;
+    const double t = (z - ray.origin.z()) / ray.dir.z();
+    const Eigen::Vector3d x = ray.at(t);
+    if (t > 0 && std::abs(x.x()) <= 1 && std::abs(x.y()) <= 1) return t;
+    return std::nullopt;
+  };
+  const auto window = [&](const Ray& ray) { const auto t = plane_at(ray, 0.0); return t && ray.at(*t).head<2>().norm() < 0.3; };
+  const SurfaceErrorOptions o{.views = 8, .resolution = 96, .bound = bound};
+  // The upper sheet (at z), else the lower one (seen past the upper one's edge).
+  const auto sheets = [&](const Ray& r, double z) { const auto t = plane_at(r, z); return t ? t : plane_at(r, -0.2); };
+  const SurfaceError whole = measure_surface_error([&](const Ray& r) { return sheets(r, 0.0); }, data, box, o);
+  const SurfaceError through = measure_surface_error(
+      [&](const Ray& r) { return window(r) ? plane_at(r, -0.2) : sheets(r, 0.0); }, data, box, o);
+  const SurfaceError empty = measure_surface_error(
+      [&](const Ray& r) { return window(r) ? std::nullopt : sheets(r, 0.0); }, data, box, o);
+  const SurfaceError behind = measure_surface_error([&](const Ray& r) { return sheets(r, -0.4 * bound); }, data, box, o);
+  std::printf("holes: whole %zu, through %zu (%zu seen through), empty %zu, behind %zu of %zu\n", whole.holes, through.holes,
+              through.see_through, empty.holes, behind.holes, whole.data_pixels);
+  EXPECT_GT(whole.data_pixels, 5000u);
+  EXPECT_EQ(whole.holes, 0u);
+  EXPECT_EQ(behind.holes, 0u);
+  EXPECT_GT(empty.holes, 500u);
+  EXPECT_EQ(through.see_through, through.holes);
+  EXPECT_GT(through.holes, empty.holes * 9 / 10);
+  EXPECT_LE(through.holes, empty.holes);
+}
+
+// One ray judged as the hole count judges it, on a closed cube (mesh data): a ray straight
+// through whose surface hit lies past the cube's far side sees through it; one whose hit lies
+// just under the near face does not; one that only grazes an edge, never deeper than the bound,
+// does not count either way.
+TEST(SurfaceError, JudgeRaySeesThroughSolidsNotPastGrazedEdges) {
+  PolygonMesh cube;
+  for (int v = 0; v < 8; ++v) cube.vertices.emplace_back(v & 1, (v >> 1) & 1, (v >> 2) & 1);
+  // Outward winding: counter-clockwise seen from outside.
+  cube.add_face(std::array<int, 4>{4, 5, 7, 6});  // z = 1
+  cube.add_face(std::array<int, 4>{0, 2, 3, 1});  // z = 0
+  cube.add_face(std::array<int, 4>{1, 3, 7, 5});  // x = 1
+  cube.add_face(std::array<int, 4>{0, 4, 6, 2});  // x = 0
+  cube.add_face(std::array<int, 4>{0, 1, 5, 4});  // y = 0
+  cube.add_face(std::array<int, 4>{2, 6, 7, 3});  // y = 1
+  const DataSurface data = DataSurface::from_mesh(cube);
+  const double bound = 0.01;
+  const Ray down{Eigen::Vector3d(0.5, 0.5, 2), -Eigen::Vector3d::UnitZ()};
+  const RayVerdict through = judge_ray(data, down, 2.5, bound);  // the surface shows z = −0.5
+  EXPECT_TRUE(through.counts);
+  EXPECT_TRUE(through.through);
+  EXPECT_TRUE(through.hole);
+  EXPECT_NEAR(through.data_t, 1.0, 1e-12);
+  const RayVerdict under = judge_ray(data, down, 1.0 + 0.5 * bound, bound);
+  EXPECT_TRUE(under.counts);
+  EXPECT_FALSE(under.hole);
+  const RayVerdict empty = judge_ray(data, down, -1.0, bound);
+  EXPECT_TRUE(empty.counts);
+  EXPECT_TRUE(empty.hole);
+  EXPECT_FALSE(empty.through);
+  // Along +x, entering the top face near x = 1 and leaving through x = 1 half the bound down.
+  const double delta = 0.05 * bound, slope = (delta + 0.5 * bound) / 0.1;
+  const Ray graze{Eigen::Vector3d(0.9, 0.5, 1 + delta), Eigen::Vector3d(1, 0, -slope).normalized()};
+  const RayVerdict grazed = judge_ray(data, graze, 3.0, bound);
+  EXPECT_GE(grazed.data_t, 0.0);
+  EXPECT_FALSE(grazed.counts);
+  // The same entry, ten times as steep: through the cube, not grazing it.
+  const Ray steep{Eigen::Vector3d(0.9, 0.5, 1 + delta), Eigen::Vector3d(1, 0, -10 * slope).normalized()};
+  EXPECT_TRUE(judge_ray(data, steep, 3.0, bound).through);
 }
 
 // Stray points are found wherever they float (far from the surface, among each other, inside a
