@@ -213,6 +213,8 @@ struct SlimFitOptions {
   /// (15,000 points, 10× denser on one half) at 1e-3 left 5 points' holes, 50 of 33,775 pixels
   /// seen through at 160².
   bool see_point_holes = true;
+  /// ... unless more than this share of the points see one at the first check (then counted).
+  double seen_hole_share = 0.01;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;

@@ -246,12 +246,23 @@ std::size_t SlimFitter::add_point_balls(const std::vector<std::pair<std::uint32_
 // the true surface a little better — 5,000 points drawn from the bunny at 1e-3: 7.7 % of the
 // pixels beyond 2E of the mesh instead of 10.5 % — but ran off the points' tangent discs: 1 % of
 // the pixels beyond 2E of them instead of 0.001 %.)
-std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots) {
+std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, bool on_data) {
   const std::size_t first = balls_.size();
+  const double bound = opt_.surface_factor * E_;
   for (const auto& [i, x] : spots) {
     // Reaching its spot well inside (a hole between the points lies up to a spacing away).
     const double R = std::max(disc_patch_radius(i), 1.25 * (x - P_[i]).norm());
     if (!(R > 0)) continue;
+    if (on_data) {
+      // The plane at the spot and on two rings (half and all of the ball) within the bound.
+      const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
+      bool off = !(data_->distance(x - N_[i].dot(x - P_[i]) * N_[i], 2.0 * bound) <= bound);
+      for (int k = 0; k < 12 && !off; ++k) {
+        const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 6.0) * u + std::sin(std::numbers::pi * k / 6.0) * v;
+        off = !(data_->distance(P_[i] + (k % 2 ? 0.5 : 0.98) * R * t, 2.0 * bound) <= bound);
+      }
+      if (off) continue;
+    }
     Ball b{i, R, Quadric::plane(N_[i], 0.0), true, true, 0, 0, 0, ClipPlanes{}};
     b.count = 1;
     b.settled = true;
@@ -286,6 +297,21 @@ std::optional<Eigen::Vector3d> SlimFitter::seen_hole(const Ray& ray, const Refer
     if (!h || !h->front) return std::nullopt;
   }
   return ray.at(v.data_t);
+}
+
+// The points' holes a view sees: of their coverage holes (spots), those seen_point_holes sees,
+// and those between the points, one spot per point, by point.
+std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::seen_holes(
+    const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const PointIndex& centres,
+    const ReferenceScene& scene) const {
+  auto out = seen_point_holes(spots, scene);
+  const auto by_point = [](const auto& x, const auto& y) { return x.first < y.first; };
+  std::sort(out.begin(), out.end(), by_point);
+  const std::size_t seen = out.size();
+  for (const auto& h : holes_between_points(centres, scene))
+    if (!std::binary_search(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(seen), h, by_point)) out.push_back(h);
+  std::sort(out.begin(), out.end(), by_point);
+  return out;
 }
 
 // Holes between the points that no coverage disc reaches (a disc reaches 0.6 of the spacing: on

@@ -108,7 +108,10 @@ private:
   double disc_patch_radius(std::size_t i) const { return opt_.disc_patch_reach * opt_.point_hole_factor * data_->spacing(i); }
   std::size_t add_point_balls(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots,
                               std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& far);
-  std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
+  /// on_data: only where the plane stays within 2E of the data's surface across its ball (the
+  /// holes below the fill band: planes off a curved cloud's surface, repaired round after round,
+  /// kept radar.xyz at 1e-3 from ever ending within its bound).
+  std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, bool on_data = false);
   // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp, sheets within 120°,
   // not at fault) that no other patch holds, where the blend shows nothing within 2E just past
   // it along the sheet's normal, is followed across the plane along the patch's own zero set to
@@ -119,6 +122,9 @@ private:
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_point_holes(
       const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const ReferenceScene& scene) const;
   std::optional<Eigen::Vector3d> seen_hole(const Ray& ray, const ReferenceScene& scene, const TraceOptions& trace) const;
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_holes(
+      const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const PointIndex& centres,
+      const ReferenceScene& scene) const;
   /// Holes a view sees between a point and its neighbours (one spot per point, at most).
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes_between_points(const PointIndex& centres,
                                                                             const ReferenceScene& scene) const;
@@ -253,6 +259,7 @@ private:
   std::vector<std::uint32_t> point_order_;            // the points in Morton order (point_holes)
   bool fill_point_holes_ = false;                     // point_holes are filled (not E far below the sampling)
   bool see_point_holes_ = false;                      // below the fill band: those a view sees are filled
+  bool seen_counted_late_ = false;                    // too many to fill: counted on the model returned
   bool point_holes_fresh_ = false;                    // st_.point_holes was counted on the model just verified
   std::vector<std::uint8_t> disc_shrunk_;             // per point: the repair shrank its disc patch (its hole stays)
   std::vector<std::uint8_t> hole_tried_;              // per face: a spot on it joined the points (add_points)
