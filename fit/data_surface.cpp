@@ -481,15 +481,20 @@ std::optional<DataSurface::RayHit> DataSurface::first_hit(const Ray& ray, double
   RayHit hit;
   if (m.triangles.empty()) {
     // Points: the nearest tangent disc the ray crosses (the union of discs distance() measures
-    // to); front when the disc's normal faces the ray.
+    // to); front when the disc's normal faces the ray. Of discs crossed at the same depth (a
+    // plane's, all in one plane), the one whose point is nearest relative to its spacing.
     std::uint32_t best_i = 0;
-    m.discs().traverse(ray, tmin, [&] { return best; }, [&](std::uint32_t i) {
+    double best_rel = std::numeric_limits<double>::infinity();
+    const auto tie = [&] { return 1e-9 * std::max(1.0, std::abs(best) < kInf ? std::abs(best) : 1.0); };
+    m.discs().traverse(ray, tmin, [&] { return best < tmax ? best + tie() : best; }, [&](std::uint32_t i) {
       const double along = m.normals[i].dot(ray.dir);
       if (along == 0.0 || !(m.disc[i] > 0)) return;
       const double d = m.normals[i].dot(m.points[i] - ray.origin) / along;
-      if (!(d > tmin && d < best)) return;
+      if (!(d > tmin && d < tmax) || d > best + tie()) return;
       double h = 0;
-      if (m.disc_excess(i, ray.at(d), h) <= 0.0) best = d, best_i = i;
+      if (m.disc_excess(i, ray.at(d), h) > 0.0) return;
+      const double rel = (ray.at(d) - m.points[i]).norm() / std::max(m.spacing[i], 1e-300);
+      if (d < best - tie() || rel < best_rel) best = std::min(best, d), best_i = i, best_rel = rel;
     });
     if (!(best < tmax)) return std::nullopt;
     hit.t = best;

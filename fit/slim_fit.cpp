@@ -636,7 +636,7 @@ void SlimFitter::verify_and_repair() {
       disc_shrunk_.assign(P_.size(), 0);
       const double share = double(gaps.size()) / double(std::max<std::size_t>(1, P_.size()));
       fill_point_holes_ = share >= opt_.point_hole_least && share <= opt_.point_hole_share;
-      see_point_holes_ = opt_.see_point_holes && !surface_ && share < opt_.point_hole_least;
+      see_point_holes_ = opt_.see_point_holes && opt_.cover_point_holes && !surface_ && share < opt_.point_hole_least;
       if (share > opt_.point_hole_share)
         log::info("fit_slim: {} of {} points have a hole in the surface around them (balls smaller than the points' spacing: "
                   "E below what the sampling resolves); left as they are", gaps.size(), P_.size());

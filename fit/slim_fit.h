@@ -284,7 +284,8 @@ struct SlimFitStats {
   std::size_t view_balls = 0;        ///< regular balls added where a view saw through (view_balls)
   std::size_t view_holes = 0;   ///< fan triangles still seen through from some view at the end
   std::size_t point_holes = 0;  ///< points whose coverage disc is not held by the model returned (cover_point_holes)
-  /// Of point_holes, those a view along the point's normal sees through (see_point_holes)
+  /// Points with a hole a view sees at the end, of their coverage holes or between them and
+  /// their neighbours (see_point_holes; where too many to fill, counted on the model returned)
   std::size_t seen_point_holes = 0;
   std::size_t point_hole_balls = 0;  ///< candidate balls added on points with a hole
   std::size_t disc_patches = 0;      ///< disc patches added on points with a hole

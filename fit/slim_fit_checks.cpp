@@ -63,6 +63,34 @@ void SlimFitter::uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, c
   split_in_four(p, q, s, [&](const auto&... piece) { uncovered(piece..., near, band, depth + 1, max_depth, emit); });
 }
 
+std::array<Eigen::Vector3d, 6> SlimFitter::tangent_ring(std::size_t i, double rho) const {
+  const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
+  std::array<Eigen::Vector3d, 6> ring;
+  for (int k = 0; k < 6; ++k)
+    ring[k] = P_[i] + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
+  return ring;
+}
+
+bool SlimFitter::held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 6>& ring, double rho, double band,
+                            const PointIndex& centres, double max_radius, std::optional<std::uint32_t>& last,
+                            std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const {
+  const auto whole = [&](std::uint32_t k) {
+    return holds(k, p, band) && std::all_of(ring.begin(), ring.end(), [&](const auto& x) { return holds(k, x, band); });
+  };
+  if (last && whole(*last)) return true;
+  // The patches near the ring, nearest centres first: usually the first holds it whole.
+  const auto& slims = result_.model.slims;
+  centres.radius(p, max_radius + rho, nb);
+  std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
+  near.clear();
+  for (const auto& [k, d2] : nb)
+    if (std::sqrt(d2) < slims[k].radius + rho) near.push_back(std::uint32_t(k));
+  const auto it = std::find_if(near.begin(), near.end(), whole);
+  if (it == near.end()) return false;
+  last = *it;
+  return true;
+}
+
 // Spots of the data's faces outside every chosen ball: holes of the drawn surface between
 // points that are all covered. A fan triangle some one ball holds whole (its three corners:
 // balls are convex) is covered; else it is split in four, down to face_hole_depth levels, and
@@ -172,28 +200,8 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
       if (!(rho > 0)) continue;
       if (point_covered_[i] && changed && !changed->near_ball(P_[i], rho, nb)) continue;
       const Eigen::Vector3d& p = P_[i];
-      const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
-      for (int k = 0; k < 6; ++k)
-        corner[k] = p + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
-      const auto whole = [&](std::uint32_t k) {
-        if (!holds(k, p, band)) return false;
-        for (const auto& x : corner)
-          if (!holds(k, x, band)) return false;
-        return true;
-      };
-      if (last && whole(*last)) {
-        point_covered_[i] = 1;
-        continue;
-      }
-      // The patches near the disc, nearest centres first: usually the first holds it whole.
-      index.radius(p, max_radius + rho, nb);
-      std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
-      near.clear();
-      for (const auto& [k, d2] : nb)
-        if (std::sqrt(d2) < slims[k].radius + rho) near.push_back(std::uint32_t(k));
-      const auto it = std::find_if(near.begin(), near.end(), whole);
-      if (it != near.end()) {
-        last = *it;
+      corner = tangent_ring(i, rho);
+      if (held_whole(p, corner, rho, band, index, max_radius, last, nb, near)) {
         point_covered_[i] = 1;
         continue;
       }
@@ -261,7 +269,10 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
         const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 6.0) * u + std::sin(std::numbers::pi * k / 6.0) * v;
         off = !(data_->distance(P_[i] + (k % 2 ? 0.5 : 0.98) * R * t, 2.0 * bound) <= bound);
       }
-      if (off) continue;
+      if (off) {
+        disc_shrunk_[i] = 1;  // as a disc patch that ran off: counted, not tried again
+        continue;
+      }
     }
     Ball b{i, R, Quadric::plane(N_[i], 0.0), true, true, 0, 0, 0, ClipPlanes{}};
     b.count = 1;
@@ -278,6 +289,17 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
     take(std::uint32_t(b));
   }
   return balls_.size() - first;
+}
+
+// The view of a spot near point i: along its normal, from outside its disc (its radius and 4E
+// out), or from halfway to the data's next crossing where one faces it nearer (a paw against a
+// body, a slit's far lip): the view starts outside.
+Ray SlimFitter::spot_ray(std::size_t i, const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d& n = N_[i];
+  const double own = 2.0 * opt_.surface_factor * E_;  // past the spot's own sheet
+  double L = data_->disc_radius(i) + 4.0 * E_;
+  if (const auto h = data_->first_hit(Ray{x, n}, own, L)) L = 0.5 * (own + h->t);
+  return Ray{x + L * n, -n};
 }
 
 // Where a ray shows a hole the way bench fit counts one (judge_ray): the data there (its point),
@@ -310,7 +332,9 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::seen_holes(
   const std::size_t seen = out.size();
   for (const auto& h : holes_between_points(centres, scene))
     if (!std::binary_search(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(seen), h, by_point)) out.push_back(h);
-  std::sort(out.begin(), out.end(), by_point);
+  // Holes between the points are filed under the point nearest each: one spot per point.
+  std::stable_sort(out.begin(), out.end(), by_point);
+  out.erase(std::unique(out.begin(), out.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), out.end());
   return out;
 }
 
@@ -341,28 +365,12 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::holes_between
       const std::size_t i = point_order_[o];
       const double rho = data_->spacing(i);
       if (!(rho > 0)) continue;
-      const Eigen::Vector3d &p = P_[i], &n = N_[i];
-      const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-      for (int k = 0; k < 6; ++k)
-        spot[k] = p + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
-      const auto whole = [&](std::uint32_t k) {
-        return holds(k, p, band) && std::all_of(spot.begin(), spot.end(), [&](const auto& x) { return holds(k, x, band); });
-      };
-      if (last && whole(*last)) continue;
-      centres.radius(p, max_radius + rho, nb);
-      std::sort(nb.begin(), nb.end(), [](const Neighbour& x, const Neighbour& y) { return x.second < y.second; });
-      near.clear();
-      for (const auto& [k, d2] : nb)
-        if (std::sqrt(d2) < slims[k].radius + rho) near.push_back(std::uint32_t(k));
-      if (const auto it = std::find_if(near.begin(), near.end(), whole); it != near.end()) {
-        last = *it;
-        continue;
-      }
-      const double L = data_->disc_radius(i) + 4.0 * E_;
+      const Eigen::Vector3d& p = P_[i];
+      spot = tangent_ring(i, rho);
+      if (held_whole(p, spot, rho, band, centres, max_radius, last, nb, near)) continue;
       for (const auto& x : spot) {
         if (std::any_of(near.begin(), near.end(), [&](std::uint32_t k) { return holds(k, x, band); })) continue;
-        const Ray ray{x + L * n, -n};
-        if (const auto y = seen_hole(ray, scene, trace)) {
+        if (const auto y = seen_hole(spot_ray(i, x), scene, trace)) {
           // Filled from the point nearest the hole (its ball reaches it soonest).
           index_->nearest(*y, 1, nb);
           out.push_back({nb.empty() ? std::uint32_t(i) : std::uint32_t(nb[0].first), *y});
@@ -391,10 +399,7 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::seen_point_ho
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, spots.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k != r.end(); ++k) {
       const auto& [i, x] = spots[k];
-      const Eigen::Vector3d& n = N_[i];
-      const double L = data_->disc_radius(i) + 4.0 * E_;
-      const Ray ray{x + L * n, -n};
-      seen[k] = seen_hole(ray, scene, trace).has_value();
+      seen[k] = seen_hole(spot_ray(i, x), scene, trace).has_value();
     }
   });
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> out;

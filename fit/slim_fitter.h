@@ -3,10 +3,12 @@
 /// fit_slim — candidates, covering, pruning, then rounds of verification on both sides of the
 /// contract and repair of the patches at fault. The steps are defined in fit/slim_fit.cpp; the
 /// checks (points, drawn surface, face and view holes) and what they add in fit/slim_fit_checks.cpp.
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <queue>
 #include <utility>
 #include <vector>
@@ -112,15 +114,18 @@ private:
   /// holes below the fill band: planes off a curved cloud's surface, repaired round after round,
   /// kept radar.xyz at 1e-3 from ever ending within its bound).
   std::size_t add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, bool on_data = false);
-  // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp, sheets within 120°,
-  // not at fault) that no other patch holds, where the blend shows nothing within 2E just past
-  // it along the sheet's normal, is followed across the plane along the patch's own zero set to
-  // where another patch holds it (its zero set within E, inside its planes); the plane moves there
-  // (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in chosen_),
-  // its moved plane; `open` gets the slit samples found (crease gaps).
   /// Of points' coverage holes, those a view along the point's normal sees (judge_ray).
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_point_holes(
       const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const ReferenceScene& scene) const;
+  /// Six spots rho out from point i in its tangent plane.
+  std::array<Eigen::Vector3d, 6> tangent_ring(std::size_t i, double rho) const;
+  /// Whether one patch holds p and the whole ring within band: the one that last did (`last`,
+  /// updated), else the patches whose balls may reach the ring, nearest centres first (left in
+  /// `near` when none does; `nb` is scratch).
+  bool held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 6>& ring, double rho, double band,
+                  const PointIndex& centres, double max_radius, std::optional<std::uint32_t>& last,
+                  std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
+  Ray spot_ray(std::size_t i, const Eigen::Vector3d& x) const;
   std::optional<Eigen::Vector3d> seen_hole(const Ray& ray, const ReferenceScene& scene, const TraceOptions& trace) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_holes(
       const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, const PointIndex& centres,
@@ -128,6 +133,12 @@ private:
   /// Holes a view sees between a point and its neighbours (one spot per point, at most).
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes_between_points(const PointIndex& centres,
                                                                             const ReferenceScene& scene) const;
+  // Slits at creases: a cut edge of a patch clipped at a crease (try_sharp, sheets within 120°,
+  // not at fault) that no other patch holds, where the blend shows nothing within 2E just past
+  // it along the sheet's normal, is followed across the plane along the patch's own zero set to
+  // where another patch holds it (its zero set within E, inside its planes); the plane moves there
+  // (E/2 past) if its new cut edge stays on the data or held. Per such patch (index in chosen_),
+  // its moved plane; `open` gets the slit samples found (crease gaps).
   std::vector<std::pair<std::size_t, ClipPlanes>> crease_slits(const PointIndex& centres, const ReferenceScene& scene,
                                                                const std::vector<std::uint8_t>& at_fault, std::size_t& open) const;
   // Each such patch's ball replaced in chosen_ by a copy with the moved planes (pinned).

@@ -43,10 +43,14 @@ std::vector<Camera> views_of(const Box3& box, const SurfaceErrorOptions& o) {
 // curvature (the kitten at 1e-3: discs 22E wide), so a crossing within the bound or the two
 // discs' radii of the first along its normal is the same sheet unless it faces the other way (a
 // thin part's far side, a body's back wall seen from inside).
+// The walk through a cloud's sheet gives up after kMaxCrossings discs (a ray along widened discs,
+// a scanner's lines): such a ray is not sure enough to count.
+constexpr int kMaxCrossings = 64;
 struct DataView {
   DataSurface::RayHit first, best;
   std::optional<DataSurface::RayHit> next_sheet;
   bool grazed = false;
+  bool walked = true;  // the sheet's crossings were all seen (within kMaxCrossings)
 };
 std::optional<DataView> view_data(const DataSurface& data, const Ray& ray, double bound, double t_surface) {
   const auto first = data.first_hit(ray);
@@ -57,7 +61,11 @@ std::optional<DataView> view_data(const DataSurface& data, const Ray& ray, doubl
   const double tmax = next ? t_surface + bound : std::numeric_limits<double>::infinity();
   if (!discs && !next) return v;
   double from = first->t;
-  for (int k = 0; k < 16; ++k) {
+  for (int k = 0;; ++k) {
+    if (k == kMaxCrossings) {
+      v.walked = false;
+      break;
+    }
     const auto hit = data.first_hit(ray, from * (1 + 1e-12) + 1e-12, tmax);
     if (!hit) break;
     const double offset = (hit->t - first->t) * std::abs(first->normal.dot(ray.dir));
@@ -68,7 +76,12 @@ std::optional<DataView> view_data(const DataSurface& data, const Ray& ray, doubl
     if (hit->front && hit->from_sample * v.best.spacing < v.best.from_sample * hit->spacing) v.best = *hit;
     from = hit->t;
   }
-  if (v.next_sheet && !v.next_sheet->front)
+  // Grazed: the ray leaves the solid again, never deeper inside than the bound (a ridge or a bump
+  // seen edge-on). A thin part crossed within 60° of its normal, from one side to the opposite one
+  // (normals over 145° apart), is not grazed: holes through it count.
+  const bool across_thin = v.next_sheet && std::abs(first->normal.dot(ray.dir)) >= 0.5 &&
+                           first->normal.dot(v.next_sheet->normal) < -0.8;
+  if (v.next_sheet && !v.next_sheet->front && !across_thin)
     v.grazed = data.distance(ray.at(0.5 * (v.best.t + v.next_sheet->t)), 2.0 * bound) <= bound;
   return v;
 }
@@ -85,7 +98,7 @@ RayVerdict judge_ray(const DataSurface& data, const Ray& ray, double t_surface, 
   // point's spacing: farther out a disc stands off the surface (past an ear's rim over the head
   // behind it, the kitten's discs at 1e-3 reach 22E), and neither a hole nor a view through is
   // sure.
-  if (view->best.from_sample > view->best.spacing || view->grazed) return out;
+  if (view->best.from_sample > view->best.spacing || view->grazed || !view->walked) return out;
   out.counts = true;
   // Behind the data by more than the bound, nearer the data's next sheet than the first: seen
   // through a slit (the far side of a head through its mouth, a groove's lower lip through its

@@ -59,7 +59,8 @@ struct SurfaceError {
 /// pixel. data_t: the data's first front-facing sheet along the ray (a cloud's: the tangent disc
 /// there nearest its own point), −1: none; reach: a cloud's disc radius there (it may stand that
 /// far past a silhouette), else 0. counts: the data there is sure enough to ask for a surface (not
-/// a cloud's disc far from its point, not a ridge the ray only grazes within the bound); hole:
+/// a cloud's disc far from its point, not a ridge the ray only grazes within the bound, not a ray
+/// along more than 64 of a cloud's overlapping discs); hole:
 /// the surface shows nothing (t_surface < 0), or through: something more than the bound behind
 /// the data, nearer its next sheet (for a cloud: where the ray leaves the solid) than its first.
 struct RayVerdict {

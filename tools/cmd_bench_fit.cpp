@@ -159,8 +159,9 @@ nlohmann::json surface_json(const Row& r) {
           {"share_beyond_2e", r.surface_share_beyond_2e},
           {"hole_share", std::isfinite(r.hole_share) ? nlohmann::json(r.hole_share) : nlohmann::json(nullptr)},
           {"measure", "8 views, every covered pixel back-projected, distance to the input mesh (to the points' "
-                      "tangent discs without one); holes: front-facing mesh pixels away from its silhouette "
-                      "left empty"}};
+                      "tangent discs without one); holes (judge_ray): pixels where the data shows its front away from "
+                      "its silhouette and the surface nothing, or something more than 2E behind it nearer the "
+                      "data's next sheet (seen through)"}};
 }
 
 constexpr Rgb kColours[] = {{31, 119, 180}, {214, 39, 40}, {44, 160, 44}, {148, 103, 189}, {255, 127, 14}, {23, 190, 207}};

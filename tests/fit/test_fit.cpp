@@ -845,8 +845,15 @@ TEST(DataSurface, RaysMeetACloudsDiscsWhereDistanceSaysTheyAre) {
     EXPECT_LT(sheet.distance(ray.at(hit->t)), 0.05 * s) << k;
     EXPECT_TRUE(hit->front) << k;
     EXPECT_GT(hit->reach, s) << k;
-    // Nothing nearer: the data's distance stays positive along the ray before the hit.
-    for (int m = 1; m < 20; ++m) ASSERT_GT(sheet.distance(ray.at(hit->t * m / 20.0)), 0.0) << k << " " << m;
+    // Nothing nearer: no full disc of a point away from the edges (their discs are whole) is
+    // crossed before the hit (brute force over every such point).
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      if (std::min({P[i].x(), P[i].y(), 1.0 - P[i].x(), 1.0 - P[i].y()}) < 4 * s) continue;
+      const double along = N[i].dot(ray.dir);
+      const double t = N[i].dot(P[i] - ray.origin) / along;
+      const Eigen::Vector3d x = ray.at(t) - P[i];
+      if (t > 0 && (x - x.dot(N[i]) * N[i]).norm() < sheet.disc_radius(i) * (1 - 1e-9)) ASSERT_GE(t, hit->t - 1e-12) << k << " " << i;
+    }
     // From below, the same disc is met from behind.
     const auto back = sheet.first_hit(Ray{ray.at(hit->t + 1.0), -ray.dir});
     ASSERT_TRUE(back) << k;
@@ -940,9 +947,64 @@ TEST(SurfaceError, JudgeRaySeesThroughSolidsNotPastGrazedEdges) {
   const RayVerdict grazed = judge_ray(data, graze, 3.0, bound);
   EXPECT_GE(grazed.data_t, 0.0);
   EXPECT_FALSE(grazed.counts);
+  // A thin part crossed straight on is not grazed: a slab 1.5 × the bound thick, seen through.
+  {
+    PolygonMesh slab;
+    const double h = 1.5 * bound;
+    for (int v = 0; v < 8; ++v) slab.vertices.emplace_back(v & 1, (v >> 1) & 1, ((v >> 2) & 1) * h);
+    slab.add_face(std::array<int, 4>{4, 5, 7, 6});
+    slab.add_face(std::array<int, 4>{0, 2, 3, 1});
+    slab.add_face(std::array<int, 4>{1, 3, 7, 5});
+    slab.add_face(std::array<int, 4>{0, 4, 6, 2});
+    slab.add_face(std::array<int, 4>{0, 1, 5, 4});
+    slab.add_face(std::array<int, 4>{2, 6, 7, 3});
+    const DataSurface thin = DataSurface::from_mesh(slab);
+    const RayVerdict v = judge_ray(thin, down, 2.5, bound);
+    EXPECT_TRUE(v.counts);
+    EXPECT_TRUE(v.through);
+  }
   // The same entry, ten times as steep: through the cube, not grazing it.
   const Ray steep{Eigen::Vector3d(0.9, 0.5, 1 + delta), Eigen::Vector3d(1, 0, -10 * slope).normalized()};
   EXPECT_TRUE(judge_ray(data, steep, 3.0, bound).through);
+}
+
+// The same judgement on a cloud: the six faces of a cube sampled as points with outward normals.
+// A ray through the top that the surface shows past the bottom sees through the solid (the
+// cloud's next sheet is the bottom's discs, met from inside); one shown just under the top's discs
+// (within the bound) is no hole; an empty one is; along the top face, inside its discs' stack,
+// the walk ends within the crossings it may take.
+TEST(SurfaceError, JudgeRayOnACloudsDiscs) {
+  std::vector<Eigen::Vector3d> P, N;
+  const int m = 40;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double side : {0.0, 1.0})
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < m; ++j) {
+          Eigen::Vector3d p;
+          p[axis] = side;
+          p[(axis + 1) % 3] = (i + 0.5) / m;
+          p[(axis + 2) % 3] = (j + 0.5) / m;
+          Eigen::Vector3d n = Eigen::Vector3d::Zero();
+          n[axis] = side > 0 ? 1.0 : -1.0;
+          P.push_back(p), N.push_back(n);
+        }
+  const DataSurface cube = DataSurface::from_points(P, N);
+  const double bound = 0.01;
+  const Ray down{Eigen::Vector3d(0.51, 0.52, 2), -Eigen::Vector3d::UnitZ()};
+  const RayVerdict through = judge_ray(cube, down, 2.5, bound);
+  EXPECT_TRUE(through.counts);
+  EXPECT_TRUE(through.through);
+  EXPECT_NEAR(through.data_t, 1.0, 1e-9);
+  EXPECT_GT(through.reach, 0.0);
+  const RayVerdict under = judge_ray(cube, down, 1.0 + 0.5 * bound, bound);
+  EXPECT_TRUE(under.counts);
+  EXPECT_FALSE(under.hole);
+  const RayVerdict empty = judge_ray(cube, down, -1.0, bound);
+  EXPECT_TRUE(empty.counts);
+  EXPECT_TRUE(empty.hole);
+  EXPECT_FALSE(empty.through);
+  // Seen from below the top face's discs (from inside the cube) nothing counts.
+  EXPECT_LT(judge_ray(cube, Ray{Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d::UnitZ()}, -1.0, bound).data_t, 0.0);
 }
 
 // Stray points are found wherever they float (far from the surface, among each other, inside a
