@@ -912,6 +912,24 @@ TEST(SurfaceError, HolesCountWhatIsSeenThroughAsWellAsWhatIsEmpty) {
   EXPECT_LE(through.holes, empty.holes);
 }
 
+// A ray straight down through the top (z = 1) of a unit cube's data, 2 above it: the surface
+// shown past the bottom (z = −0.5) is seen through the solid; shown half the bound under the top,
+// no hole; not shown, a hole.
+void expect_through_under_empty(const DataSurface& data, const Ray& down, double bound) {
+  const RayVerdict through = judge_ray(data, down, 2.5, bound);
+  EXPECT_TRUE(through.counts);
+  EXPECT_TRUE(through.through);
+  EXPECT_TRUE(through.hole);
+  EXPECT_NEAR(through.data_t, 1.0, 1e-9);
+  const RayVerdict under = judge_ray(data, down, 1.0 + 0.5 * bound, bound);
+  EXPECT_TRUE(under.counts);
+  EXPECT_FALSE(under.hole);
+  const RayVerdict empty = judge_ray(data, down, -1.0, bound);
+  EXPECT_TRUE(empty.counts);
+  EXPECT_TRUE(empty.hole);
+  EXPECT_FALSE(empty.through);
+}
+
 // One ray judged as the hole count judges it, on a closed cube (mesh data): a ray straight
 // through whose surface hit lies past the cube's far side sees through it; one whose hit lies
 // just under the near face does not; one that only grazes an edge, never deeper than the bound,
@@ -929,18 +947,7 @@ TEST(SurfaceError, JudgeRaySeesThroughSolidsNotPastGrazedEdges) {
   const DataSurface data = DataSurface::from_mesh(cube);
   const double bound = 0.01;
   const Ray down{Eigen::Vector3d(0.5, 0.5, 2), -Eigen::Vector3d::UnitZ()};
-  const RayVerdict through = judge_ray(data, down, 2.5, bound);  // the surface shows z = −0.5
-  EXPECT_TRUE(through.counts);
-  EXPECT_TRUE(through.through);
-  EXPECT_TRUE(through.hole);
-  EXPECT_NEAR(through.data_t, 1.0, 1e-12);
-  const RayVerdict under = judge_ray(data, down, 1.0 + 0.5 * bound, bound);
-  EXPECT_TRUE(under.counts);
-  EXPECT_FALSE(under.hole);
-  const RayVerdict empty = judge_ray(data, down, -1.0, bound);
-  EXPECT_TRUE(empty.counts);
-  EXPECT_TRUE(empty.hole);
-  EXPECT_FALSE(empty.through);
+  expect_through_under_empty(data, down, bound);
   // Along +x, entering the top face near x = 1 and leaving through x = 1 half the bound down.
   const double delta = 0.05 * bound, slope = (delta + 0.5 * bound) / 0.1;
   const Ray graze{Eigen::Vector3d(0.9, 0.5, 1 + delta), Eigen::Vector3d(1, 0, -slope).normalized()};
@@ -991,18 +998,8 @@ TEST(SurfaceError, JudgeRayOnACloudsDiscs) {
   const DataSurface cube = DataSurface::from_points(P, N);
   const double bound = 0.01;
   const Ray down{Eigen::Vector3d(0.51, 0.52, 2), -Eigen::Vector3d::UnitZ()};
-  const RayVerdict through = judge_ray(cube, down, 2.5, bound);
-  EXPECT_TRUE(through.counts);
-  EXPECT_TRUE(through.through);
-  EXPECT_NEAR(through.data_t, 1.0, 1e-9);
-  EXPECT_GT(through.reach, 0.0);
-  const RayVerdict under = judge_ray(cube, down, 1.0 + 0.5 * bound, bound);
-  EXPECT_TRUE(under.counts);
-  EXPECT_FALSE(under.hole);
-  const RayVerdict empty = judge_ray(cube, down, -1.0, bound);
-  EXPECT_TRUE(empty.counts);
-  EXPECT_TRUE(empty.hole);
-  EXPECT_FALSE(empty.through);
+  expect_through_under_empty(cube, down, bound);
+  EXPECT_GT(judge_ray(cube, down, 2.5, bound).reach, 0.0);
   // Seen from below the top face's discs (from inside the cube) nothing counts.
   EXPECT_LT(judge_ray(cube, Ray{Eigen::Vector3d(0.5, 0.5, 0.5), Eigen::Vector3d::UnitZ()}, -1.0, bound).data_t, 0.0);
 }
