@@ -311,14 +311,9 @@ std::optional<Eigen::Vector3d> SlimFitter::seen_hole(const Ray& ray, const Refer
   const auto hit = scene.trace(ray, 0.0, std::numeric_limits<double>::infinity(), trace);
   const RayVerdict v = judge_ray(*data_, ray, hit ? hit->t : -1.0, bound);
   if (!v.counts || !v.hole) return std::nullopt;
-  const double r = std::max(bound, v.reach);
-  const Eigen::Vector3d u = ray.dir.unitOrthogonal(), w = ray.dir.cross(u);
-  for (int k = 0; k < 6; ++k) {
-    const Eigen::Vector3d side = r * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * w);
-    const auto h = data_->first_hit(Ray{ray.origin + side, ray.dir});
-    if (!h || !h->front) return std::nullopt;
-  }
-  return ray.at(v.data_t);
+  const Eigen::Vector3d x = ray.at(v.data_t);
+  if (!data_around(x, ray.dir, v.data_t, std::max(bound, v.reach))) return std::nullopt;
+  return x;
 }
 
 // The points' holes a view sees: of their coverage holes (spots), those seen_point_holes sees,
@@ -560,10 +555,10 @@ bool SlimFitter::data_front(const Eigen::Vector3d& x, const Eigen::Vector3d& d, 
   return t && front && std::abs(*t - L) <= 1e-3 * E_;
 }
 
-bool SlimFitter::data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const {
+bool SlimFitter::data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L, double r) const {
   const Eigen::Vector3d o = x - L * d;
   const Eigen::Vector3d u = d.unitOrthogonal(), v = d.cross(u);
-  const double r = opt_.surface_factor * E_;
+  if (!(r > 0)) r = opt_.surface_factor * E_;
   static const std::array<Eigen::Vector2d, 6> kAround = [] {
     std::array<Eigen::Vector2d, 6> a;
     for (int k = 0; k < 6; ++k) a[k] = {std::cos(std::numbers::pi * k / 3.0), std::sin(std::numbers::pi * k / 3.0)};

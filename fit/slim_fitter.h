@@ -151,7 +151,8 @@ private:
                                                                     const Changed* changed);
   // Whether the view along d sees the data at x away from its silhouette: the main ray, then the six beside it.
   bool data_front(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
-  bool data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L) const;
+  /// r: how far to the side the six rays run (≤ 0: surface_factor·E).
+  bool data_around(const Eigen::Vector3d& x, const Eigen::Vector3d& d, double L, double r = 0) const;
   void balls_near_triangle(const PointIndex& index, double max_radius, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                            const Eigen::Vector3d& c, std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
   std::size_t add_face_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots);
