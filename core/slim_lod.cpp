@@ -121,12 +121,11 @@ std::vector<double> measure_errors(const Model& m, const Tree& t) {
     for (std::size_t b = 0; b < n; ++b) err[b] = std::max(err[b], p[b]);
   // (2) each merged ball's zero set → the leaves' surface: the nearest leaf sample, or nearer, the
   // quadric of one of the nearest leaves whose ball holds the point.
-  SampleTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
+  // (nanoflann 1.4 builds each tree in its constructor.)
+  const SampleTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   SampleCloud leaf_centres;
   for (std::int32_t leaf : leaves) leaf_centres.points.push_back(slim_ball(m, static_cast<std::size_t>(leaf)).centre);
-  SampleTree centre_tree(3, leaf_centres, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  centre_tree.buildIndex();
+  const SampleTree centre_tree(3, leaf_centres, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, interior.size(), 64), [&](const auto& range) {
     std::vector<SlimSurfaceSample> samples;
     for (std::size_t k = range.begin(); k < range.end(); ++k) {

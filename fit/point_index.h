@@ -16,7 +16,7 @@ using Neighbour = std::pair<std::uint32_t, double>;
 
 class PointIndex {
 public:
-  /// points: N×3 world units; the span must outlive the index.
+  /// points: N×3 world units (copied: the index keeps its own, in Morton order).
   explicit PointIndex(std::span<const Eigen::Vector3d> points);
   ~PointIndex();
   PointIndex(PointIndex&&) noexcept;
