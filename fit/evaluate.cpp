@@ -152,9 +152,11 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   // The blended surface's normal where each point's probe counted it, against the point's own
   // normal (−1: no blend to compare, e.g. a probe settled along another line).
   std::vector<double> angle(out.points, -1.0);
+  const auto order = index.order();  // visited in Morton order (PointIndex::order)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.points, 512), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<SlimSample> blended;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    for (std::size_t o = r.begin(); o != r.end(); ++o) {
+      const std::size_t i = order[o];
       out.per_point[i] = measure_point(scene, trace, index, unit, cloud.points[i], unit[i], heights[i], E, &blended).error;
       if (!std::isfinite(out.per_point[i]) || blended.empty()) continue;
       if (const auto b = blend_slim_samples(blended, trace.slim))

@@ -58,9 +58,11 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   out.normals.resize(n);
   std::vector<std::uint32_t> graph(n * km);  // the km nearest neighbours of each point (self excluded)
   std::vector<std::uint8_t> degree(n, 0);
+  const auto order = index.order();  // visited in Morton order (PointIndex::order)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> nb;
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+    for (std::size_t o = range.begin(); o != range.end(); ++o) {
+      const std::size_t i = order[o];
       const auto eig = neighbourhood_pca(index, points, points[i], k, km + 1, nb);
       out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
       if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();

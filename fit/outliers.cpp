@@ -26,9 +26,11 @@ std::vector<std::uint32_t> outliers_once(std::span<const Eigen::Vector3d> points
   std::vector<double> spacing(n), rough(n);
   std::vector<Eigen::Vector3d> centroid(n), normal(n);
   std::vector<std::uint8_t> planar(n, 0);
+  const auto order = index.order();  // visited in Morton order (PointIndex::order)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
     std::vector<Neighbour> nb;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    for (std::size_t o = r.begin(); o != r.end(); ++o) {
+      const std::size_t i = order[o];
       index.nearest(points[i], k + 1, nb);
       std::size_t m = 0;
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -54,7 +56,8 @@ std::vector<std::uint32_t> outliers_once(std::span<const Eigen::Vector3d> points
     std::vector<double> s(k);
     std::vector<Neighbour> wide;
     std::vector<std::uint32_t> wide_ids;
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+    for (std::size_t o = r.begin(); o != r.end(); ++o) {
+      const std::size_t i = order[o];
       const std::uint32_t* nb = &near[i * k];
       for (std::size_t q = 0; q < k; ++q) s[q] = spacing[nb[q]];
       std::nth_element(s.begin(), s.begin() + k / 2, s.end());

@@ -49,6 +49,7 @@ PointIndex::PointIndex(PointIndex&&) noexcept = default;
 PointIndex& PointIndex::operator=(PointIndex&&) noexcept = default;
 
 std::size_t PointIndex::size() const { return impl_->sorted.size(); }
+std::span<const std::uint32_t> PointIndex::order() const { return impl_->original; }
 
 void PointIndex::radius(const Eigen::Vector3d& q, double r, std::vector<Neighbour>& out, bool sorted) const {
   out.clear();

@@ -27,6 +27,10 @@ public:
   /// The k nearest points, nearest first (fewer when the cloud is smaller; out is cleared first).
   void nearest(const Eigen::Vector3d& q, std::size_t k, std::vector<Neighbour>& out) const;
   std::size_t size() const;
+  /// The points' indices in the index's Morton order: loops that query every point visit them
+  /// in this order, so that neighbouring queries share the tree's cache lines (the queries of a
+  /// 1M-point cloud in random order cost twice as much each: point_index.cpp).
+  std::span<const std::uint32_t> order() const;
 
 private:
   struct Impl;
