@@ -26,6 +26,7 @@
 #include "core/error.h"
 #include "core/io/io.h"
 #include "core/log.h"
+#include "core/morton.h"
 #include "core/reference.h"
 #include "core/slim.h"
 #include "fit/data_surface.h"
@@ -976,7 +977,14 @@ using fit_detail::SlimFitter;
 
 
 SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
-  SlimFitResult r = SlimFitter(cloud, options, nullptr).run();
+  // Fitted in Morton order: the fit's loops over the points then query the indices and the
+  // data's discs where the last query did (1M points sampled from the armadillo in random order
+  // fitted at 1e-3 in 15.0 s; the same points in Morton order in 11.9 s). Validated first, so
+  // that errors name the caller's indices; nothing the result holds refers to a point's index.
+  validate(cloud, options);
+  PointCloud sorted;
+  for (const std::uint32_t i : morton_order(cloud.points)) sorted.push_back_from(cloud, i);
+  SlimFitResult r = SlimFitter(std::move(sorted), options).run();
   set_patch_colours(r.model, cloud);
   return r;
 }

@@ -49,6 +49,9 @@ class SlimFitter {
 public:
   SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)
       : cloud_(cloud), opt_(options), P_(cloud.points), surface_(surface) {}
+  // Owning its points, without a surface (fit_slim: the cloud in Morton order).
+  SlimFitter(PointCloud&& cloud, const SlimFitOptions& options)
+      : owned_(std::move(cloud)), cloud_(owned_), opt_(options), P_(owned_.points), surface_(nullptr) {}
   // Owning its points (a mesh's vertices and face samples), the fitter may add points where the
   // faces between them are left uncovered (SlimFitOptions::cover_face_holes).
   SlimFitter(PointCloud&& cloud, const SlimFitOptions& options, const PolygonMesh* surface, std::vector<std::uint32_t> face_of)
