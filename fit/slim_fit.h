@@ -303,6 +303,8 @@ struct SlimFitResult {
   SlimFitStats stats;
   /// The data's surface the fit was bounded against (the mesh's triangles, else the points'
   /// tangent discs; fit/data_surface.h), for measurements after the fit without building it again.
+  /// Points alone are fitted in Morton order: its per-point queries (spacing, disc_radius) are
+  /// indexed in that order, not the caller's.
   std::shared_ptr<const DataSurface> data;
   /// Per model.slims: the largest distance from the data of the patch's surface samples as the
   /// blend shows them (the surface side per patch, world units; 0 when not checked).

@@ -45,6 +45,10 @@ bool meets_every_view(const SlimPatch& patch, double bend, const PatchAtSpot& at
 bool meets_every_view(const SlimPatch& patch, double bend, const Eigen::Vector3d& x, const Eigen::Vector3d& n, double widest,
                       double reach);
 
+/// Orders spots by point (or face), then by position: parallel loops' results in an order that
+/// does not depend on the threads' scheduling.
+bool by_point_then_spot(const std::pair<std::uint32_t, Eigen::Vector3d>& x, const std::pair<std::uint32_t, Eigen::Vector3d>& y);
+
 class SlimFitter {
 public:
   SlimFitter(const PointCloud& cloud, const SlimFitOptions& options, const PolygonMesh* surface)

@@ -20,6 +20,7 @@
 #include "fit/evaluate.h"
 #include "fit/normals.h"
 #include "fit/outliers.h"
+#include "fit/point_index.h"
 #include "fit/slim_fit.h"
 #include "fit/slim_fitter.h"
 #include "fit/slim_hierarchy.h"
@@ -145,9 +146,51 @@ TEST(FitSlim, TorusWithinE) {
 
 TEST(FitSlim, RoundedCubeWithinE) { fit_and_check(rounded_cube(12000, 0.8, 0.2, 4), 1e-3); }
 
+// PointIndex keeps its points in Morton order and answers with the caller's indices: on
+// points in random order (and a few exact copies), radius and nearest give what a brute-force
+// search over the caller's points gives, and order() is a permutation of them.
+TEST(PointIndex, AnswersWithTheCallersIndicesAsABruteForceSearchDoes) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::vector<Eigen::Vector3d> p(2000);
+  for (auto& x : p) x = {U(rng), U(rng), 0.2 * U(rng)};
+  for (int k = 0; k < 20; ++k) p[std::size_t(k) * 7 + 1] = p[std::size_t(k) * 7];  // copies
+  const PointIndex index{std::span<const Eigen::Vector3d>(p)};
+  const auto order = index.order();
+  std::vector<std::uint32_t> seen(order.begin(), order.end());
+  std::sort(seen.begin(), seen.end());
+  for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], i);
+  std::vector<Neighbour> got;
+  for (int q = 0; q < 200; ++q) {
+    const Eigen::Vector3d x(U(rng), U(rng), 0.2 * U(rng));
+    std::vector<std::pair<double, std::uint32_t>> all;
+    for (std::size_t i = 0; i < p.size(); ++i) all.push_back({(p[i] - x).squaredNorm(), std::uint32_t(i)});
+    std::sort(all.begin(), all.end());
+    index.nearest(x, 12, got);
+    ASSERT_EQ(got.size(), 12u);
+    for (std::size_t k = 0; k < 12; ++k) {
+      EXPECT_EQ(got[k].second, all[k].first);                          // the same distances, nearest first
+      EXPECT_EQ((p[got[k].first] - x).squaredNorm(), got[k].second);  // of the caller's points
+    }
+    const double r = 0.15;
+    index.radius(x, r, got, true);
+    std::vector<std::uint32_t> want, have;
+    for (const auto& [d2, i] : all)
+      if (d2 <= r * r) want.push_back(i);
+    for (const auto& [i, d2] : got) {
+      have.push_back(i);
+      EXPECT_EQ((p[i] - x).squaredNorm(), d2);
+    }
+    std::sort(want.begin(), want.end());
+    std::sort(have.begin(), have.end());
+    EXPECT_EQ(have, want);
+  }
+}
+
 // fit_slim fits points alone in Morton order, points sharing a Morton cell by their coordinates,
-// so the rows' order does not change the model: the torus's points shuffled, and every point
-// moved into another's cell, give the same patches. (Before, the cover's random order was over
+// so the rows' order does not change the model: the torus's points shuffled give the same
+// patches, and so do pairs of points 1e-9 apart (every second point moved next to the one
+// before it, into its cell) in either order. (Before, the cover's random order was over
 // the rows: a different model for every order.)
 TEST(FitSlim, TheSamePointsInAnyOrderGiveTheSameModel) {
   const PointCloud c = torus(3000, 1.0, 0.35, 11);
@@ -168,7 +211,8 @@ TEST(FitSlim, TheSamePointsInAnyOrderGiveTheSameModel) {
     if (a.model.slims.size() != b.model.slims.size()) return false;
     for (std::size_t k = 0; k < a.model.slims.size(); ++k)
       if (a.model.slims[k].centre != b.model.slims[k].centre || a.model.slims[k].radius != b.model.slims[k].radius ||
-          a.model.slims[k].local.coefficients() != b.model.slims[k].local.coefficients())
+          a.model.slims[k].local.coefficients() != b.model.slims[k].local.coefficients() ||
+          !(a.model.slims[k].clips == b.model.slims[k].clips))
         return false;
     return true;
   };
