@@ -293,12 +293,12 @@ TEST(FitSlimHard, UnevenDensity) {
 // half, between points whose coverage discs were all held, and a few points' discs not held;
 // below the fill band they were only counted (50 of 33,775 pixels seen through at 160², 1.5e-3).
 // Now the holes a view along the points' normals sees are filled (see_point_holes): 3 pixels,
-// for 37 patches instead of 24. Since fit_slim fits the points in Morton order, this draw leaves
-// 11 pixels for 35 patches (the unfilled fit 54). Not all are filled: fitted through the CLI
-// with seeds 1–6, 0–13 pixels stay (the points in file order: 0–10), mostly a slit between two
-// large clipped patches whose planes both cut away a spot on the smooth sphere, seen head-on,
-// that no ring of spots around the points lands in; seeds 3, 5 and 6 fit the sphere with 4–5
-// patches and no hole.
+// for 37 patches instead of 24. Since fit_slim fits the points in Morton order (and sorts its
+// parallel loops' spots), this draw leaves 6 pixels for 36 patches (the unfilled fit 54). Not
+// all are filled: fitted through the CLI with seeds 1–6, 6, 6, 4, 3, 0 and 8 pixels stay (in
+// file order, before: 4, 9, 0, 10, 9, 0), mostly a slit between two large clipped patches whose
+// planes both cut away a spot on the smooth sphere, seen head-on, that no ring of spots around
+// the points lands in; seed 5 fits the sphere with 4 patches and no hole.
 TEST(FitSlimHard, UnevenDensityPointsOnly) {
   const Shape s = uneven_sphere();
   const Outcome o = fit_and_measure(s, kE, {}, false, false);
