@@ -16,7 +16,7 @@ using Neighbour = std::pair<std::uint32_t, double>;
 
 class PointIndex {
 public:
-  /// points: N×3 world units (copied: the index keeps its own, in Morton order).
+  /// points: N×3 world units; the span must outlive the index.
   explicit PointIndex(std::span<const Eigen::Vector3d> points);
   ~PointIndex();
   PointIndex(PointIndex&&) noexcept;
@@ -28,8 +28,7 @@ public:
   void nearest(const Eigen::Vector3d& q, std::size_t k, std::vector<Neighbour>& out) const;
   std::size_t size() const;
   /// The points' indices in the index's Morton order: loops that query every point visit them
-  /// in this order, so that neighbouring queries share the tree's cache lines (the queries of a
-  /// 1M-point cloud in random order cost twice as much each: point_index.cpp).
+  /// in this order, so that neighbouring queries share the tree's cache lines (point_index.cpp).
   std::span<const std::uint32_t> order() const;
 
 private:
