@@ -1,6 +1,7 @@
 #include "core/morton.h"
 
 #include <algorithm>
+#include <tuple>
 #include <utility>
 
 #include "core/model.h"
@@ -37,7 +38,13 @@ std::vector<std::uint32_t> morton_order(std::span<const Eigen::Vector3d> points)
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
   for (std::size_t i = 0; i < n; ++i)
     keyed[i] = {morton_key(((points[i] - all.min).array() / extent.array()).matrix()), static_cast<std::uint32_t>(i)};
-  std::sort(keyed.begin(), keyed.end());
+  // Within one cell by coordinates, then by index: the same points in any order come out in the
+  // same order (fit_slim relies on it), copies of one position in their input order.
+  std::sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
+    if (a.first != b.first) return a.first < b.first;
+    const auto &p = points[a.second], &q = points[b.second];
+    return std::tie(p.x(), p.y(), p.z(), a.second) < std::tie(q.x(), q.y(), q.z(), b.second);
+  });
   for (std::size_t i = 0; i < n; ++i) order[i] = keyed[i].second;
   return order;
 }

@@ -1,5 +1,7 @@
 #include "fit/point_index.h"
 
+#include <mutex>
+
 #include <nanoflann.hpp>
 
 #include "core/morton.h"
@@ -29,12 +31,14 @@ using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<do
 // points' order and 1.0 µs in Morton order over a Morton-ordered copy). The tree is not built
 // over such a copy: the order of equally near answers would change, and with it fits of meshes
 // whose results the mesher's tests rely on (fit_slim sorts points alone itself).
+// The order is sorted on the first call only: most indices (rebuilt each repair round) never ask.
 struct PointIndex::Impl {
   Adaptor adaptor;
   Tree tree;
-  std::vector<std::uint32_t> order;
+  mutable std::once_flag ordered;
+  mutable std::vector<std::uint32_t> order;
   explicit Impl(std::span<const Eigen::Vector3d> p)
-      : adaptor{p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)), order(morton_order(p)) {}
+      : adaptor{p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
 };
 
 PointIndex::PointIndex(std::span<const Eigen::Vector3d> points) : impl_(std::make_unique<Impl>(points)) {}
@@ -43,7 +47,10 @@ PointIndex::PointIndex(PointIndex&&) noexcept = default;
 PointIndex& PointIndex::operator=(PointIndex&&) noexcept = default;
 
 std::size_t PointIndex::size() const { return impl_->adaptor.points.size(); }
-std::span<const std::uint32_t> PointIndex::order() const { return impl_->order; }
+std::span<const std::uint32_t> PointIndex::order() const {
+  std::call_once(impl_->ordered, [&] { impl_->order = morton_order(impl_->adaptor.points); });
+  return impl_->order;
+}
 
 void PointIndex::radius(const Eigen::Vector3d& q, double r, std::vector<Neighbour>& out, bool sorted) const {
   out.clear();

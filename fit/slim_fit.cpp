@@ -984,23 +984,13 @@ SlimFitResult fit_slim(const PointCloud& cloud, const SlimFitOptions& options) {
   // caller's indices. Of the result, only `data` (the points' tangent discs) is indexed by point,
   // in the sorted order; the model and the stats are not. Colours are not copied: the fitter
   // does not read them, and the patches take theirs from the caller's cloud.
-  // Points sharing a Morton cell go by their coordinates, not by their rows, so the same points
-  // in any order give the same model (exact copies of a position aside).
+  // Points sharing a Morton cell go by their coordinates (core/morton.h), not by their rows, so
+  // the same points in any order give the same model (exact copies of a position aside).
   validate(cloud, options);
-  Box3 box;
-  for (const auto& p : cloud.points) box.extend(p);
-  const Eigen::Vector3d extent = (box.max - box.min).cwiseMax(Eigen::Vector3d::Constant(1e-300));
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(cloud.points.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i)
-    keyed[i] = {morton_key(((cloud.points[i] - box.min).array() / extent.array()).matrix()), std::uint32_t(i)};
-  std::sort(keyed.begin(), keyed.end(), [&](const auto& a, const auto& b) {
-    if (a.first != b.first) return a.first < b.first;
-    const auto &p = cloud.points[a.second], &q = cloud.points[b.second];
-    return std::tie(p.x(), p.y(), p.z()) < std::tie(q.x(), q.y(), q.z());
-  });
+  const std::vector<std::uint32_t> order = morton_order(cloud.points);
   PointCloud sorted;
-  sorted.points.reserve(keyed.size());
-  for (const auto& [key, i] : keyed) {
+  sorted.points.reserve(order.size());
+  for (const std::uint32_t i : order) {
     sorted.points.push_back(cloud.points[i]);
     if (cloud.has_normals()) sorted.normals.push_back(cloud.normals[i]);
   }
