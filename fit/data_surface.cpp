@@ -123,6 +123,9 @@ struct DataSurface::Impl {
   std::vector<DataSurface::BoundarySample> boundary;  // open-boundary samples
   std::vector<Eigen::Vector3d> boundary_points;       // their positions (boundary_index's span)
   std::unique_ptr<PointIndex> boundary_index;
+  // Mesh: the open edges, boundary[k] being open_edges[k]'s midpoint; half the longest one.
+  std::vector<std::array<Eigen::Vector3d, 2>> open_edges;
+  double open_edge_half = 0;
   // Points: a BVH over the tangent discs' boxes, built on the first ray cast (the fit asks only
   // distances of a cloud; measuring what a view sees of it casts rays).
   mutable std::once_flag disc_bvh_once;
@@ -371,6 +374,8 @@ void DataSurface::from_mesh_boundary(const PolygonMesh& mesh, Impl& m) {
       if (!(in.norm() > 0) || !e.allFinite()) continue;
       in.normalize();
       m.boundary.push_back({mid, in});
+      m.open_edges.push_back({mesh.vertices[a], mesh.vertices[b]});
+      m.open_edge_half = std::max(m.open_edge_half, 0.5 * (mesh.vertices[b] - mesh.vertices[a]).norm());
       for (const int v : {a, b}) {
         auto [it, fresh] = vertex_inward.try_emplace(v, Eigen::Vector3d::Zero());
         it->second += in;
@@ -393,6 +398,26 @@ void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<
   thread_local std::vector<Neighbour> nb;
   m.boundary_index->radius(c, r, nb);
   for (const auto& [i, d2] : nb) out.push_back(m.boundary[i]);
+}
+
+bool DataSurface::near_open_boundary(const Eigen::Vector3d& x, double r) const {
+  const auto& m = *impl_;
+  if (!m.boundary_index) return false;
+  thread_local std::vector<Neighbour> nb;
+  // An edge's points lie within half its length of its midpoint.
+  m.boundary_index->radius(x, r + m.open_edge_half, nb);
+  for (const auto& [i, d2] : nb) {
+    if (i >= m.open_edges.size()) {
+      if (d2 <= r * r) return true;
+      continue;
+    }
+    const auto& [a, b] = m.open_edges[i];
+    const Eigen::Vector3d ab = b - a;
+    const double L2 = ab.squaredNorm();
+    const double s = L2 > 0 ? std::clamp((x - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
+    if ((a + s * ab - x).squaredNorm() <= r * r) return true;
+  }
+  return false;
 }
 
 double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) const {

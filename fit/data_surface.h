@@ -92,6 +92,9 @@ public:
     Eigen::Vector3d point, inward;
   };
   void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const;
+  /// Whether x lies within r of the data's open boundary: a mesh's open edges (exactly), a
+  /// cloud's boundary points.
+  bool near_open_boundary(const Eigen::Vector3d& x, double r) const;
 
 private:
   DataSurface();

@@ -147,6 +147,7 @@ SurfaceError measure_surface_error(const SurfaceViews& views, const DataSurface&
     std::vector<double> data_reach(n, 0.0);   // the hit disc's radius (points), else 0
     std::vector<std::uint8_t> through(n, 0);  // the surface shows another sheet than the data's first
     std::vector<std::uint8_t> counts(n, 0);   // a data pixel sure enough to count (mesh: all)
+    const double pixel_angle = 2.0 * std::tan(cam.fov_y_deg * std::numbers::pi / 360.0) / H;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 2), [&](const tbb::blocked_range<int>& rows) {
       for (int y = rows.begin(); y < rows.end(); ++y)
         for (int x = 0; x < W; ++x) {
@@ -158,7 +159,9 @@ SurfaceError measure_surface_error(const SurfaceViews& views, const DataSurface&
           if (!(v.data_t >= 0)) continue;
           data_t[i] = v.data_t;
           data_reach[i] = v.reach;
-          counts[i] = v.counts;
+          // The edge of a sheet is a silhouette of it, whatever lies behind in view.
+          counts[i] = v.counts && !(o.rim_band && data.near_open_boundary(ray.at(v.data_t),
+                                                                         std::max({o.band_px * v.data_t * pixel_angle, o.bound, v.reach})));
           through[i] = v.through;
         }
     });
@@ -172,7 +175,6 @@ SurfaceError measure_surface_error(const SurfaceViews& views, const DataSurface&
     }
     if (!out.has_holes_measure) continue;
     // Holes: data pixels whose neighbourhood (the band) is all data, left empty by the surface.
-    const double pixel_angle = 2.0 * std::tan(cam.fov_y_deg * std::numbers::pi / 360.0) / H;
     for (int y = 0; y < H; ++y)
       for (int x = 0; x < W; ++x) {
         const std::size_t i = std::size_t(y) * W + x;

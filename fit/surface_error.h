@@ -28,6 +28,12 @@ struct SurfaceErrorOptions {
   /// Hole band: a data pixel counts only when every pixel within max(band_px, bound in pixels)
   /// of it is covered by the data too (away from the silhouette).
   double band_px = 1.0;
+  /// The same band along the data's open boundary (DataSurface::boundary_near: a mesh's open
+  /// edges, a cloud's boundary points): data pixels that near the edge of a sheet do not count,
+  /// as near its silhouette, whatever lies behind it in view (a scan's open base seen from
+  /// below, the inside of the far wall past its rim): a fit's surface stops within the bound of
+  /// an open boundary instead of extrapolating past it. false: they count.
+  bool rim_band = true;
   /// Keep where the first this many holes are (the data's points there), e.g. to log them.
   std::size_t keep_hole_points = 0;
   /// Keep where the first this many pixels beyond bound are (the surface's points there).

@@ -991,6 +991,48 @@ TEST(SurfaceError, HolesCountWhatIsSeenThroughAsWellAsWhatIsEmpty) {
   EXPECT_LE(through.holes, empty.holes);
 }
 
+// A sheet over a wider one (a scan's open base over the inside of its far wall): a surface that
+// stops short of the upper sheet's open edge shows the lower one past it. Within the bound of
+// the edge that is the band every silhouette gets, no hole; farther in, holes, seen through.
+TEST(SurfaceError, HolesSpareABandAlongOpenEdgesAsAlongSilhouettes) {
+  PolygonMesh two;
+  const auto quad = [&](double half, double z) {
+    const int v = int(two.vertices.size());
+    for (const auto& [x, y] : {std::pair{-half, -half}, {half, -half}, {half, half}, {-half, half}}) two.vertices.emplace_back(x, y, z);
+    two.add_face(std::array<int, 4>{v, v + 1, v + 2, v + 3});
+  };
+  quad(1.0, 0.0);
+  quad(1.5, -0.2);
+  const DataSurface data = DataSurface::from_mesh(two);
+  Box3 box;
+  box.extend(Eigen::Vector3d(-1.5, -1.5, -0.2));
+  box.extend(Eigen::Vector3d(1.5, 1.5, 0));
+  const double bound = 0.05;
+  const auto square_at = [](const Ray& ray, double half, double z) -> std::optional<double> {
+    if (!(ray.dir.z() < 0)) return std::nullopt;
+    const double t = (z - ray.origin.z()) / ray.dir.z();
+    const Eigen::Vector3d x = ray.at(t);
+    if (t > 0 && std::abs(x.x()) <= half && std::abs(x.y()) <= half) return t;
+    return std::nullopt;
+  };
+  // The upper sheet inset by `short_by` from its edge, the lower one whole.
+  const auto inset = [&](double short_by) {
+    return [&, short_by](const Ray& r) { const auto t = square_at(r, 1.0 - short_by, 0.0); return t ? t : square_at(r, 1.5, -0.2); };
+  };
+  SurfaceErrorOptions o{.views = 8, .resolution = 192, .bound = bound};
+  const SurfaceError within = measure_surface_error(inset(0.5 * bound), data, box, o);
+  const SurfaceError beyond = measure_surface_error(inset(3 * bound), data, box, o);
+  o.rim_band = false;
+  const SurfaceError within_counted = measure_surface_error(inset(0.5 * bound), data, box, o);
+  std::printf("holes: stopping 0.5 bound short %zu (%zu without the band), 3 bounds short %zu (%zu seen through) of %zu\n",
+              within.holes, within_counted.holes, beyond.holes, beyond.see_through, beyond.data_pixels);
+  EXPECT_GT(within.data_pixels, 20000u);
+  EXPECT_EQ(within.holes, 0u);
+  EXPECT_GT(within_counted.holes, 50u);  // the band is what spares them
+  EXPECT_GT(beyond.holes, 200u);
+  EXPECT_EQ(beyond.see_through, beyond.holes);
+}
+
 // A ray straight down through the top (z = 1) of a unit cube's data, 2 above it: the surface
 // shown past the bottom (z = −0.5) is seen through the solid; shown half the bound under the top,
 // no hole; not shown, a hole.
