@@ -217,12 +217,14 @@ private:
     std::size_t blend_failures = 0, surface_failures = 0, face_holes = 0, view_holes = 0;
     int round = -1;  // -1: none
     double score = 0;  // failures() of that model
+    double excess = 0;  // breach_excess() of that model
     std::size_t point_holes = 0;
     std::size_t crease_gaps = 0;
     std::size_t seen_point_holes = 0;
     bool point_holes_fresh = false;  // point_holes was counted on this model
   };
   double failures() const;
+  double breach_excess() const;
   Verified snapshot(int round, double score) const;
   void restore(Verified&& v);
 
