@@ -108,7 +108,7 @@ TEST(FitSlimScans, SparseCloudsHolesBetweenThePointsAreFilled) {
 // along (−0.527, −0.442, −0.726): 14 of the 81 rays there meet nothing (the far side is seen
 // from inside, culled). The mouth's spot was (0.1190, 0.0971, 0.2663), seen from 0.08 out along
 // its offset from (0.0309, 0.0084, −0.0505).
-// Moved again when a boundary point's disc distance became a distance (the 636-patch fit with
+// Moved again when a boundary point's disc distance became a distance (the 640-patch fit with
 // both off): the slit lies a hair off, at (0.3186, 0.4433, −0.0160) (1024², 14 views: the one
 // hole there that a moved plane closes). There 17 of 81 rays pass with both off, 6 with the moved
 // plane alone (it narrows the slit, and the seen holes close the rest), 0 with the seen holes
