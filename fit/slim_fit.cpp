@@ -713,8 +713,8 @@ void SlimFitter::verify_and_repair() {
     // failures wins. (bun000_rawscan at 1e-4 kept a round with 16 surface samples beyond 2E over a
     // later one with none but more points' holes, and exited 7; radar.xyz at 1e-4 kept round 3's
     // 497 samples beyond 2E, max 23E, over later rounds' 77 … 1, whose repairs had opened more
-    // points' holes. Counted by number, bun000_rawscan at 1e-3 kept one patch 8.3E off over two
-    // samples 2.3E off.) While either the kept model or the score improves, the repairs go on.
+    // points' holes. Counted by number, one patch 8E off would beat two samples a hair past 2E.)
+    // While either the kept model or the score improves, the repairs go on.
     const std::size_t breaches = st_.round_breaches.back();
     const std::size_t best_breaches = best.blend_failures + best.surface_failures;
     const double excess = breaches > 0 ? breach_excess() : 0.0;

@@ -932,20 +932,8 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       double& excess = patch_excess_[chosen_[k]];
       // Skipped when settle's check already passed on a lattice at least as fine (same bound).
       const Ball& ball = balls_[chosen_[k]];
-      if (excess < 0) {
+      if (excess < 0)
         excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
-        // zero_set_excess names the first sample beyond `local`, not the farthest: where that
-        // lies within the bound, the patch's figure is the farthest of its lattice's samples (at
-        // most 24 lines per side), so that one beyond the bound counts (radar.xyz at 1e-2: a
-        // patch over a gap in the scan, first found 1.71E off, reached 2.8E; its round counted no
-        // failure, the fit stopped there, and bench fit saw 3.5E). Beyond the bound it is a
-        // breach already.
-        if (excess > 0 && excess <= bound) {
-          std::vector<SlimSurfaceSample> lattice;
-          sample_slim_patch(slims[k], std::min(grid, 24), lattice);
-          for (const auto& z : lattice) excess = std::max(excess, data_->distance(z.point, kInf, 0.0));
-        }
-      }
       if (const double d = excess; d > 0) {
         if (log::level() <= log::Level::debug) {
           const std::lock_guard lock(debug_mutex_);

@@ -229,8 +229,9 @@ TEST(FitSlimScans, UntunedDataEndsWithinItsBound) {
 // radar.xyz at 1e-4 (no normals: estimated; E far below its sampling): the repairs trade surface
 // samples beyond 2E for points' holes (497, 300, 170, 77 … 1 beyond while the holes rose from
 // 659 to 938). The fit used to stop three rounds after the least share of failures (holes
-// counted) and keep round 3, 497 samples beyond 2E up to 23E; the kept model is now the one with
-// the fewest breaches of the bound, and the repairs go on while they lower them.
+// counted) and keep round 3, 497 samples beyond 2E up to 23E; the kept model is now one within
+// the bound if any round was (else the one that breaches it least), and the repairs go on while
+// they lower the breaches.
 TEST(FitSlimScans, KeepsTheRoundWithTheFewestBreachesOfTheBound) {
   const std::string file = std::string(QUADRIX_DATASETS) + "/points/radar.xyz";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
