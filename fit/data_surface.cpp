@@ -149,11 +149,11 @@ struct DataSurface::Impl {
     if (inward[i].squaredNorm() == 0) return std::max(0.0, t.norm() - disc[i]);
     const Eigen::Vector3d u = normals[i].unitOrthogonal(), w = normals[i].cross(u);
     const Eigen::Vector2d p(t.dot(u), t.dot(w));
-    return std::max(star_excess(i, p), cut_disc_excess(p, Eigen::Vector2d(inward[i].dot(u), inward[i].dot(w)), disc[i]));
+    return std::max(star_excess(i, p, tangent_sector(t, u, w)), cut_disc_excess(p, Eigen::Vector2d(inward[i].dot(u), inward[i].dot(w)), disc[i]));
   }
-  // Distance from p (tangent-plane coordinates along u, w of tangent_sector) to the union of the
-  // six 60° sectors of radius min(disc, farthest neighbour there + boundary_reach·disc).
-  double star_excess(std::uint32_t i, const Eigen::Vector2d& p) const {
+  // Distance from p (tangent-plane coordinates along u, w of tangent_sector, in sector `own`) to
+  // the union of the six 60° sectors of radius min(disc, farthest neighbour there + boundary_reach·disc).
+  double star_excess(std::uint32_t i, const Eigen::Vector2d& p, int own) const {
     // Unit directions of the sectors' edges: sector k spans angles −π + kπ/3 … −π + (k+1)π/3.
     static const std::array<Eigen::Vector2d, 7> kEdge = [] {
       std::array<Eigen::Vector2d, 7> e;
@@ -161,7 +161,6 @@ struct DataSurface::Impl {
       return e;
     }();
     const double len = p.norm();
-    const int own = std::clamp(int(std::floor((std::atan2(p.y(), p.x()) + std::numbers::pi) / (std::numbers::pi / 3.0))), 0, 5);
     double best = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 6; ++k) {
       const double r = std::min(disc[i], double(sector_far[i][k]) + options.boundary_reach * disc[i]);

@@ -486,8 +486,8 @@ double SlimFitter::breach_excess() const {
   return x;
 }
 
-SlimFitter::Verified SlimFitter::snapshot(int round, double score) const {
-  Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, st_.view_holes, round, score};
+SlimFitter::Verified SlimFitter::snapshot(int round, double score, double excess) const {
+  Verified v{chosen_, point_error_, {}, st_.blend_failures, st_.surface_failures, st_.face_holes, st_.view_holes, round, score, excess};
   v.point_holes = st_.point_holes;
   v.crease_gaps = st_.crease_gaps;
   v.seen_point_holes = st_.seen_point_holes;
@@ -740,10 +740,7 @@ void SlimFitter::verify_and_repair() {
       break;
     }
     const auto t_fill = Clock::now();
-    if (improved) {
-      best = snapshot(round, score);
-      best.excess = excess;
-    }
+    if (improved) best = snapshot(round, score, excess);
     // The model just verified: what changes from here on (face patches below, the repair) is
     // traced again next round.
     before = chosen_;

@@ -885,21 +885,26 @@ void SlimFitter::collect_surface_errors() {
 // outward direction.
 namespace {
 constexpr int kRimViews = 12;
-Eigen::Vector3d rim_view(const SlimPatch& patch, const SlimSurfaceSample& z, int v) {
+std::array<Eigen::Vector3d, kRimViews> rim_views(const SlimPatch& patch, const SlimSurfaceSample& z) {
   const Eigen::Vector3d& n = z.normal;
   Eigen::Vector3d out = z.point - patch.centre;
   out -= out.dot(n) * n;
   out = out.squaredNorm() > 0 ? out.normalized() : n.unitOrthogonal();
   const Eigen::Vector3d side = n.cross(out);
-  const double tilt = (v < kRimViews / 2 ? 50.0 : 70.0) * std::numbers::pi / 180.0;
-  const double azimuth = (v % (kRimViews / 2)) * 2.0 * std::numbers::pi / (kRimViews / 2);
-  return std::cos(tilt) * n + std::sin(tilt) * (std::cos(azimuth) * out + std::sin(azimuth) * side);
+  std::array<Eigen::Vector3d, kRimViews> views;
+  for (int v = 0; v < kRimViews; ++v) {
+    const double tilt = (v < kRimViews / 2 ? 50.0 : 70.0) * std::numbers::pi / 180.0;
+    const double azimuth = (v % (kRimViews / 2)) * 2.0 * std::numbers::pi / (kRimViews / 2);
+    views[v] = std::cos(tilt) * n + std::sin(tilt) * (std::cos(azimuth) * out + std::sin(azimuth) * side);
+  }
+  return views;
 }
 }  // namespace
 
 // Surface side: samples of every patch's zero set, each seen along its normal through the
-// blend (a rim point off the data also from the side, rim_view); the blended point must lie within surface_factor·E of the data. Culprits: the
-// blended patches whose own hit is farther than local_surface_factor·E (all of them when none is).
+// blend (a rim point off the data also from the side, rim_views); the blended point must lie
+// within surface_factor·E of the data. Culprits: the blended patches whose own hit is farther
+// than local_surface_factor·E (all of them when none is).
 std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
                            std::vector<std::uint8_t>& at_fault) {
   debug_shown_ = 0;
@@ -970,9 +975,10 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
         // where the blend shows it alone from the side, it is a fin there though a patch over
         // it hides it head-on (a raw scan's fin at 1e-2, 5E off, seen 57–69° from its normal).
         const int views = si < lattice ? 1 : 1 + kRimViews;
+        const auto slanted = si < lattice ? std::array<Eigen::Vector3d, kRimViews>{} : rim_views(slims[k], z);
         double d = -1;
         for (int v = 0; v < views && !(d > bound); ++v) {
-          const Eigen::Vector3d w = v == 0 ? z.normal : rim_view(slims[k], z, v - 1);
+          const Eigen::Vector3d w = v == 0 ? z.normal : slanted[v - 1];
           const auto hit = scene.trace(Ray{z.point + h * w, -w}, 0.0, kInf, trace, &blended);
           if (!hit) continue;
           if (v == 0) reach = std::max(reach, blend_reach(blended, trace.slim));

@@ -225,7 +225,7 @@ private:
   };
   double failures() const;
   double breach_excess() const;
-  Verified snapshot(int round, double score) const;
+  Verified snapshot(int round, double score, double excess) const;
   void restore(Verified&& v);
 
   static constexpr double kInf = std::numeric_limits<double>::infinity();
