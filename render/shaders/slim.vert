@@ -77,10 +77,27 @@ void main() {
   vec3 be = u_view_rot * vec3(ball.q1.z, ball.q1.w, ball.q2.x);
   float c = ball.q2.y;
 
-  // [Stoll06] eq. 18 about the centre: c′ − e′ᵀb′ = c + e′ᵀb with e′ the eye in local units; the
-  // patch faces away everywhere in its ball when c − yᵀb < −‖b − A y‖, y = C/R.
+  // [Stoll06] eq. 18 about the centre: a point u of the zero set (local units) faces the eye
+  // −y (y = C/R) when c − yᵀb + (b − A y)ᵀu > 0, so the patch faces away wherever its zero set
+  // can be when c − yᵀb + max wᵀu ≤ 0, w = b − A y, the max over the region that holds the zero
+  // set: the ball (‖w‖), or with a tight slab the ball cut by the slab s0 ≤ aᵀu ≤ s1, where
+  // max over ‖u‖ ≤ 1 at aᵀu = s is w_a·s + ‖w⊥‖·√(1 − s²), concave in s, greatest at
+  // s = w_a/‖w‖ clamped to [s0, s1]. The slab culls a curved patch seen past its silhouette that
+  // the whole ball keeps (its A y term reaches across the ball); a margin of float rounding.
   vec3 y = C / R;
-  bool culled = u_cull != 0 && c - dot(y, be) < -length(be - Ae * y);
+  vec3 w = be - Ae * y;
+  float w_len = length(w);
+  float w_max = w_len;
+  bool has_slab = ball.slab.w <= ball.q2.w;
+  if (has_slab) {
+    vec3 a_eye = u_view_rot * ball.slab.xyz;
+    float w_a = dot(w, a_eye);
+    float w_perp = sqrt(max(0.0, w_len * w_len - w_a * w_a));
+    float s = w_len > 0.0 ? clamp(w_a / w_len, ball.slab.w, ball.q2.w) : 0.0;
+    w_max = min(w_len, w_a * s + w_perp * sqrt(max(0.0, 1.0 - s * s)));
+  }
+  float y_b = dot(y, be);
+  bool culled = u_cull != 0 && c - y_b + w_max < -1e-5 * (abs(c) + abs(y_b) + w_len);
 #if SLIM_PASS == 1
   bool count_balls = u_count_stats != 0 && gl_VertexID == 0;  // once per ball and frame
 #else
@@ -102,7 +119,7 @@ void main() {
 #endif
 
   // The cylinder about the slab: its disc of radius ρ, caps at s0 and s1.
-  bool tight = ball.slab.w <= ball.q2.w && u_tight != 0;
+  bool tight = has_slab && u_tight != 0;
   float s0 = ball.slab.w, s1 = ball.q2.w;
   float rho = (s0 <= 0.0 && s1 >= 0.0) ? 1.0 : sqrt(max(0.0, 1.0 - min(s0 * s0, s1 * s1)));
   float reach = tight ? sqrt(rho * rho + max(s0 * s0, s1 * s1)) : 1.0;

@@ -179,3 +179,36 @@ TEST_F(CullingExactGl, ClosedModelsSeenFromOutsideAreStillCulled) {
   draw(cam, true, &st);
   EXPECT_GT(st.culled, st.primitives / 4);
 }
+
+TEST_F(CullingExactGl, SlimPatchesPastTheSilhouetteAreCulledByTheirSlab) {
+  // A curved patch seen just past its silhouette faces away wherever its zero set is, but its
+  // A·y term reaches across the whole ball, so the whole-ball test ([Stoll06] eq. 18) keeps it;
+  // the ball cut by the patch's slab (core/slim.h slim_patch_slab) culls it. More culled than
+  // the whole-ball test would, and still no pixel changed.
+  // Sphere patches with a term λ(eᵀu)² along their normal e added, as a fit leaves that
+  // coefficient free (its points lie at eᵀu ≈ 0): the zero set barely moves, A grows along e.
+  constexpr int kSize = 128;
+  Model m = synth_model("slim-sphere", {.count = 400});
+  for (SlimPatch& p : m.slims) {
+    const Eigen::Vector3d e = p.local.b.normalized();
+    p.local.A += 0.25 * e * e.transpose();
+  }
+  renderer_->set_model(m);
+  for (const double az : {0.0, 70.0, 200.0}) {
+    SCOPED_TRACE(az);
+    const Camera cam = frame_box(bounds(m), {.azimuth_deg = az, .elevation_deg = 25, .width = kSize, .height = kSize});
+    std::size_t ball_test = 0;  // the whole-ball test, in double
+    for (const SlimPatch& p : m.slims) {
+      const Eigen::Vector3d y = (p.centre - cam.eye) / p.radius;  // the eye is −y in local units
+      ball_test += p.local.c - y.dot(p.local.b) < -(p.local.b - p.local.A * y).norm();
+    }
+    render::FrameStats st;
+    const Images on = draw(cam, true, &st), off = draw(cam, false);
+    std::printf("culled %zu, whole-ball test %zu of %zu\n", static_cast<std::size_t>(st.culled), ball_test, m.slims.size());
+    EXPECT_GT(st.culled, ball_test + m.slims.size() / 20);
+    const Difference d = differ(off, on, kSize, kSize, 1e-5);
+    EXPECT_GT(d.covered, 2000);
+    EXPECT_EQ(d.differing, 0);
+    EXPECT_LE(d.differing_anywhere, d.covered / 500);
+  }
+}

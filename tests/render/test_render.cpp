@@ -484,9 +484,12 @@ TEST_F(GlSlim, EarlyDepthPathMatchesTheReferenceAndRayCastsFewerFragments) {
         EXPECT_LE(c.normal_median_deg, 0.5);
         EXPECT_EQ(cracks(ref, g[1]), 0);
       }
-      // Pass 1 is the same work; pass 2 runs (and ray-casts) only where a hit can count.
+      // Pass 1 is the same work; pass 2 runs (and ray-casts) only where a hit can count. Since
+      // the per-quadric test culls by the patch's slab, the hit-depth path no longer runs most
+      // of the back-facing patches' fragments either (82,643 pass-2 fragments here at azimuth 0,
+      // 93,259 with the whole-ball test), so the early path's margin is 11–28 % (it was 28–45 %).
       EXPECT_EQ(st[1].slim_hit_fragments, st[0].slim_hit_fragments);
-      EXPECT_LT(st[1].slim_accumulate_fragments, st[0].slim_accumulate_fragments * 4 / 5);
+      EXPECT_LT(st[1].slim_accumulate_fragments, st[0].slim_accumulate_fragments * 19 / 20);
       EXPECT_LT(st[1].slim_cast_fragments, st[0].slim_cast_fragments);
       std::printf("pass-2 fragments %llu early depth, %llu hit depth; ray casts %llu, %llu\n",
                   (unsigned long long)st[1].slim_accumulate_fragments, (unsigned long long)st[0].slim_accumulate_fragments,
