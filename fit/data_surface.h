@@ -27,8 +27,6 @@ struct DataSurfaceOptions {
   /// ... and at least sector_reach × the distance to the nearest same-sheet point in whichever
   /// 60° sector of its tangent plane has it farthest (of those that have one: not past a boundary)
   double sector_reach = 0.75;
-  /// Points (nearest first) whose discs are tried per distance query.
-  std::size_t candidates = 12;
   /// Open boundaries: a point whose boundary_neighbours nearest neighbours have their tangential
   /// centroid more than boundary_offset × their mean distance away lies on a boundary; its disc
   /// reaches only boundary_reach × its radius past the point, away from that centroid (so the
@@ -54,13 +52,13 @@ public:
   /// distance beyond the cap comes back as +inf (faster: a mesh walk prunes what lies farther).
   /// With good > 0, a mesh walk stops at the first triangle within good and returns its
   /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions); for
-  /// points, a disc within good of a point surely among the `candidates` nearest answers so,
-  /// before any search. Either way the answer to "≤ good?" is the full query's.
+  /// points likewise the first disc found within good. Either way the answer to "≤ good?" is the
+  /// full query's. For points the distance is to the union of every point's tangent disc (a BVH
+  /// walk over the discs), so, like a mesh's, it never changes faster than x moves.
   double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
                   double good = 0) const;
   /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax), or for
-  /// points with their tangent discs (the discs distance() measures to: it asks the `candidates`
-  /// nearest points' only, a ray meets any). front: whether that
+  /// points with their tangent discs (the union distance() measures to). front: whether that
   /// triangle faces the ray: counter-clockwise seen from the ray's origin, or clockwise when the
   /// mesh is wound inwards (core/io/io.h mesh_wound_inward); whether the disc's normal does.
   std::optional<double> intersect(const Ray& ray, double tmin = 0.0, bool* front = nullptr,
@@ -112,8 +110,15 @@ private:
 /// guarantee grows with (R/bound)²; the blended verification samples the rest). A clipped patch
 /// is also sampled every bound/2 along the curve where its zero set meets the clip plane, where
 /// it reaches farthest past an open boundary.
+/// With vouch > 0, past max_depth a cell whose sample still cannot vouch for it within
+/// max(vouch, bound) (the bound the surface must keep, where `bound` is a stricter aim) is split
+/// on, at most 3 levels more and down to the same reach, its samples held to that bound: without
+/// it a large ball's cells pass with a sample 1.4E from the data and a reach of 2E, so its zero
+/// set can run farther off between the lines (SlimFitOptions::certify_surface). vouch ≤ 0: a
+/// cell at max_depth is taken as its sample says.
 /// Returns 0 when within, else the distance of the first sample found beyond bound.
-double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth);
+double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth,
+                       double vouch = 0);
 
 /// Distance from x to triangle (a, b, c), any shape (degenerate ones as segments).
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -938,7 +938,8 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       // Skipped when settle's check already passed on a lattice at least as fine (same bound).
       const Ball& ball = balls_[chosen_[k]];
       if (excess < 0)
-        excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
+        excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1,
+                                                                             opt_.certify_surface ? bound : 0.0);
       if (const double d = excess; d > 0) {
         if (log::level() <= log::Level::debug) {
           const std::lock_guard lock(debug_mutex_);
