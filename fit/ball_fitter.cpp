@@ -254,8 +254,7 @@ std::pair<int, int> BallFitter::surface_lattice(double R) const {
 bool BallFitter::surface_ok(const Ball& b) const {
   const auto [grid, depth] = surface_lattice(b.R);
   return zero_set_excess(SlimPatch{P[b.centre], b.R, b.g, b.clips, std::nullopt, std::nullopt}, *data,
-                         opt.local_surface_factor * E, grid, depth,
-                         opt.certify_surface ? opt.surface_factor * E : 0.0) == 0.0;
+                         opt.local_surface_factor * E, grid, depth) == 0.0;
 }
 
 // A ball at (ci, R) whose points are within E and whose zero set passes surface_ok: the

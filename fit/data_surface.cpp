@@ -122,8 +122,7 @@ struct DataSurface::Impl {
   // Mesh: the open edges, boundary[k] being open_edges[k]'s midpoint; half the longest one.
   std::vector<std::array<Eigen::Vector3d, 2>> open_edges;
   double open_edge_half = 0;
-  // Points: a BVH over the tangent discs' boxes, built on the first ray cast (the fit asks only
-  // distances of a cloud; measuring what a view sees of it casts rays).
+  // Points: a BVH over the tangent discs' boxes, built on first use (distance and ray casts).
   mutable std::once_flag disc_bvh_once;
   mutable Bvh disc_bvh;
 
@@ -198,8 +197,11 @@ struct DataSurface::Impl {
     std::call_once(disc_bvh_once, [&] {
       std::vector<Box3> boxes(points.size());
       for (std::size_t i = 0; i < points.size(); ++i) {
-        // A disc of radius r about p with unit normal n spans r·√(1 − nₐ²) along axis a.
-        const Eigen::Vector3d half = disc[i] * (Eigen::Vector3d::Ones() - normals[i].cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
+        // A disc of radius r about p with unit normal n spans r·√(1 − nₐ²) = r·‖(n_b, n_c)‖ along
+        // axis a (the norm of the other two: no cancellation for a normal near the axis).
+        const Eigen::Vector3d& n = normals[i];
+        const Eigen::Vector3d half =
+            disc[i] * Eigen::Vector3d(std::hypot(n.y(), n.z()), std::hypot(n.x(), n.z()), std::hypot(n.x(), n.y()));
         boxes[i].extend(points[i] - half);
         boxes[i].extend(points[i] + half);
       }
@@ -608,8 +610,7 @@ std::optional<DataSurface::RayHit> DataSurface::first_hit(const Ray& ray, double
   return hit;
 }
 
-double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth,
-                       double vouch) {
+double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth) {
   struct Cell {
     int axis;
     double a, b, h;  // line through (a, b) in the two other local coordinates; cell side h
@@ -625,8 +626,6 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     for (int i = 0; i < grid; ++i)
       for (int j = 0; j < grid; ++j) stack.push_back({axis, -1.0 + (i + 0.5) * h0, -1.0 + (j + 0.5) * h0, h0, 0});
   const double min_reach = bound / 16.0;
-  const int past_depth = vouch > 0 ? 3 : 0;  // levels past max_depth, only when vouching
-  vouch = std::max(vouch, bound);
   // A clipped patch reaches farthest along its clip planes: the curve where its zero set meets a
   // plane (inside the others) is sampled at a spacing of bound/2 (a tilted cut past an open
   // boundary leaves a wedge thinner than the lattice spacing; bunny-size balls are hundreds of E
@@ -681,17 +680,11 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
       ++met;
       const Eigen::Vector3d x = patch.centre + patch.radius * u;
       const Eigen::Vector3d g = patch.local.gradient(u);
-      // Past max_depth a cell is split only while its sample cannot vouch for it within `vouch`.
-      const bool aligned = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach;
-      const bool may_split = aligned && c.depth < max_depth;
-      const bool may_split_past = aligned && !may_split && c.depth < max_depth + past_depth;
-      const double goal = may_split ? bound : may_split_past ? vouch : kInf;
-      // A sample past max_depth is held to vouch: it was sought only to vouch for its cell.
-      const double limit = c.depth > max_depth ? vouch : bound;
-      // Any triangle within `good` settles this sample: within the limit, and no split.
-      const double d = data.distance(x, limit, goal < kInf ? std::max(0.0, goal - reach) : limit);
-      if (!(d <= limit)) return std::isnan(d) ? kInf : data.distance(x);
-      if (goal < kInf && d + reach > goal) split = true;
+      const bool may_split = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach && c.depth < max_depth;
+      // Any triangle within `good` settles this sample: within the bound, and no split.
+      const double d = data.distance(x, bound, may_split ? std::max(0.0, bound - reach) : bound);
+      if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
+      if (may_split && d + reach > bound) split = true;
     }
     if (!split) continue;
     const double q = 0.25 * c.h;

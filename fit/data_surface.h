@@ -110,15 +110,8 @@ private:
 /// guarantee grows with (R/bound)²; the blended verification samples the rest). A clipped patch
 /// is also sampled every bound/2 along the curve where its zero set meets the clip plane, where
 /// it reaches farthest past an open boundary.
-/// With vouch > 0, past max_depth a cell whose sample still cannot vouch for it within
-/// max(vouch, bound) (the bound the surface must keep, where `bound` is a stricter aim) is split
-/// on, at most 3 levels more and down to the same reach, its samples held to that bound: without
-/// it a large ball's cells pass with a sample 1.4E from the data and a reach of 2E, so its zero
-/// set can run farther off between the lines (SlimFitOptions::certify_surface). vouch ≤ 0: a
-/// cell at max_depth is taken as its sample says.
 /// Returns 0 when within, else the distance of the first sample found beyond bound.
-double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth,
-                       double vouch = 0);
+double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double bound, int grid, int max_depth);
 
 /// Distance from x to triangle (a, b, c), any shape (degenerate ones as segments).
 double point_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

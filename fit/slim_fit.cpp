@@ -949,8 +949,6 @@ void SlimFitter::finish() {
   md["max_error_abs"] = num(E_);
   md["surface_bound_abs"] = num(opt_.surface_factor * E_);
   md["surface_reference"] = surface_ ? "mesh" : "points";
-  // How each patch's own zero set was checked (SlimFitOptions::certify_surface).
-  md["surface_check"] = opt_.certify_surface ? "certified" : "sampled";
   md["diagonal"] = num(st_.diagonal);
   md["normals"] = st_.normals_estimated ? "estimated" : "given";
   md["points"] = std::to_string(st_.points);

@@ -109,13 +109,6 @@ struct SlimFitOptions {
   double local_surface_factor = 1.5;
   int local_surface_grid = 6;
   int local_surface_depth = 2;  ///< refinement levels of that lattice (fit/data_surface.h)
-  /// Certify each patch's own zero set within surface_factor·E of the data: its lattice cells are
-  /// split past local_surface_depth until each sample vouches for its cell (distance plus the
-  /// cell's reach within the bound; fit/data_surface.h zero_set_excess's vouch). Off, the lattice
-  /// samples without a guarantee between its lines and the blended verification samples the
-  /// rest: radar.xyz at 1e-2 showed 2.19E at 7.8e-5 of the views' pixels (0 certified, 4.1 s
-  /// against 1.8 s); the cost grows with (R/E)² (radar at 1e-3: 14.5 s against 4.0 s).
-  bool certify_surface = false;
   double shrink_step = 0.75;
   /// Open boundaries: when a ball's points have their tangential centroid farther than
   /// boundary_offset·R from its centre and its zero set runs past the data, the patch gets a

@@ -286,8 +286,8 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
     b.count = 1;
     b.settled = true;
     b.disc = true;
-    // Not on_data: the data's distance asks the nearest points' discs only, and a plane a
-    // spacing wide leaves a curved tip (the bunny's ears from 5,000 points: 20E off).
+    // Not on_data: a plane a spacing wide leaves a curved tip (the bunny's ears from 5,000
+    // points: 20E off).
     balls_.push_back(std::move(b));
     grow_candidate_arrays();
     covers_.back() = {i};
@@ -938,8 +938,7 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       // Skipped when settle's check already passed on a lattice at least as fine (same bound).
       const Ball& ball = balls_[chosen_[k]];
       if (excess < 0)
-        excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1,
-                                                                             opt_.certify_surface ? bound : 0.0);
+        excess = grid <= ball.surface_lattice || ball.on_data ? 0.0 : zero_set_excess(slims[k], *data_, local, grid, 1);
       if (const double d = excess; d > 0) {
         if (log::level() <= log::Level::debug) {
           const std::lock_guard lock(debug_mutex_);

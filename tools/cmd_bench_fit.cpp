@@ -209,7 +209,6 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     bool keep_models = false;
     bool face_prisms = true;
     bool view_holes = true;
-    bool certify_surface = false;
     int view_resolution = 512;
     std::size_t sample = 0;
     bool fill_point_holes = true;
@@ -233,7 +232,6 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->capture_default_str();
   app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
   app->add_flag("!--no-view-holes", a->view_holes, "Fit as `fit --no-view-holes` does (for comparison)");
-  app->add_flag("--certify-surface", a->certify_surface, "Fit as `fit --certify-surface` does");
   app->add_option("--sample", a->sample,
                   "Fit each mesh model from this many points drawn uniformly over its faces (points only, the "
                   "faces' normals) and measure the surface side against the mesh they came from; 0: the mesh itself")
@@ -326,7 +324,6 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         log::info("bench fit: {}: SLIM fit at E = {:g}", d.name, E);
         SlimFitOptions fo{.max_error = E, .face_prisms = a->face_prisms};
         if (!a->view_holes) fo.view_hole_rays = 0;
-        fo.certify_surface = a->certify_surface;
         fo.cover_point_holes = a->fill_point_holes;
         if (a->cover_fraction > 0) fo.cover_fraction = a->cover_fraction;
         const SlimFitResult fit = fit_mesh ? fit_slim(fit_cloud, *fit_mesh, fo) : fit_slim(fit_cloud, fo);

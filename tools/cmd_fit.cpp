@@ -59,10 +59,6 @@ void add_fit(CLI::App& root, Commands& commands) {
                 "patch of its own, a speck beside the surface)");
   app->add_flag("!--no-surface-check", a->options.check_surface,
                 "Skip the surface side of the bound (fins, specks: the blended surface within 2E of the data)");
-  app->add_flag("--certify-surface", a->options.certify_surface,
-                "Certify each patch's zero set within 2E of the data (its check's lattice refined until every sample "
-                "vouches for its cell) instead of sampling it; slower where balls are many E across (radar scan at "
-                "1e-2: 4.1 s instead of 1.8)");
   app->add_flag("!--no-face-prisms", a->options.face_prisms,
                 "Clip a face patch (a mesh face's plane, where E is below the sampling) only at an open edge, "
                 "not to its face's prism (for comparison: its plane then runs on into its neighbours)");

@@ -92,7 +92,7 @@ void main() {
   if (has_slab) {
     vec3 a_eye = u_view_rot * ball.slab.xyz;
     float w_a = dot(w, a_eye);
-    float w_perp = sqrt(max(0.0, w_len * w_len - w_a * w_a));
+    float w_perp = length(w - w_a * a_eye);  // not √(‖w‖² − w_a²): w lies near a for flat patches
     float s = w_len > 0.0 ? clamp(w_a / w_len, ball.slab.w, ball.q2.w) : 0.0;
     w_max = min(w_len, w_a * s + w_perp * sqrt(max(0.0, 1.0 - s * s)));
   }

@@ -296,21 +296,6 @@ TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
   EXPECT_NE(r.out.find(fmt::format("holes left: {} points' coverage discs not held", holes)), std::string::npos) << r.out;
 }
 
-// The model says how its patches' own zero sets were checked: sampled by default, certified with
-// --certify-surface (fit/slim_fit.h SlimFitOptions::certify_surface); both within their bounds.
-TEST(Cli, FitRecordsWhetherItsSurfaceCheckWasCertified) {
-  const std::string kitten = std::string(QUADRIX_DATASETS) + "/points/kitten.xyz";
-  if (!std::filesystem::exists(kitten)) GTEST_SKIP() << "dataset missing: " << kitten;
-  ScratchDir dir("cli-fit-certify");
-  for (const bool certify : {false, true}) {
-    SCOPED_TRACE(certify);
-    const auto model = dir / (certify ? "c.qxm" : "s.qxm");
-    const CmdResult r = quadrix_run("fit " + q(kitten) + " --max-error 1e-2 -o " + q(model) + (certify ? " --certify-surface" : ""));
-    ASSERT_EQ(r.code, 0) << r.out;
-    EXPECT_EQ(read_model(model).metadata.at("surface_check"), certify ? "certified" : "sampled");
-  }
-}
-
 // Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
 // speck floating beside the surface. --keep-outliers fits them all.
 TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
