@@ -31,6 +31,11 @@ public:
   template <typename Bound, typename Visit>
   void traverse(const Ray& ray, double tmin, Bound&& bound, Visit&& visit) const;
 
+  /// Visits, nearest box first, every leaf item whose box lies nearer x than √best2, in squared
+  /// distances; visit(item) may lower best2 as it finds nearer items. Stops once best2 ≤ good2.
+  template <typename Visit>
+  void nearest(const Eigen::Vector3d& x, double& best2, double good2, Visit&& visit) const;
+
 private:
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> items_;
@@ -79,6 +84,34 @@ void Bvh::traverse(const Ray& ray, double tmin, Bound&& bound, Visit&& visit) co
     } else {
       if (tl != std::numeric_limits<double>::infinity()) stack[sp++] = left;
       stack[sp++] = right;
+    }
+  }
+}
+
+template <typename Visit>
+void Bvh::nearest(const Eigen::Vector3d& x, double& best2, double good2, Visit&& visit) const {
+  if (nodes_.empty()) return;
+  const auto box_distance = [&](const Node& n) { return (x - x.cwiseMax(n.min).cwiseMin(n.max)).squaredNorm(); };
+  std::uint32_t stack[128];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const Node& n = nodes_[stack[--sp]];
+    if (box_distance(n) >= best2) continue;
+    if (n.count > 0) {
+      for (std::uint32_t i = 0; i < n.count; ++i) visit(items_[n.first + i]);
+      if (best2 <= good2) break;
+      continue;
+    }
+    const std::uint32_t left = static_cast<std::uint32_t>(&n - nodes_.data()) + 1, right = n.first;
+    const double dl = box_distance(nodes_[left]), dr = box_distance(nodes_[right]);
+    // Push the far child first so the near one is visited first.
+    if (dl <= dr) {
+      if (dr < best2) stack[sp++] = right;
+      if (dl < best2) stack[sp++] = left;
+    } else {
+      if (dl < best2) stack[sp++] = left;
+      if (dr < best2) stack[sp++] = right;
     }
   }
 }

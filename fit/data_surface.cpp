@@ -458,38 +458,6 @@ bool DataSurface::near_open_boundary(const Eigen::Vector3d& x, double r) const {
   return false;
 }
 
-// Walks a BVH nearest box first for the item nearest x, in squared distances: visits every leaf
-// item whose box lies nearer than best2 (which visit lowers as it finds nearer items), and stops
-// once best2 ≤ good2.
-template <class Visit>
-void nearest_walk(const Bvh& bvh, const Eigen::Vector3d& x, double& best2, double good2, Visit&& visit) {
-  const auto& nodes = bvh.nodes();
-  if (nodes.empty()) return;
-  const auto& items = bvh.items();
-  const auto box_distance = [&](const Bvh::Node& n) { return (x - x.cwiseMax(n.min).cwiseMin(n.max)).squaredNorm(); };
-  std::uint32_t stack[128];
-  int sp = 0;
-  stack[sp++] = 0;
-  while (sp > 0) {
-    const Bvh::Node& n = nodes[stack[--sp]];
-    if (box_distance(n) >= best2) continue;
-    if (n.count > 0) {
-      for (std::uint32_t k = 0; k < n.count; ++k) visit(items[n.first + k]);
-      if (best2 <= good2) break;
-      continue;
-    }
-    const std::uint32_t left = static_cast<std::uint32_t>(&n - nodes.data()) + 1, right = n.first;
-    const double dl = box_distance(nodes[left]), dr = box_distance(nodes[right]);
-    if (dl <= dr) {
-      if (dr < best2) stack[sp++] = right;
-      if (dl < best2) stack[sp++] = left;
-    } else {
-      if (dl < best2) stack[sp++] = left;
-      if (dr < best2) stack[sp++] = right;
-    }
-  }
-}
-
 double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) const {
   const auto& m = *impl_;
   thread_local Hints hints;
@@ -511,7 +479,7 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
       hints.remember(best_id);
       return std::sqrt(best);
     }
-    nearest_walk(m.bvh, x, best, good2, [&](std::uint32_t id) {
+    m.bvh.nearest(x, best, good2, [&](std::uint32_t id) {
       const auto& t = m.triangles[id];
       if (const double d2 = point_triangle_distance2(x, t[0], t[1], t[2]); d2 < best) best = d2, best_id = id;
     });
@@ -534,9 +502,9 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
   if (best <= good) return best;
   const double cap2 = cap * cap * (1.0 + 1e-12);
   double best2 = std::min(best * best, cap2);
-  nearest_walk(m.discs(), x, best2, good * good, [&](std::uint32_t i) {
+  m.discs().nearest(x, best2, good * good, [&](std::uint32_t i) {
     // A disc lies no nearer than its point less its radius: most items of a leaf go by that.
-    const double far = std::sqrt((x - m.points[i]).squaredNorm()) - m.disc[i];
+    const double far = (x - m.points[i]).norm() - m.disc[i];
     if (far > 0 && far * far >= best2) return;
     if (const double d = m.disc_distance(i, x); d * d < best2) best2 = d * d, best = d, best_id = i;
   });
