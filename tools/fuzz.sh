@@ -11,6 +11,8 @@
 #   libFuzzer is missing, 0 when present. FUZZ_NICE=N runs the fuzzers under nice -n N.
 #   FUZZ_TIMEOUT=S: an input running longer (wall clock) is a finding (default 20); raise it with
 #   a high FUZZ_NICE on a busy machine, where a starved fuzzer can stall past 20 s on any input.
+#   FUZZ_SEED=N: libFuzzer's -seed (default 0: a random seed each run); the smoke tests set 1, so
+#   each replays the same inputs in the same order (only how far it gets in SECONDS varies).
 set -euo pipefail
 MODE=all
 case ${1:-} in --build|--run|--check) MODE=${1#--}; shift ;; esac
@@ -88,7 +90,7 @@ for r in $READERS; do
   echo "fuzz: $r for ${SECONDS_EACH} s"
   start=$(date +%s)
   if ! (cd "$OUT/$r" && nice -n "${FUZZ_NICE:-0}" ./"fuzz_$r" -max_total_time="$SECONDS_EACH" -max_len=65536 \
-        -rss_limit_mb=2048 -timeout="${FUZZ_TIMEOUT:-20}" -print_final_stats=1 corpus > log.txt 2>&1); then
+        -rss_limit_mb=2048 -timeout="${FUZZ_TIMEOUT:-20}" -seed="${FUZZ_SEED:-0}" -print_final_stats=1 corpus > log.txt 2>&1); then
     echo "fuzz: $r found a failure, see $OUT/$r/log.txt and $OUT/$r/crash-*" >&2
     grep -m3 -E "ERROR|runtime error|terminate|deadly" "$OUT/$r/log.txt" >&2 || true
     status=1
