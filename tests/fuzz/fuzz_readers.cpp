@@ -27,13 +27,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The folder the path-based readers' inputs are written to: removed when the fuzzer exits (at
+// -max_total_time or -runs; a crash leaves it, with the input beside the crash file).
+struct Folder {
+  fs::path path = fs::temp_directory_path() / ("quadrix-fuzz-" + std::to_string(::getpid()));
+  Folder() { fs::create_directories(path); }
+  ~Folder() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
 const fs::path& folder() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("quadrix-fuzz-" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+  static const Folder dir;
+  return dir.path;
 }
 
 fs::path put(const std::string& name, std::string_view bytes) {
