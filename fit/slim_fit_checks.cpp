@@ -44,12 +44,14 @@ void SlimFitter::balls_near_triangle(const PointIndex& index, double max_radius,
     if (std::sqrt(d2) < slims[i].radius + spread) near.push_back(std::uint32_t(i));
 }
 
-bool SlimFitter::holds(std::uint32_t k, const Eigen::Vector3d& x, double band) const {
+bool SlimFitter::holds(std::uint32_t k, const Eigen::Vector3d& x, double band, const Eigen::Vector3d* n) const {
   const SlimPatch& sp = result_.model.slims[k];
   if (!((x - sp.centre).squaredNorm() < sp.radius * sp.radius)) return false;
   const Eigen::Vector3d u = (x - sp.centre) / sp.radius;
   if (!sp.clips.keeps(u)) return false;
-  const double g = sp.local.eval(u), gn = sp.local.gradient(u).norm();
+  const Eigen::Vector3d grad = sp.local.gradient(u);
+  const double g = sp.local.eval(u), gn = grad.norm();
+  if (n && !(std::abs(grad.dot(*n)) >= std::cos(kHoldSteepest) * gn)) return false;
   return std::abs(g) * sp.radius <= band * gn;
 }
 
@@ -57,18 +59,19 @@ bool SlimFitter::holds(std::uint32_t k, const Eigen::Vector3d& x, double band) c
 // patch holds is held whole, up to a quadric's bending over the piece.)
 template <class Emit>
 void SlimFitter::uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
-                           const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit) const {
+                           const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit,
+                           const Eigen::Vector3d* n) const {
   for (const std::uint32_t i : near)
-    if (holds(i, p, band) && holds(i, q, band) && holds(i, s, band)) return;
+    if (holds(i, p, band, n) && holds(i, q, band, n) && holds(i, s, band, n)) return;
   if (depth == max_depth) {
     for (const Eigen::Vector3d& x : {Eigen::Vector3d((p + q + s) / 3.0), p, q, s})
-      if (std::none_of(near.begin(), near.end(), [&](std::uint32_t i) { return holds(i, x, band); })) {
+      if (std::none_of(near.begin(), near.end(), [&](std::uint32_t i) { return holds(i, x, band, n); })) {
         emit(x);
         return;
       }
     return;
   }
-  split_in_four(p, q, s, [&](const auto&... piece) { uncovered(piece..., near, band, depth + 1, max_depth, emit); });
+  split_in_four(p, q, s, [&](const auto&... piece) { uncovered(piece..., near, band, depth + 1, max_depth, emit, n); });
 }
 
 std::array<Eigen::Vector3d, 6> SlimFitter::tangent_ring(std::size_t i, double rho) const {
@@ -116,7 +119,7 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
   // surface bound: the points of a noisy face may lie beyond the bound from a patch within E of
   // its vertices; a face patch across a crease lies hundreds of E away).
   const double band = 2.0 * opt_.surface_factor * E_;
-  if (!changed) face_covered_.assign(m.face_count(), 0);
+  if (!changed) face_covered_.assign(m.face_count(), 0), steep_spots_.assign(m.face_count(), {});
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
     auto& out = found.local();
@@ -130,6 +133,7 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
         if (!changed->near_ball(o, faces_->reach[f], nb)) continue;
       }
       const std::size_t spots_before = out.size();
+      steep_spots_[f].clear();
       for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
         const Eigen::Vector3d &a = m.vertices[vs[0]], &b = m.vertices[vs[k]], &c = m.vertices[vs[k + 1]];
         balls_near_triangle(index, max_radius, a, b, c, nb, near);
@@ -137,7 +141,12 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
         // a boundary plane that stops a sheet short of a crease leaves the strip beyond it
         // uncovered although the ball reaches across, and the prism of a face patch across
         // the crease holds the strip but its plane is elsewhere.
+        const std::size_t before = out.size();
         uncovered(a, b, c, near, band, 0, opt_.face_hole_depth, [&](const Eigen::Vector3d& x) { out.push_back({std::uint32_t(f), x}); });
+        // Held, but beside a crease only by the other face's sheet: for view_holes to ask.
+        if (const Eigen::Vector3d n = (b - a).cross(c - a).normalized(); out.size() == before && n.allFinite())
+          uncovered(a, b, c, near, band, 0, opt_.face_hole_depth,
+                    [&](const Eigen::Vector3d& x) { steep_spots_[f].push_back({std::uint32_t(k), x}); }, &n);
       }
       face_covered_[f] = out.size() == spots_before;
     }
@@ -695,16 +704,8 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
               return met_by(k);
           return false;
         };
-        // The spots: the centroids of the face's pieces split in four view_hole_depth times.
-        const auto check = [&](const auto& self, const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
-                               int depth) -> void {
-          if (!clear) return;
-          if (depth < opt_.view_hole_depth) {
-            split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
-            return;
-          }
-          const Eigen::Vector3d x = (p + q + s) / 3.0;
-          std::uint8_t* asked = &seen[spot++ * cone.size()];
+        // One spot x of the face: asked[j], the data's answer for view j so far (see seen).
+        const auto check_spot = [&](const Eigen::Vector3d& x, std::uint8_t* asked) {
           at.resize(near.size());
           for (std::size_t k = 0; k < near.size(); ++k) at[k] = patch_at_spot(slims[near[k]], x);
           // A patch that provably meets every view of the spot spares all its rays.
@@ -729,7 +730,27 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
             }
           }
         };
+        // The spots: the centroids of the face's pieces split in four view_hole_depth times.
+        const auto check = [&](const auto& self, const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
+                               int depth) -> void {
+          if (!clear) return;
+          if (depth < opt_.view_hole_depth) {
+            split_in_four(p, q, s, [&](const auto&... piece) { self(self, piece..., depth + 1); });
+            return;
+          }
+          check_spot((p + q + s) / 3.0, &seen[spot++ * cone.size()]);
+        };
         check(check, a, b, c, 0);
+        // Then the spots beside a crease that only a steep sheet holds (face_holes), on this
+        // triangle (the data's answers asked afresh: few faces have them).
+        static const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> no_spots;
+        std::vector<std::uint8_t> fresh(cone.size());
+        for (const auto& [fan, x] : f < steep_spots_.size() ? steep_spots_[f] : no_spots) {
+          if (!clear) break;
+          if (fan != k) continue;
+          std::fill(fresh.begin(), fresh.end(), std::uint8_t(0));
+          check_spot(x, fresh.data());
+        }
       }
       view_clear_[f] = clear;
     }
