@@ -143,9 +143,13 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
         // the crease holds the strip but its plane is elsewhere.
         const std::size_t before = out.size();
         uncovered(a, b, c, near, band, 0, opt_.face_hole_depth, [&](const Eigen::Vector3d& x) { out.push_back({std::uint32_t(f), x}); });
-        // Held, but beside a crease only by the other face's sheet: for view_holes to ask.
+        // Held, but beside a crease only by the other face's sheet: for view_holes to ask. The
+        // strip along the edge may be narrower than a piece at face_hole_depth: pieces down to
+        // 2E (at most 8 levels; only pieces no one patch holds whole are split).
+        const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+        const int steep_depth = std::clamp(int(std::ceil(std::log2(longest / (2.0 * E_)))), opt_.face_hole_depth, 8);
         if (const Eigen::Vector3d n = (b - a).cross(c - a).normalized(); out.size() == before && n.allFinite())
-          uncovered(a, b, c, near, band, 0, opt_.face_hole_depth,
+          uncovered(a, b, c, near, band, 0, steep_depth,
                     [&](const Eigen::Vector3d& x) { steep_spots_[f].push_back({std::uint32_t(k), x}); }, &n);
       }
       face_covered_[f] = out.size() == spots_before;

@@ -766,7 +766,7 @@ TEST(FitSlimHard, SliversWithTwoSharpCornersBelowTheirSampling) {
 // stop short of it, and the strip left is within the band of the other face's sheet, whose ball
 // and prism hold it. A ray that meets the face there passes beside that sheet: a line of holes
 // along every edge (the turbine of CGAL's data at 1e-3: 9.8e-4 of its pixels). This box: 236 of
-// 696,944 pixels at 512^2 (600 patches) before view_holes asked about such spots, 19 after (619).
+// 696,944 pixels at 512^2 (600 patches) before view_holes asked about such spots, 1 after (651).
 TEST(FitSlimHard, NoSlitsAlongTheEdgesOfABox) {
   constexpr int n = 12;
   Shape s;
@@ -804,7 +804,7 @@ TEST(FitSlimHard, NoSlitsAlongTheEdgesOfABox) {
   const SurfaceError fine = measure_surface_error(o.fit.model, truth, s.box, {.views = 8, .resolution = 512, .bound = 2 * o.E});
   std::cerr << "  holes at 512^2: " << fine.holes << " of " << fine.data_pixels << " pixels, " << o.fit.model.slims.size()
             << " patches\n";
-  EXPECT_LE(fine.hole_share, 1e-4) << fine.holes << " of " << fine.data_pixels;
+  EXPECT_LE(fine.hole_share, 2e-5) << fine.holes << " of " << fine.data_pixels;
 }
 
 TEST(PolygonMesh, FannedSplitsEachFaceFromItsFirstCorner) {
