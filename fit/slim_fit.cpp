@@ -614,7 +614,8 @@ void SlimFitter::verify_and_repair() {
     const double t_surface = seconds_since(t_check);
     t_check = Clock::now();
     std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> holes;
-    if (can_add_points_ && opt_.cover_face_holes) holes = face_holes(centre_index, changed_balls ? &*changed_balls : nullptr);
+    if (can_add_points_ && opt_.cover_face_holes)
+      holes = face_holes(centre_index, changed_balls ? &*changed_balls : nullptr, /*steep=*/true);
     log::debug("fit_slim: round {}: points {:.2f} s, surface {:.2f} s, face holes {:.2f} s", round + 1, t_points, t_surface,
                seconds_since(t_check));
     st_.face_holes = holes.size();

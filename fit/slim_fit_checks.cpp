@@ -13,6 +13,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "core/io/io.h"
 #include "core/log.h"
 #include "core/morton.h"
 #include "core/ray.h"
@@ -51,7 +52,7 @@ bool SlimFitter::holds(std::uint32_t k, const Eigen::Vector3d& x, double band, c
   if (!sp.clips.keeps(u)) return false;
   const Eigen::Vector3d grad = sp.local.gradient(u);
   const double g = sp.local.eval(u), gn = grad.norm();
-  if (n && !(std::abs(grad.dot(*n)) >= std::cos(kHoldSteepest) * gn)) return false;
+  if (n && !(std::abs(grad.dot(*n)) >= kHoldSteepestCos * gn)) return false;
   return std::abs(g) * sp.radius <= band * gn;
 }
 
@@ -60,7 +61,11 @@ bool SlimFitter::holds(std::uint32_t k, const Eigen::Vector3d& x, double band, c
 template <class Emit>
 void SlimFitter::uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
                            const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit,
-                           const Eigen::Vector3d* n) const {
+                           const Eigen::Vector3d* n, std::size_t* budget) const {
+  if (budget && (*budget)-- == 0) {
+    *budget = 0;
+    return;
+  }
   for (const std::uint32_t i : near)
     if (holds(i, p, band, n) && holds(i, q, band, n) && holds(i, s, band, n)) return;
   if (depth == max_depth) {
@@ -71,7 +76,7 @@ void SlimFitter::uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, c
       }
     return;
   }
-  split_in_four(p, q, s, [&](const auto&... piece) { uncovered(piece..., near, band, depth + 1, max_depth, emit, n); });
+  split_in_four(p, q, s, [&](const auto&... piece) { uncovered(piece..., near, band, depth + 1, max_depth, emit, n, budget); });
 }
 
 std::array<Eigen::Vector3d, 6> SlimFitter::tangent_ring(std::size_t i, double rho) const {
@@ -109,7 +114,8 @@ bool SlimFitter::held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Ve
 // index: the round's index of the patches' centres; changed: the balls that left or joined
 // the model since the last check (none: the first), so a face covered then and far from all
 // of them is covered still.
-std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(const PointIndex& index, const Changed* changed) {
+std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(const PointIndex& index, const Changed* changed,
+                                                                  bool steep) {
   const auto& slims = result_.model.slims;
   if (!faces_ || slims.empty()) return {};
   double max_radius = 0;
@@ -120,6 +126,9 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
   // its vertices; a face patch across a crease lies hundreds of E away).
   const double band = 2.0 * opt_.surface_factor * E_;
   if (!changed) face_covered_.assign(m.face_count(), 0), steep_spots_.assign(m.face_count(), {});
+  // The crease spots only where view_holes will ask about them.
+  steep = steep && opt_.view_hole_rays > 0 && face_prisms();
+  face_patched_.resize(m.face_count(), 0);
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
     auto& out = found.local();
@@ -141,16 +150,23 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::face_holes(co
         // a boundary plane that stops a sheet short of a crease leaves the strip beyond it
         // uncovered although the ball reaches across, and the prism of a face patch across
         // the crease holds the strip but its plane is elsewhere.
-        const std::size_t before = out.size();
         uncovered(a, b, c, near, band, 0, opt_.face_hole_depth, [&](const Eigen::Vector3d& x) { out.push_back({std::uint32_t(f), x}); });
-        // Held, but beside a crease only by the other face's sheet: for view_holes to ask. The
-        // strip along the edge may be narrower than a piece at face_hole_depth: pieces down to
-        // 2E (at most 8 levels; only pieces no one patch holds whole are split).
-        const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-        const int steep_depth = std::clamp(int(std::ceil(std::log2(longest / (2.0 * E_)))), opt_.face_hole_depth, 8);
-        if (const Eigen::Vector3d n = (b - a).cross(c - a).normalized(); out.size() == before && n.allFinite())
-          uncovered(a, b, c, near, band, 0, steep_depth,
-                    [&](const Eigen::Vector3d& x) { steep_spots_[f].push_back({std::uint32_t(k), x}); }, &n);
+        // Held, but beside a crease perhaps only by the other face's sheet: for view_holes to
+        // ask (while the face is covered and has no face patch). The strip along the edge may
+        // be narrower than a piece at face_hole_depth: pieces down to edges of 2E (at most 8
+        // levels; only pieces no one patch holds whole are split, at most kSteepPieces of them),
+        // at most kSteepSpots a triangle.
+        if (!steep || out.size() != spots_before || face_patched_[f]) continue;
+        const Eigen::Vector3d cross = (b - a).cross(c - a);
+        const double longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+        if (is_sliver(cross.norm(), longest2)) continue;
+        const Eigen::Vector3d n = cross.normalized();
+        const double halvings = std::clamp(0.5 * std::log2(longest2 / (4.0 * E_ * E_)), 0.0, 8.0);
+        const int depth = std::max(opt_.face_hole_depth, int(std::ceil(halvings)));
+        std::size_t kept = 0, budget = kSteepPieces;
+        uncovered(a, b, c, near, band, 0, depth, [&](const Eigen::Vector3d& x) {
+            if (kept++ < kSteepSpots) steep_spots_[f].push_back({std::uint32_t(k), x});
+          }, &n, &budget);
       }
       face_covered_[f] = out.size() == spots_before;
     }
@@ -662,12 +678,14 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
     const double phi = 2.0 * std::numbers::pi * ((j - 1) % rays + (ring == 2 ? 0.5 : 0.0)) / rays;
     cone.emplace_back(std::cos(theta), std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi));
   }
+  static const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> no_spots;
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.face_count(), 128), [&](const tbb::blocked_range<std::size_t>& r) {
     auto& out = found.local();
     std::vector<Neighbour> nb;
     std::vector<std::uint32_t> near;
     std::vector<PatchAtSpot> at;  // near's patches seen from the spot
+    std::vector<std::uint8_t> fresh(cone.size());  // the data's answers for a crease spot's views
     for (std::size_t f = r.begin(); f != r.end(); ++f) {
       if (faces_->centroid[f] == FaceSet::kNone || !face_covered_[f] || face_patched_[f]) continue;
       const Eigen::Vector3d& o = P_[faces_->centroid[f]];
@@ -747,8 +765,6 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::view_holes(co
         check(check, a, b, c, 0);
         // Then the spots beside a crease that only a steep sheet holds (face_holes), on this
         // triangle (the data's answers asked afresh: few faces have them).
-        static const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> no_spots;
-        std::vector<std::uint8_t> fresh(cone.size());
         for (const auto& [fan, x] : f < steep_spots_.size() ? steep_spots_[f] : no_spots) {
           if (!clear) break;
           if (fan != k) continue;

@@ -8,7 +8,6 @@
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <numbers>
 #include <optional>
 #include <queue>
 #include <utility>
@@ -99,20 +98,23 @@ private:
   void collect_surface_errors();
   std::size_t verify_surface(const ReferenceScene& scene, const std::vector<std::uint8_t>& stale,
                              std::vector<std::uint8_t>& at_fault);
-  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index, const Changed* changed);
+  // steep: also record the spots only a steep sheet holds (steep_spots_) for view_holes.
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> face_holes(const PointIndex& index, const Changed* changed,
+                                                                    bool steep = false);
   // Whether chosen patch k holds x: inside its ball and clip planes, its zero set within band;
-  // given the data's unit normal n at x, also no steeper there than kHoldSteepest to it (beside
+  // given the data's unit normal n at x, also no steeper there than 75 degrees to it (beside
   // a crease the other face's sheet passes within the band, and its planes keep the strip along
   // the edge, but a ray that meets this face there may pass beside that sheet: view_holes asks).
   bool holds(std::uint32_t k, const Eigen::Vector3d& x, double band, const Eigen::Vector3d* n = nullptr) const;
   // The triangle pqs against the patches `near`: covered when one holds its three corners (ball,
   // planes and band are convex), else split in four down to max_depth; a smallest piece no one
   // patch holds whole gives emit() its centroid or first corner that none holds. n: the
-  // triangle's unit normal, for holds().
+  // triangle's unit normal, for holds() (the angle test is not convex: a piece one patch holds at
+  // its corners is taken as held, as for the band). budget: pieces left to look at (none: no limit).
   template <class Emit>
   void uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s,
                  const std::vector<std::uint32_t>& near, double band, int depth, int max_depth, Emit&& emit,
-                 const Eigen::Vector3d* n = nullptr) const;
+                 const Eigen::Vector3d* n = nullptr, std::size_t* budget = nullptr) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> point_holes(const PointIndex& index, const Changed* changed);
   // How deep in a ball a point counts as covered (SlimFitOptions::cover_fraction).
   double cover_fraction() const {
@@ -235,9 +237,10 @@ private:
   void restore(Verified&& v);
 
   static constexpr double kInf = std::numeric_limits<double>::infinity();
-  // holds(): the steepest a patch may stand to the data's surface where it holds a spot of it
-  // (radians: 60 degrees).
-  static constexpr double kHoldSteepest = 75.0 * std::numbers::pi / 180.0;
+  // holds(): the cosine of the steepest a patch may stand to the data's surface where it holds a
+  // spot of it (75 degrees); face_holes: at most this many such spots a fan triangle.
+  static constexpr double kHoldSteepestCos = 0.25881904510252074;
+  static constexpr std::size_t kSteepSpots = 256, kSteepPieces = 4096;
   PointCloud owned_;  // the points, when the fitter owns them (may grow: add_points)
   const PointCloud& cloud_;
   const SlimFitOptions& opt_;
@@ -280,8 +283,9 @@ private:
   bool can_add_points_ = false;                       // owned_ holds the points
   std::size_t face_triangles_ = 0;                    // fan triangles of the faces with a surface (face_holes' pieces / 4^depth)
   std::vector<std::uint8_t> face_covered_;            // per face: inside the union of the balls at the last check
-  // Per face: spots only a patch steeper than kHoldSteepest to the face holds (beside a crease:
-  // the other face's sheet), found by face_holes; view_holes asks its views of them.
+  // Per face: spots no patch within 75 degrees of the face holds, though a steeper one does
+  // (beside a crease: the other face's sheet), found by face_holes; view_holes asks its views of
+  // them.
   std::vector<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> steep_spots_;  // (fan triangle, spot)
   std::vector<std::uint8_t> view_clear_;              // per face: every view ray met a patch at the last check
   std::vector<std::vector<std::uint8_t>> view_data_;  // per face: data_front/data_around's answers so far (view_holes)

@@ -11,8 +11,9 @@
 #   libFuzzer is missing, 0 when present. FUZZ_NICE=N runs the fuzzers under nice -n N.
 #   FUZZ_TIMEOUT=S: an input running longer (wall clock) is a finding (default 20); raise it with
 #   a high FUZZ_NICE on a busy machine, where a starved fuzzer can stall past 20 s on any input.
-#   FUZZ_SEED=N: libFuzzer's -seed (default 0: a random seed each run); the smoke tests set 1, so
-#   each replays the same inputs in the same order (only how far it gets in SECONDS varies).
+#   FUZZ_SEED=N: libFuzzer's -seed (default 0: a random seed each run, growing OUT/READER/corpus);
+#   the smoke tests set 1: each run starts from the checked-in inputs only and tries the same
+#   inputs in the same order (only how far it gets in SECONDS varies with the machine and load).
 set -euo pipefail
 MODE=all
 case ${1:-} in --build|--run|--check) MODE=${1#--}; shift ;; esac
@@ -76,7 +77,19 @@ for r in $READERS; do
     echo "fuzz: SKIPPED: $OUT/$r/fuzz_$r is not built (tools/fuzz.sh --build)" >&2
     exit 77
   fi
-  mkdir -p "$OUT/$r/corpus"
+  # With a fixed FUZZ_SEED (the smoke tests) the run starts from the checked-in inputs alone, in a
+  # fresh folder, and writes what it finds to another fresh one: the same inputs in the same order
+  # on every machine (only how far it gets in SECONDS depends on the machine's speed and load).
+  # Otherwise it grows OUT/READER/corpus from run to run.
+  corpus="$OUT/$r/corpus"
+  dirs=(corpus)
+  if [ "${FUZZ_SEED:-0}" != 0 ]; then
+    corpus="$OUT/$r/smoke-seeds"
+    rm -rf "$corpus" "$OUT/$r/smoke-found"
+    mkdir -p "$OUT/$r/smoke-found"
+    dirs=(smoke-found smoke-seeds)
+  fi
+  mkdir -p "$corpus"
   case $r in
     ply) glob='*.ply' ;; xyz) glob='*.xyz' ;; pts) glob='*.pts' ;; qxm) glob='*.qxm' ;; slim2t) glob='*.slim2t' ;;
     mesh) glob='*.mesh' ;; tetgen) glob='*.node' ;; values) glob='values*.txt' ;; nrrd) glob='*.nrrd' ;;
@@ -84,13 +97,13 @@ for r in $READERS; do
     csv) glob='*.csv' ;; png) glob='*.png' ;; pfm) glob='*.pfm' ;; implicit) glob='*.implicit' ;; *) glob="*.$r" ;;
   esac
   find "$ROOT/tests/data/malformed/files" "$ROOT/tests/data/malformed" -maxdepth 1 -type f -name "$glob" \
-    -exec cp {} "$OUT/$r/corpus/" \;
-  [ -d "$ROOT/tests/fuzz/seeds/$r" ] && cp "$ROOT/tests/fuzz/seeds/$r"/* "$OUT/$r/corpus/"
-  [ -n "$(ls -A "$OUT/$r/corpus")" ] || printf '0\n' > "$OUT/$r/corpus/seed"
+    -exec cp {} "$corpus/" \;
+  [ -d "$ROOT/tests/fuzz/seeds/$r" ] && cp "$ROOT/tests/fuzz/seeds/$r"/* "$corpus/"
+  [ -n "$(ls -A "$corpus")" ] || printf '0\n' > "$corpus/seed"
   echo "fuzz: $r for ${SECONDS_EACH} s"
   start=$(date +%s)
   if ! (cd "$OUT/$r" && nice -n "${FUZZ_NICE:-0}" ./"fuzz_$r" -max_total_time="$SECONDS_EACH" -max_len=65536 \
-        -rss_limit_mb=2048 -timeout="${FUZZ_TIMEOUT:-20}" -seed="${FUZZ_SEED:-0}" -print_final_stats=1 corpus > log.txt 2>&1); then
+        -rss_limit_mb=2048 -timeout="${FUZZ_TIMEOUT:-20}" -seed="${FUZZ_SEED:-0}" -print_final_stats=1 "${dirs[@]}" > log.txt 2>&1); then
     echo "fuzz: $r found a failure, see $OUT/$r/log.txt and $OUT/$r/crash-*" >&2
     grep -m3 -E "ERROR|runtime error|terminate|deadly" "$OUT/$r/log.txt" >&2 || true
     status=1

@@ -804,6 +804,7 @@ TEST(FitSlimHard, NoSlitsAlongTheEdgesOfABox) {
   const SurfaceError fine = measure_surface_error(o.fit.model, truth, s.box, {.views = 8, .resolution = 512, .bound = 2 * o.E});
   std::cerr << "  holes at 512^2: " << fine.holes << " of " << fine.data_pixels << " pixels, " << o.fit.model.slims.size()
             << " patches\n";
+  EXPECT_GT(fine.data_pixels, 100000u);
   EXPECT_LE(fine.hole_share, 2e-5) << fine.holes << " of " << fine.data_pixels;
 }
 
