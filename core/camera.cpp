@@ -155,8 +155,12 @@ Camera fit_points(const Camera& camera, std::span<const Eigen::Vector3d> points,
     }
     if (!(x1 >= x0 && y1 >= y0)) break;
     const double dist = (c.target - c.eye).norm();
-    // Centre: move the target (and eye) sideways by the bounds' centre offset at target depth.
-    const Eigen::Vector3d shift = dist * (0.5 * (x0 + x1) * r + 0.5 * (y0 + y1) * u);
+    // Centre: move the target and eye sideways so the bounds' centre slope, taken at the points'
+    // middle depth, comes onto the axis. (At the target's depth instead, points well in front of
+    // it were pushed off-centre by the parallax of the zoom that follows, and a probe that saw one
+    // speck of a model sent the camera 10 diagonals away, looking at nothing.)
+    const double zc = 0.5 * (zmin + zmax);
+    const Eigen::Vector3d shift = zc * (0.5 * (x0 + x1) * r + 0.5 * (y0 + y1) * u);
     // The larger of the fractions of width and height the bounds span becomes `fill`: the
     // nearest point's distance scales by extent/fill (the rest of the depth kept).
     const double extent = std::max((x1 - x0) / (2.0 * tan_y * aspect), (y1 - y0) / (2.0 * tan_y));

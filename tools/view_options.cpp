@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "core/reference.h"
 #include "tools/cli.h"
 
@@ -140,7 +141,12 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
     po.trace.cull_backfaces = o.cull;
     po.trace.slim = o.slim;
     const ReferenceImage img = render_reference(scene, probe, po);
-    for (int y = 0; y < img.height; ++y)
+    // A probe that sees only a few pixels (a model of sub-pixel specks, such as a fit far below
+    // its cloud's sampling) cannot tell where the geometry is: the bounding box frames it instead.
+    constexpr std::ptrdiff_t kFewestPixels = 64;
+    const std::ptrdiff_t covered = std::count_if(img.coverage.begin(), img.coverage.end(), [](auto v) { return v != 0; });
+    if (covered < kFewestPixels) log::debug("framing: the probe covers {} pixels: framing the bounds", covered);
+    for (int y = 0; y < img.height && covered >= kFewestPixels; ++y)
       for (int x = 0; x < img.width; ++x)
         if (const std::size_t i = std::size_t(y) * img.width + x; img.coverage[i]) {
           // Pixel corners too, so the bounds are those of the covered pixels, not their centres.

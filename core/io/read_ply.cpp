@@ -9,6 +9,7 @@
 #include "core/io/formats.h"
 #include "core/io/ply.h"
 #include "core/limits.h"
+#include "core/log.h"
 
 namespace quadrix::io {
 
@@ -37,6 +38,9 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
   Surface s;
   s.mesh.vertices.resize(t.rows);
   if (normal_count == 3) s.normals.resize(t.rows);
+  // Normals all zero are placeholders for "none" (as in read_xyz.cpp): read without normals; a
+  // zero normal among non-zero ones, or the other way round, is refused at the first row that mixes.
+  std::int64_t zero_row = -1, normal_row = -1;
   for (std::size_t i = 0; i < t.rows; ++i) {
     for (std::size_t c = 0; c < props.size(); ++c)
       if (c < 3 ? !is_world_value(t(i, c)) : !std::isfinite(t(i, c)))
@@ -45,9 +49,18 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
     s.mesh.vertices[i] = {t(i, 0), t(i, 1), t(i, 2)};
     if (normal_count == 3) {
       const Eigen::Vector3d n(t(i, 3), t(i, 4), t(i, 5));
-      if (!(n.norm() > 0))
-        throw FormatError(f.message("vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3), "zero normal"));
-      s.normals[i] = n.normalized();
+      const bool zero = !(n.norm() > 0);
+      if (zero ? normal_row >= 0 : zero_row >= 0)
+        throw FormatError(f.message(
+            "vertex", static_cast<std::int64_t>(i), "nx", t.byte_offset(i, 3),
+            zero ? fmt::format("zero normal (vertex {}'s is not: either every normal is given, or all are 0 0 0 for none)",
+                               normal_row)
+                 : fmt::format("normal ({} {} {}) after vertex {}'s zero normal (either every normal is given, or all "
+                               "are 0 0 0 for none)",
+                               n.x(), n.y(), n.z(), zero_row)));
+      std::int64_t& first = zero ? zero_row : normal_row;
+      if (first < 0) first = static_cast<std::int64_t>(i);
+      if (!zero) s.normals[i] = n.normalized();
     }
     if (has_colours) {
       std::array<std::uint8_t, 3> c{};
@@ -60,6 +73,10 @@ Surface read_ply(std::string bytes, const std::filesystem::path& path) {
       }
       s.mesh.colours.push_back(c);
     }
+  }
+  if (zero_row >= 0) {
+    s.normals.clear();
+    log::warn("{}: every normal is 0 0 0: read as points without normals", path.string());
   }
   if (!ef) return s;
   const ply::Table& ft = tables[1];

@@ -10,6 +10,7 @@
 #include "core/io/formats.h"
 #include "core/io/text_reader.h"
 #include "core/limits.h"
+#include "core/log.h"
 
 namespace quadrix::io {
 
@@ -18,6 +19,10 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
   PointCloud cloud;
   std::size_t columns = 0, first_line = 0;
   long long declared = -1;
+  // Normals all zero are placeholders (exporters write "0 0 0" for "none": CGAL's blobby.xyz):
+  // the cloud is read without normals, which the fit then estimates. A zero normal among
+  // non-zero ones, or the other way round, is refused at the first line that breaks the rule.
+  std::size_t zero_normals = 0, zero_line = 0, normal_line = 0;
   std::array<double, 9> v{};
   while (r.next_line()) {
     std::size_t n = 0;
@@ -46,8 +51,18 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
     if (n >= 6) {
       const Eigen::Vector3d nn(v[3], v[4], v[5]);
       if (!nn.allFinite()) r.fail("normal ({} {} {}) is not finite", v[3], v[4], v[5]);
-      if (!(nn.norm() > 0)) r.fail("zero normal");
-      cloud.normals.push_back(nn.normalized());
+      if (!(nn.norm() > 0)) {
+        if (normal_line != 0)
+          r.fail("zero normal (line {} has a non-zero one: either every normal is given, or all are 0 0 0 for none)",
+                 normal_line);
+        if (zero_normals++ == 0) zero_line = r.line_number();
+      } else {
+        if (zero_normals != 0)
+          r.fail("normal ({} {} {}) after line {}'s zero normal (either every normal is given, or all are 0 0 0 for none)",
+                 v[3], v[4], v[5], zero_line);
+        if (normal_line == 0) normal_line = r.line_number();
+        cloud.normals.push_back(nn.normalized());
+      }
     }
     if (n == 9) {
       std::array<std::uint8_t, 3> c{};
@@ -59,6 +74,8 @@ PointCloud read_xyz(std::string_view text, const std::filesystem::path& path, bo
       cloud.colours.push_back(c);
     }
   }
+  if (zero_normals > 0)
+    log::warn("{}: every normal is 0 0 0: read as points without normals", path.string());
   if (declared >= 0 && static_cast<std::size_t>(declared) != cloud.points.size())
     throw FormatError(fmt::format("{}: the count line declares {} points but the file holds {}", path.string(),
                                   declared, cloud.points.size()));
