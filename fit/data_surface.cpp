@@ -112,6 +112,15 @@ struct DataSurface::Impl {
   // Points: the farthest neighbour asked in each 60° sector of the tangent plane (tangent_sector);
   // a boundary point's disc reaches no farther than that plus boundary_reach of it there.
   std::vector<std::array<float, 6>> sector_far;
+  // Points: the disc's second-order term, the height ½(a x² + 2b xy + c y²) over the tangent plane
+  // (x, y along normal.unitOrthogonal() and normal × it), fitted to the same-sheet neighbours'
+  // heights: a tangent disc is flat, so where E is below the sampling's sag (a sphere of 400
+  // points at 1e-3) the true surface itself read as off the data (400 patches for a sphere).
+  // As a world-frame tensor K (tangential: Kn = 0; height ½ tᵀKt at the tangential offset t),
+  // empty where the disc is flat; bend_reach: its largest |height| on the disc, ½·max|λ|·radius².
+  std::vector<Eigen::Matrix3f> bend;
+  std::vector<float> bend_reach;
+  double lipschitz = 1.0;  // DataSurface::lipschitz: above 1 once a disc is bent
   std::vector<std::array<Eigen::Vector3d, 3>> triangles;
   bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
@@ -141,11 +150,52 @@ struct DataSurface::Impl {
     const Eigen::Vector3d v = x - points[i];
     h = normals[i].dot(v);
     const Eigen::Vector3d t = v - h * normals[i];
+    h -= bend_height(i, t);
     if (inward[i].squaredNorm() == 0) return std::max(0.0, t.norm() - disc[i]);
     const Eigen::Vector3d u = normals[i].unitOrthogonal(), w = normals[i].cross(u);
     const Eigen::Vector2d p(t.dot(u), t.dot(w));
     return std::max(star_excess(i, p, tangent_sector(t, u, w)), cut_disc_excess(p, Eigen::Vector2d(inward[i].dot(u), inward[i].dot(w)), disc[i]));
   }
+  // The bent disc's height at the tangential offset t (world frame), t clamped to the disc's
+  // radius; 0 for a flat disc.
+  double bend_height(std::uint32_t i, const Eigen::Vector3d& t) const {
+    if (bend_reach.empty() || bend_reach[i] == 0.0f) return 0.0;
+    const double len = t.norm();
+    const Eigen::Vector3d q = len > disc[i] ? Eigen::Vector3d(t * (disc[i] / len)) : t;
+    return 0.5 * q.dot(bend[i].cast<double>() * q);
+  }
+  double reach_of_bend(std::uint32_t i) const { return bend_reach.empty() ? 0.0 : double(bend_reach[i]); }
+  // The first t in (tmin, tmax) where the ray meets point i's disc (flat or bent, within its
+  // shape: disc_excess 0), else +inf. Bent: z − ½q(x, y) along the ray is a quadratic in t.
+  double disc_hit(std::uint32_t i, const Ray& ray, double tmin, double tmax) const {
+    const Eigen::Vector3d& n = normals[i];
+    const Eigen::Vector3d v = ray.origin - points[i];
+    const auto within = [&](double t) {
+      double h = 0;
+      return t > tmin && t < tmax && disc_excess(i, ray.at(t), h) <= 0.0;
+    };
+    if (reach_of_bend(i) == 0.0) {
+      const double along = n.dot(ray.dir);
+      if (along == 0.0) return kInf;
+      const double t = -n.dot(v) / along;
+      return within(t) ? t : kInf;
+    }
+    // n·(v + td) − ½(v + td)ᵀK(v + td) = 0 (K is tangential, so v and d need no projecting):
+    // αt² + 2βt + γ = 0, solved by core's solver (core/ray.h).
+    const Eigen::Matrix3d K = bend[i].cast<double>();
+    const Eigen::Vector3d Kv = K * v, Kd = K * ray.dir;
+    const RayQuadratic e{-0.5 * ray.dir.dot(Kd), 0.5 * (n.dot(ray.dir) - v.dot(Kd)), n.dot(v) - 0.5 * v.dot(Kv)};
+    const Roots roots = solve_ray_quadratic(e);
+    for (int r = 0; r < roots.count; ++r)
+      if (within(roots.t[r])) return roots.t[r];
+    return kInf;
+  }
+  // The unit normal of point i's disc at x (on it): n for a flat disc, the bent one's gradient.
+  Eigen::Vector3d disc_normal(std::uint32_t i, const Eigen::Vector3d& x) const {
+    if (reach_of_bend(i) == 0.0) return normals[i];
+    return (normals[i] - bend[i].cast<double>() * (x - points[i])).normalized();
+  }
+
   // Distance from p (tangent-plane coordinates along u, w of tangent_sector, in sector `own`) to
   // the union of the six 60° sectors of radius min(disc, farthest neighbour there + boundary_reach·disc).
   double star_excess(std::uint32_t i, const Eigen::Vector2d& p, int own) const {
@@ -200,8 +250,10 @@ struct DataSurface::Impl {
         // A disc of radius r about p with unit normal n spans r·√(1 − nₐ²) = r·‖(n_b, n_c)‖ along
         // axis a (the norm of the other two: no cancellation for a normal near the axis).
         const Eigen::Vector3d& n = normals[i];
+        // A bent disc's height reaches up to bend_reach along its normal.
         const Eigen::Vector3d half =
-            disc[i] * Eigen::Vector3d(std::hypot(n.y(), n.z()), std::hypot(n.x(), n.z()), std::hypot(n.x(), n.y()));
+            disc[i] * Eigen::Vector3d(std::hypot(n.y(), n.z()), std::hypot(n.x(), n.z()), std::hypot(n.x(), n.y())) +
+            reach_of_bend(std::uint32_t(i)) * n.cwiseAbs();
         boxes[i].extend(points[i] - half);
         boxes[i].extend(points[i] + half);
       }
@@ -238,6 +290,10 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.spacing.assign(m.points.size(), 0.0);
   m.sector_far.assign(m.points.size(), std::array<float, 6>{});
   m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
+  if (options.bent_discs) {
+    m.bend.assign(m.points.size(), Eigen::Matrix3f::Zero());
+    m.bend_reach.assign(m.points.size(), 0.0f);
+  }
   // Visited in Morton order (neighbouring queries share the tree's cache lines: a 1M-point cloud
   // in random order spent 39 s here). Neighbours on the same sheet only (normals within 60°):
   // across a thin part or a gap the other sheet's points are no evidence of this sheet's spacing
@@ -301,6 +357,39 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
           if (d < kInf) widest = std::max(widest, d);
         m.disc[i] = std::max(m.disc[i], options.sector_reach * widest);
       }
+      if (options.bent_discs && same.size() >= 5) {
+        // Least squares of h = ½(a x² + 2b xy + c y²) over the same-sheet neighbours; the bend
+        // capped so the disc's slope at its rim stays below max_disc_slope.
+        const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+        Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
+        double flat = 0;  // Σh²: the flat disc's residual
+        for (std::size_t j = 1; j < nb.size(); ++j) {
+          if (m.normals[nb[j].first].dot(n) < 0.5) continue;
+          const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
+          const double x = v.dot(u), y = v.dot(w), hh = v.dot(n);
+          const Eigen::Vector3d row(0.5 * x * x, x * y, 0.5 * y * y);
+          AtA += row * row.transpose();
+          Atb += row * hh;
+          flat += hh * hh;
+        }
+        const Eigen::Vector3d k = AtA.ldlt().solve(Atb);
+        // The bend only where it explains the heights (residual Σ(h − q)² = Σh² − kᵀAᵀb at the
+        // least-squares solution): where noise or a crease dominates them, the disc stays flat.
+        const double residual = flat - k.dot(Atb);
+        if (k.allFinite() && residual <= options.bend_residual * flat) {
+          Eigen::Matrix2d K;
+          K << k[0], k[1], k[1], k[2];
+          const double kmax =
+              Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(K, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+          const double cap = options.max_disc_slope / std::max(m.disc[i], 1e-300);
+          const double scale = kmax > cap ? cap / kmax : 1.0;
+          m.bend[i] = (scale * (k[0] * u * u.transpose() + k[1] * (u * w.transpose() + w * u.transpose()) +
+                                k[2] * w * w.transpose()))
+                          .cast<float>();
+          m.bend_reach[i] = float(0.5 * scale * kmax * m.disc[i] * m.disc[i]);
+        }
+      }
       const std::size_t kb = std::min(options.boundary_neighbours, same.size());
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       double mean = 0;
@@ -311,6 +400,14 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
     }
   });
   confirm_boundaries(m, reach);
+  // A boundary point's disc stays flat: its shape (a star of sectors, cut short past the boundary)
+  // measures the tangential excess to its nearest shape point, and the height there is that of the
+  // tangent plane (the bent height at the clamped offset would not belong to a point of the disc).
+  if (!m.bend.empty())
+    for (std::size_t i = 0; i < m.points.size(); ++i)
+      if (m.inward[i].squaredNorm() > 0) m.bend[i].setZero(), m.bend_reach[i] = 0.0f;
+  if (std::any_of(m.bend_reach.begin(), m.bend_reach.end(), [](float r) { return r > 0.0f; }))
+    m.lipschitz = std::hypot(1.0, options.max_disc_slope);
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) m.boundary.push_back({m.points[i], m.inward[i]});
   m.index_boundary();
@@ -438,6 +535,17 @@ void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<
   for (const auto& [i, d2] : nb) out.push_back(m.boundary[i]);
 }
 
+double DataSurface::lipschitz() const { return impl_->lipschitz; }
+
+Eigen::Matrix3d DataSurface::bend_tensor(std::size_t i) const {
+  const auto& m = *impl_;
+  return m.bend.empty() ? Eigen::Matrix3d::Zero() : Eigen::Matrix3d(m.bend[i].cast<double>());
+}
+
+double DataSurface::bend_height(std::size_t i, const Eigen::Vector3d& t) const {
+  return impl_->bend_height(std::uint32_t(i), t);
+}
+
 bool DataSurface::near_open_boundary(const Eigen::Vector3d& x, double r) const {
   const auto& m = *impl_;
   if (!m.boundary_index) return false;
@@ -503,8 +611,9 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
   const double cap2 = cap * cap * (1.0 + 1e-12);
   double best2 = std::min(best * best, cap2);
   m.discs().nearest(x, best2, good * good, [&](std::uint32_t i) {
-    // A disc lies no nearer than its point less its radius: most items of a leaf go by that.
-    const double far = (x - m.points[i]).norm() - m.disc[i];
+    // A disc lies no nearer than its point less its radius (and its bend's height): most items
+    // of a leaf go by that.
+    const double far = (x - m.points[i]).norm() - std::hypot(m.disc[i], m.reach_of_bend(i));
     if (far > 0 && far * far >= best2) return;
     if (const double d = m.disc_distance(i, x); d * d < best2) best2 = d * d, best = d, best_id = i;
   });
@@ -532,18 +641,15 @@ std::optional<DataSurface::RayHit> DataSurface::first_hit(const Ray& ray, double
     double best_rel = std::numeric_limits<double>::infinity();
     const auto tie = [&] { return 1e-9 * std::max(1.0, std::abs(best) < kInf ? std::abs(best) : 1.0); };
     m.discs().traverse(ray, tmin, [&] { return best < tmax ? best + tie() : best; }, [&](std::uint32_t i) {
-      const double along = m.normals[i].dot(ray.dir);
-      if (along == 0.0 || !(m.disc[i] > 0)) return;
-      const double d = m.normals[i].dot(m.points[i] - ray.origin) / along;
-      if (!(d > tmin && d < tmax) || d > best + tie()) return;
-      double h = 0;
-      if (m.disc_excess(i, ray.at(d), h) > 0.0) return;
+      if (!(m.disc[i] > 0)) return;
+      const double d = m.disc_hit(i, ray, tmin, std::min(tmax, best + tie()));
+      if (!(d < kInf)) return;
       const double rel = (ray.at(d) - m.points[i]).norm() / std::max(m.spacing[i], 1e-300);
       if (d < best - tie() || rel < best_rel) best = std::min(best, d), best_i = i, best_rel = rel;
     });
     if (!(best < tmax)) return std::nullopt;
     hit.t = best;
-    hit.normal = m.normals[best_i];
+    hit.normal = m.disc_normal(best_i, ray.at(best));
     hit.front = hit.normal.dot(ray.dir) < 0.0;
     hit.reach = m.disc[best_i];
     hit.from_sample = (ray.at(best) - m.points[best_i]).norm();
@@ -640,7 +746,7 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     line.origin[a2] = c.b;
     line.dir = Eigen::Vector3d::Unit(c.axis);
     const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, line));
-    const double reach = kReach * c.h * patch.radius;
+    const double reach = kReach * c.h * patch.radius * data.lipschitz();
     bool split = false;
     for (int k = 0; k < roots.count; ++k) {
       const Eigen::Vector3d u = line.at(roots.t[k]);

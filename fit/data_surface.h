@@ -2,7 +2,7 @@
 /// The data a SLIM fit is judged against, as a surface (DESIGN §2, the two-sided contract):
 /// a triangle mesh (exact point–triangle distance, ray casting for hole counts), or oriented
 /// points read as the union of their tangent discs, each disc as wide as the local sample
-/// spacing ("the local surface of the points").
+/// spacing and bent as its neighbours' heights bend it ("the local surface of the points").
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -34,6 +34,14 @@ struct DataSurfaceOptions {
   std::size_t boundary_neighbours = 24;
   double boundary_offset = 0.45;
   double boundary_reach = 0.25;
+  /// Bent discs: each disc carries the second-order term of its neighbours' heights over its
+  /// tangent plane (a flat disc's sag at its rim, about κρ²/2, read as error where E is below it),
+  /// capped so its slope at the rim stays below max_disc_slope.
+  bool bent_discs = true;
+  double max_disc_slope = 0.5;
+  /// ... only where the bend explains the heights: the residual sum of squares at most this
+  /// share of the flat disc's
+  double bend_residual = 0.25;
 };
 
 class DataSurface {
@@ -53,8 +61,8 @@ public:
   /// With good > 0, a mesh walk stops at the first triangle within good and returns its
   /// distance: an upper bound ≤ good, not the minimum (for "within good?" questions); for
   /// points likewise the first disc found within good. Either way the answer to "≤ good?" is the
-  /// full query's. For points the distance is to the union of every point's tangent disc (a BVH
-  /// walk over the discs), so, like a mesh's, it never changes faster than x moves.
+  /// full query's. For points the distance is to the union of every point's disc (a BVH walk
+  /// over the discs), so, like a mesh's, it never changes faster than lipschitz() × as x moves.
   double distance(const Eigen::Vector3d& x, double cap = std::numeric_limits<double>::infinity(),
                   double good = 0) const;
   /// Nearest intersection of the ray with the triangles (either side) in (tmin, tmax), or for
@@ -77,8 +85,18 @@ public:
   std::optional<RayHit> first_hit(const Ray& ray, double tmin = 0.0,
                                   double tmax = std::numeric_limits<double>::infinity()) const;
   bool has_faces() const;
+  /// How fast distance() can change as its query moves: 1 for a mesh and flat discs; for bent
+  /// discs √(1 + max_disc_slope²) (the height over a bent disc is measured along its normal).
+  double lipschitz() const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
+  /// Height of point i's bent disc over its tangent plane at the tangential offset t (points
+  /// only; 0 for flat discs), t clamped to the disc's radius: the disc's point over p + t is
+  /// p + t + height·n.
+  double bend_height(std::size_t i, const Eigen::Vector3d& t) const;
+  /// Point i's bend as a world-frame tensor K (tangential: Kn = 0): the bent disc's height over
+  /// p + t is ½ tᵀKt (points only; zero for flat discs).
+  Eigen::Matrix3d bend_tensor(std::size_t i) const;
   /// Point i's sample spacing (points only): the distance to its spacing_neighbour-th nearest
   /// neighbour on the same sheet, or, at a step in the sampling density, half the gap to the
   /// sparse side's nearest point where that is wider (not the sectors' reach of its disc).
@@ -104,8 +122,8 @@ private:
 
 /// Whether a SLIM patch's zero set inside its ball (and clip plane) lies within bound of data.
 /// Lines parallel to the three local axes on a grid × grid lattice find its points; as distance
-/// to the data is 1-Lipschitz, a sample at distance d vouches for its lattice cell when
-/// d + (the cell's reach on the sheet) ≤ bound, and cells it cannot vouch for are split in four,
+/// to the data is L-Lipschitz (DataSurface::lipschitz), a sample at distance d vouches for its
+/// lattice cell when d + L·(the cell's reach on the sheet) ≤ bound, and cells it cannot vouch for are split in four,
 /// down to a reach of bound/16 or max_depth splits, whichever comes first (the cost of a full
 /// guarantee grows with (R/bound)²; the blended verification samples the rest). A clipped patch
 /// is also sampled every bound/2 along the curve where its zero set meets the clip plane, where

@@ -215,6 +215,9 @@ struct SlimFitOptions {
   bool see_point_holes = true;
   /// ... unless more than this share of the points see one at the first check (then counted).
   double seen_hole_share = 0.01;
+  /// Points without faces: the data's surface is the points' discs bent by their neighbours'
+  /// heights (DataSurfaceOptions::bent_discs); false: flat tangent discs
+  bool bent_discs = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;

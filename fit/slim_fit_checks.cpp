@@ -82,8 +82,11 @@ void SlimFitter::uncovered(const Eigen::Vector3d& p, const Eigen::Vector3d& q, c
 std::array<Eigen::Vector3d, 6> SlimFitter::tangent_ring(std::size_t i, double rho) const {
   const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
   std::array<Eigen::Vector3d, 6> ring;
-  for (int k = 0; k < 6; ++k)
-    ring[k] = P_[i] + rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
+  for (int k = 0; k < 6; ++k) {
+    // On the point's disc, bent as the data's surface bends it (DataSurface::bend_height).
+    const Eigen::Vector3d t = rho * (std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v);
+    ring[k] = P_[i] + t + (data_ ? data_->bend_height(i, t) : 0.0) * N_[i];
+  }
   return ring;
 }
 
@@ -298,20 +301,28 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
     // Reaching its spot well inside (a hole between the points lies up to a spacing away).
     const double R = std::max(disc_patch_radius(i), 1.25 * (x - P_[i]).norm());
     if (!(R > 0)) continue;
+    // The point's disc as the data's surface bends it (DataSurface::bend_tensor): its tangent
+    // plane where the disc is flat.
+    const Eigen::Matrix3d K = data_->bend_tensor(i);
+    const auto on_disc = [&](const Eigen::Vector3d& t) { return P_[i] + t + 0.5 * t.dot(K * t) * N_[i]; };
     if (on_data) {
-      // The plane at the spot and on two rings (half and all of the ball) within the bound.
+      // The patch at the spot and on two rings (half and all of the ball) within the bound.
       const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
-      bool off = !(data_->distance(x - N_[i].dot(x - P_[i]) * N_[i], 2.0 * bound) <= bound);
+      const Eigen::Vector3d xt = x - P_[i] - N_[i].dot(x - P_[i]) * N_[i];
+      bool off = !(data_->distance(on_disc(xt), 2.0 * bound) <= bound);
       for (int k = 0; k < 12 && !off; ++k) {
         const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 6.0) * u + std::sin(std::numbers::pi * k / 6.0) * v;
-        off = !(data_->distance(P_[i] + (k % 2 ? 0.5 : 0.98) * R * t, 2.0 * bound) <= bound);
+        off = !(data_->distance(on_disc((k % 2 ? 0.5 : 0.98) * R * t), 2.0 * bound) <= bound);
       }
       if (off) {
         disc_shrunk_[i] = 1;  // as a disc patch that ran off: counted, not tried again
         continue;
       }
     }
-    Ball b{i, R, Quadric::plane(N_[i], 0.0), true, true, 0, 0, 0, ClipPlanes{}};
+    // In the ball's local units u = (x − p)/R: n·u − ½R·uᵀKu = 0 (a plane where K = 0).
+    Quadric disc = Quadric::plane(N_[i], 0.0);
+    disc.A = -0.5 * R * K;  // g = uᵀAu + 2bᵀu with b = n/2
+    Ball b{i, R, disc, true, true, 0, 0, 0, ClipPlanes{}};
     b.count = 1;
     b.settled = true;
     b.disc = true;

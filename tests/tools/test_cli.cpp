@@ -296,6 +296,29 @@ TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
   EXPECT_NE(r.out.find(fmt::format("holes left: {} points' coverage discs not held", holes)), std::string::npos) << r.out;
 }
 
+// An E far below a cloud's sampling leaves most points with a hole around them (a surface across
+// the gaps would bend more than 2E off their tangent discs). That was said only at -v, so a new
+// user saw a fit that fell apart into discs, exit 0, with no reason: now a warning at the default
+// verbosity gives the points' spacing. A sphere of 400 points (spacing about 0.18 of its radius).
+TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
+  ScratchDir dir("cli-fit-sparse");
+  std::ofstream f(dir / "sparse.xyz");
+  const int n = 400;
+  for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, outward normals
+    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
+    f << fmt::format("{} {} {} {} {} {}\n", r * std::cos(phi), r * std::sin(phi), z, r * std::cos(phi), r * std::sin(phi), z);
+  }
+  f.close();
+  const CmdResult fine = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 -o " + q(dir / "fine.qxm"));
+  ASSERT_EQ(fine.code, 0) << fine.out;
+  EXPECT_NE(fine.out.find("is below what the sampling resolves"), std::string::npos) << fine.out;
+  EXPECT_NE(fine.out.find("median spacing"), std::string::npos) << fine.out;
+  EXPECT_NE(fine.out.find("holes left"), std::string::npos) << fine.out;
+  const CmdResult coarse = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-2 -o " + q(dir / "coarse.qxm"));
+  ASSERT_EQ(coarse.code, 0) << coarse.out;
+  EXPECT_EQ(coarse.out.find("below what the sampling resolves"), std::string::npos) << coarse.out;
+}
+
 // Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
 // speck floating beside the surface. --keep-outliers fits them all.
 TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
