@@ -113,6 +113,8 @@ TEST(FitSlimScans, SparseCloudsHolesBetweenThePointsAreFilled) {
 // hole there that a moved plane closes). There 17 of 81 rays pass with both off, 6 with the moved
 // plane alone (it narrows the slit, and the seen holes close the rest), 0 with the seen holes
 // alone and with both.
+// With bent discs (the default) the slit does not open at all (0 of 81 rays with both off, 623
+// patches): the mechanisms are tested on flat discs, where it does.
 TEST(FitSlimScans, KittenShowsNoSlitThroughToTheFarSide) {
   const std::string file = std::string(QUADRIX_DATASETS) + "/points/kitten.xyz";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
@@ -122,6 +124,7 @@ TEST(FitSlimScans, KittenShowsNoSlitThroughToTheFarSide) {
   const auto through = [&](bool relax, bool see) {
     SlimFitOptions o{.max_error = 1e-3, .relax_clips = relax};
     o.see_point_holes = see;
+    o.bent_discs = false;
     const SlimFitResult r = fit_slim(cloud, o);
     const double E = r.stats.max_error_abs;
     const ReferenceScene scene(r.model);
@@ -231,11 +234,13 @@ TEST(FitSlimScans, UntunedDataEndsWithinItsBound) {
 // 659 to 938). The fit used to stop three rounds after the least share of failures (holes
 // counted) and keep round 3, 497 samples beyond 2E up to 23E; the kept model is now one within
 // the bound if any round was (else the one that breaches it least), and the repairs go on while
-// they lower the breaches.
+// they lower the breaches. With bent discs (the default) radar's first round has 49 breaches,
+// not 497, and the repairs end within the bound in 4 rounds without trading them for holes: the
+// selection is tested on flat discs, where the case still arises.
 TEST(FitSlimScans, KeepsTheRoundWithTheFewestBreachesOfTheBound) {
   const std::string file = std::string(QUADRIX_DATASETS) + "/points/radar.xyz";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
-  const SlimFitResult r = fit_slim(read_points(file), {.max_error = 1e-4});
+  const SlimFitResult r = fit_slim(read_points(file), {.max_error = 1e-4, .bent_discs = false});
   const SlimFitStats& s = r.stats;
   ASSERT_EQ(s.hole_points, 0u);  // no faces: the same points in every round
   ASSERT_EQ(s.round_breaches.size(), s.round_failures.size());

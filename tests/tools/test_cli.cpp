@@ -299,14 +299,20 @@ TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
 // An E far below a cloud's sampling leaves most points with a hole around them (a surface across
 // the gaps would bend more than 2E off their tangent discs). That was said only at -v, so a new
 // user saw a fit that fell apart into discs, exit 0, with no reason: now a warning at the default
-// verbosity gives the points' spacing. A sphere of 400 points (spacing about 0.18 of its radius).
+// verbosity gives the points' spacing. A sphere of 400 points (spacing about 0.18 of its radius)
+// with radial noise of ±0.01, about 30E at 1e-4 (without noise its bent discs hold the sphere
+// between the points, and 5 patches fit it at any E).
 TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
   ScratchDir dir("cli-fit-sparse");
   std::ofstream f(dir / "sparse.xyz");
   const int n = 400;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> noise(-0.01, 0.01);
   for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, outward normals
     const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
-    f << fmt::format("{} {} {} {} {} {}\n", r * std::cos(phi), r * std::sin(phi), z, r * std::cos(phi), r * std::sin(phi), z);
+    const double s = 1.0 + noise(rng);
+    f << fmt::format("{} {} {} {} {} {}\n", s * r * std::cos(phi), s * r * std::sin(phi), s * z, r * std::cos(phi),
+                     r * std::sin(phi), z);
   }
   f.close();
   const CmdResult fine = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 -o " + q(dir / "fine.qxm"));
