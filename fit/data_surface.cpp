@@ -406,8 +406,11 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   if (!m.bend.empty())
     for (std::size_t i = 0; i < m.points.size(); ++i)
       if (m.inward[i].squaredNorm() > 0) m.bend[i].setZero(), m.bend_reach[i] = 0.0f;
-  if (std::any_of(m.bend_reach.begin(), m.bend_reach.end(), [](float r) { return r > 0.0f; }))
-    m.lipschitz = std::hypot(1.0, options.max_disc_slope);
+  // The steepest rim slope of any bent disc (2·reach/radius) sets how fast the distance can change.
+  double slope = 0;
+  for (std::size_t i = 0; i < m.bend_reach.size(); ++i)
+    if (m.bend_reach[i] > 0.0f) slope = std::max(slope, 2.0 * double(m.bend_reach[i]) / m.disc[i]);
+  m.lipschitz = std::hypot(1.0, std::min(slope, options.max_disc_slope) * (1.0 + 1e-6));
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) m.boundary.push_back({m.points[i], m.inward[i]});
   m.index_boundary();

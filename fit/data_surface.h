@@ -86,7 +86,8 @@ public:
                                   double tmax = std::numeric_limits<double>::infinity()) const;
   bool has_faces() const;
   /// How fast distance() can change as its query moves: 1 for a mesh and flat discs; for bent
-  /// discs √(1 + max_disc_slope²) (the height over a bent disc is measured along its normal).
+  /// discs √(1 + s²), s the steepest disc's slope at its rim (≤ max_disc_slope: the height over
+  /// a bent disc is measured along its normal).
   double lipschitz() const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
