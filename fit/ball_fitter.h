@@ -38,7 +38,8 @@ struct Ball {
   // than local_surface_factor·E past the triangle: its zero set is the data by construction, so
   // neither its lattice nor its rim needs checking on its own.
   bool on_data = false;
-  // A disc patch (SlimFitOptions::cover_point_holes): a point's tangent plane, kept through repair.
+  // A disc patch (SlimFitOptions::cover_point_holes): a point's disc (its tangent plane, bent as
+  // the data's surface bends it: DataSurface::bend_tensor), kept through repair.
   bool disc = false;
   // Its crease plane moved across a slit (SlimFitter::crease_slits).
   bool relaxed = false;

@@ -136,8 +136,9 @@ struct DataSurface::Impl {
   mutable Bvh disc_bvh;
 
   // How far x's tangential offset from point i lies outside its disc (0: over the disc), and its
-  // height above the disc's plane. A boundary point's disc, past its farthest neighbour in the
-  // offset's sector, reaches on only boundary_reach of its radius: along an open sheet's edge
+  // height above the disc (its plane, or the bent disc at the offset clamped to its radius). A
+  // boundary point's disc (always flat), past its farthest neighbour in the offset's sector,
+  // reaches on only boundary_reach of its radius: along an open sheet's edge
   // towards a corner the edge points' discs ran a spacing past the corner (blobs at a square's
   // corners, ~9E at 1e-3); and beyond the boundary (away from `inward`) only boundary_reach of
   // it. The one disc shape for distances and ray casts. The excess is the Euclidean distance to
@@ -290,9 +291,11 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.spacing.assign(m.points.size(), 0.0);
   m.sector_far.assign(m.points.size(), std::array<float, 6>{});
   m.inward.assign(m.points.size(), Eigen::Vector3d::Zero());
+  std::vector<double> fitted_disc;  // bent discs: the radius when the bend was fitted (0: flat)
   if (options.bent_discs) {
     m.bend.assign(m.points.size(), Eigen::Matrix3f::Zero());
     m.bend_reach.assign(m.points.size(), 0.0f);
+    fitted_disc.assign(m.points.size(), 0.0);
   }
   // Visited in Morton order (neighbouring queries share the tree's cache lines: a 1M-point cloud
   // in random order spent 39 s here). Neighbours on the same sheet only (normals within 60°):
@@ -373,21 +376,19 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
           Atb += row * hh;
           flat += hh * hh;
         }
+        // Only where the neighbours spread over the plane (all on the point's own scan line,
+        // the cross terms rest on tiny offsets) and the bend explains the heights (residual
+        // Σ(h − q)² = Σh² − kᵀAᵀb at the least-squares solution): where noise or a crease
+        // dominates them, the disc stays flat. Capped in the pass after confirm_boundaries,
+        // which may widen the disc.
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> spread(AtA, Eigen::EigenvaluesOnly);
         const Eigen::Vector3d k = AtA.ldlt().solve(Atb);
-        // The bend only where it explains the heights (residual Σ(h − q)² = Σh² − kᵀAᵀb at the
-        // least-squares solution): where noise or a crease dominates them, the disc stays flat.
         const double residual = flat - k.dot(Atb);
-        if (k.allFinite() && residual <= options.bend_residual * flat) {
-          Eigen::Matrix2d K;
-          K << k[0], k[1], k[1], k[2];
-          const double kmax =
-              Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(K, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
-          const double cap = options.max_disc_slope / std::max(m.disc[i], 1e-300);
-          const double scale = kmax > cap ? cap / kmax : 1.0;
-          m.bend[i] = (scale * (k[0] * u * u.transpose() + k[1] * (u * w.transpose() + w * u.transpose()) +
-                                k[2] * w * w.transpose()))
+        if (spread.eigenvalues()(0) >= 1e-3 * spread.eigenvalues()(2) && k.allFinite() &&
+            residual <= options.bend_residual * flat) {
+          m.bend[i] = (k[0] * u * u.transpose() + k[1] * (u * w.transpose() + w * u.transpose()) + k[2] * w * w.transpose())
                           .cast<float>();
-          m.bend_reach[i] = float(0.5 * scale * kmax * m.disc[i] * m.disc[i]);
+          fitted_disc[i] = m.disc[i];
         }
       }
       const std::size_t kb = std::min(options.boundary_neighbours, same.size());
@@ -403,14 +404,24 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   // A boundary point's disc stays flat: its shape (a star of sectors, cut short past the boundary)
   // measures the tangential excess to its nearest shape point, and the height there is that of the
   // tangent plane (the bent height at the clamped offset would not belong to a point of the disc).
-  if (!m.bend.empty())
-    for (std::size_t i = 0; i < m.points.size(); ++i)
-      if (m.inward[i].squaredNorm() > 0) m.bend[i].setZero(), m.bend_reach[i] = 0.0f;
-  // The steepest rim slope of any bent disc (2·reach/radius) sets how fast the distance can change.
-  double slope = 0;
-  for (std::size_t i = 0; i < m.bend_reach.size(); ++i)
-    if (m.bend_reach[i] > 0.0f) slope = std::max(slope, 2.0 * double(m.bend_reach[i]) / m.disc[i]);
-  m.lipschitz = std::hypot(1.0, std::min(slope, options.max_disc_slope) * (1.0 + 1e-6));
+  // So does a disc confirm_boundaries widened past the neighbours its bend was fitted to (a step
+  // in the sampling density): extrapolated there, the bend would make the data permissive. The
+  // others are capped at max_disc_slope on their final radius.
+  double slope = 0;  // the steepest bent disc's rim slope (2·reach/radius)
+  for (std::size_t i = 0; i < m.bend.size(); ++i) {
+    if (fitted_disc[i] == 0.0 || m.inward[i].squaredNorm() > 0 || m.disc[i] > fitted_disc[i]) {
+      m.bend[i].setZero();
+      continue;
+    }
+    const Eigen::Matrix3d K = m.bend[i].cast<double>();
+    const double kmax = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(K, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+    const double scale = kmax * m.disc[i] > options.max_disc_slope ? options.max_disc_slope / (kmax * m.disc[i]) : 1.0;
+    m.bend[i] = (scale * K).cast<float>();
+    // Rounded up past the float copy's rounding, so the boxes and prunes stay conservative.
+    m.bend_reach[i] = float(0.5 * scale * kmax * m.disc[i] * m.disc[i] * (1.0 + 1e-5));
+    slope = std::max(slope, 2.0 * double(m.bend_reach[i]) / m.disc[i]);
+  }
+  m.lipschitz = std::hypot(1.0, slope);
   for (std::size_t i = 0; i < m.points.size(); ++i)
     if (m.inward[i].squaredNorm() > 0) m.boundary.push_back({m.points[i], m.inward[i]});
   m.index_boundary();
@@ -598,8 +609,8 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     hints.remember(best_id);
     return std::sqrt(best);
   }
-  // The distance to the union of every point's disc: each disc's distance is 1-Lipschitz, so is
-  // their minimum. As for a mesh: queries come in runs along one patch, so the discs nearest this
+  // The distance to the union of every point's disc: each disc's distance is lipschitz()-Lipschitz
+  // (1 for flat discs), so is their minimum. As for a mesh: queries come in runs along one patch, so the discs nearest this
   // thread's last few queries give a first bound, and one within good settles "within good?".
   // Then every disc whose box lies nearer, nearest box first. (The discs of the 12 points nearest
   // x, which this asked until now, are not enough: a query 0.4E past where one disc held it at

@@ -868,12 +868,13 @@ void SlimFitter::repair(const std::vector<std::uint8_t>& at_fault) {
     chosen_flag_[b] = 0;
     const double f = k < shrink_.size() ? shrink_[k] : opt_.shrink_step;
     if (balls_[b].disc) {
-      // A disc patch whose plane runs off the data (a tip more curved than its spacing):
+      // A disc patch whose sheet runs off the data (a tip more curved than its spacing):
       // shrunk by the culprit's factor, down to a fifth of the disc it was made for; its point
       // is remembered, so the hole it leaves gets no full disc patch back.
       disc_shrunk_[balls_[b].centre] = 1;
       if (const double R = f * balls_[b].R; R >= 0.2 * disc_patch_radius(balls_[b].centre)) {
         Ball s = balls_[b];
+        s.g.A *= R / s.R;  // the bent disc's term is −½R·K in the ball's units: the same bend at the new R
         s.R = R;
         balls_.push_back(std::move(s));
         std::vector<std::uint32_t> cov = covers_[b];

@@ -142,7 +142,8 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
     po.trace.slim = o.slim;
     const ReferenceImage img = render_reference(scene, probe, po);
     // A probe that sees only a few pixels (a model of sub-pixel specks, such as a fit far below
-    // its cloud's sampling) cannot tell where the geometry is: the bounding box frames it instead.
+    // its cloud's sampling) cannot tell where the geometry is: the camera stays as placed (the
+    // bounding box framed, or a camera file's).
     constexpr std::ptrdiff_t kFewestPixels = 64;
     const std::ptrdiff_t covered = std::count_if(img.coverage.begin(), img.coverage.end(), [](auto v) { return v != 0; });
     if (covered < kFewestPixels) log::debug("framing: the probe covers {} pixels: framing the bounds", covered);

@@ -11,7 +11,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-// Where the points fall in the image (NDC) and the nearest one's depth.
+// Where the points fall in the image (NDC).
 struct Spread {
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
 };

@@ -120,8 +120,6 @@ TEST(PointsXyz, MalformedFiles) {
   expect_format_error(dir / "cr.xyz", ":3:3: 'two' is not a number");
 }
 
-// Windows editors start a UTF-8 file with a byte order mark; classic Mac OS ends lines with CR.
-// Both were refused ("'\xef\xbb\xbf0.0199' is not a number"; 30,000 values on line 1).
 // Exporters write "0 0 0" for "no normal" (CGAL's demo cloud blobby.xyz, 3,288 rows of them,
 // was refused: "blobby.xyz:1:67: zero normal"): all zero reads as a cloud without normals.
 TEST(PointsXyz, AllZeroNormalsMeanNone) {
@@ -138,6 +136,8 @@ TEST(PointsXyz, AllZeroNormalsMeanNone) {
   EXPECT_EQ(d.colours[1][2], 60);
 }
 
+// Windows editors start a UTF-8 file with a byte order mark; classic Mac OS ends lines with CR.
+// Both were refused ("'\xef\xbb\xbf0.0199' is not a number"; 30,000 values on line 1).
 TEST(PointsXyz, ByteOrderMarkAndCarriageReturnLines) {
   ScratchDir dir("points-io");
   write_bytes(dir / "bom.xyz", "\xEF\xBB\xBF" "1 2 3 0 0 1\n4 5 6 0 1 0\n");

@@ -754,11 +754,6 @@ TEST(FitSlim, ASmallerCoverFractionBlendsWiderForMorePatches) {
   EXPECT_LT(p99[1], p99[0]);
 }
 
-// A points data surface answers "within good?" from the discs of its last queries' points
-// (DataSurface::distance): the same answer as the full search over each query's nearest points,
-// an upper bound no nearer than the search's distance. Runs of queries along random lines past a
-// noisy sphere with an open cut (boundary discs), at goods from tiny to wide; then a second,
-// smaller surface built where the first one was (its hints must not carry over).
 // A sparse cloud's discs bend with their neighbours: between the 400 points of a unit sphere
 // (spacing about 0.18) the sphere itself lies on the data, where flat tangent discs read it up to
 // their sag off (about 0.01: a fit at 1e-3 cut the sphere into 400 patches, one per point, and
@@ -788,9 +783,15 @@ TEST(DataSurface, BentDiscsFollowASparseSphere) {
               worst_flat, worst_rate);
   EXPECT_LT(worst_bent, 0.1 * worst_flat);
   EXPECT_GT(worst_flat, 5e-3);
+  EXPECT_GT(worst_rate, 1.0);  // the bend shows: steeper than a flat disc's distance
   EXPECT_LE(worst_rate, bent.lipschitz() * (1 + 1e-9));
 }
 
+// A points data surface answers "within good?" from the discs of its last queries' points
+// (DataSurface::distance): the same answer as the full search over each query's nearest points,
+// an upper bound no nearer than the search's distance. Runs of queries along random lines past a
+// noisy sphere with an open cut (boundary discs), at goods from tiny to wide; then a second,
+// smaller surface built where the first one was (its hints must not carry over).
 TEST(DataSurface, WithinGoodAnswersAsTheFullSearchOnPoints) {
   std::mt19937_64 rng(37);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
@@ -1042,7 +1043,9 @@ TEST(DataSurface, RaysMeetACloudsDiscsWhereDistanceSaysTheyAre) {
       for (int step = 1; step <= kSteps; ++step) {
         const double t = (hit->t - 1e-9) * step / kSteps;
         const double h1 = above(t, in1);
-        if (in0 && in1) ASSERT_FALSE((h0 < 0) != (h1 < 0)) << k << " " << i << ": disc crossed at t ≈ " << t << " before " << hit->t;
+        if (in0 && in1) {
+          ASSERT_FALSE((h0 < 0) != (h1 < 0)) << k << " " << i << ": disc crossed at t ≈ " << t << " before " << hit->t;
+        }
         h0 = h1, in0 = in1;
       }
     }

@@ -301,7 +301,7 @@ TEST(Cli, FitSummarySaysWhichHolesWereLeft) {
 // user saw a fit that fell apart into discs, exit 0, with no reason: now a warning at the default
 // verbosity gives the points' spacing. A sphere of 400 points (spacing about 0.18 of its radius)
 // with radial noise of ±0.01, about 30E at 1e-4 (without noise its bent discs hold the sphere
-// between the points, and 5 patches fit it at any E).
+// between the points, and 5 patches fit it at 1e-3 and 1e-4).
 TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
   ScratchDir dir("cli-fit-sparse");
   std::ofstream f(dir / "sparse.xyz");
