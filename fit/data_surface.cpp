@@ -610,8 +610,9 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
     return std::sqrt(best);
   }
   // The distance to the union of every point's disc: each disc's distance is lipschitz()-Lipschitz
-  // (1 for flat discs), so is their minimum. As for a mesh: queries come in runs along one patch, so the discs nearest this
-  // thread's last few queries give a first bound, and one within good settles "within good?".
+  // (1 for flat discs), so is their minimum. As for a mesh: queries come in runs along one patch,
+  // so the discs nearest this thread's last few queries give a first bound, and one within good
+  // settles "within good?".
   // Then every disc whose box lies nearer, nearest box first. (The discs of the 12 points nearest
   // x, which this asked until now, are not enough: a query 0.4E past where one disc held it at
   // 0.2E lost that disc from its 12 nearest and read 3.2E beside a densely sampled scan line —
@@ -627,7 +628,8 @@ double DataSurface::distance(const Eigen::Vector3d& x, double cap, double good) 
   m.discs().nearest(x, best2, good * good, [&](std::uint32_t i) {
     // A disc lies no nearer than its point less its radius (and its bend's height): most items
     // of a leaf go by that.
-    const double far = (x - m.points[i]).norm() - std::hypot(m.disc[i], m.reach_of_bend(i));
+    const double reach = m.reach_of_bend(i);
+    const double far = (x - m.points[i]).norm() - (reach == 0.0 ? m.disc[i] : std::hypot(m.disc[i], reach));
     if (far > 0 && far * far >= best2) return;
     if (const double d = m.disc_distance(i, x); d * d < best2) best2 = d * d, best = d, best_id = i;
   });
