@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <span>
 #include <numeric>
 #include <numbers>
 #include <tuple>
@@ -365,7 +366,7 @@ SlimGrid slim_grid(const Model& model, double h) {
 constexpr int kGridLevels = 3;
 
 /// Rounds of open sheets on patches' rims drawn alone (fin_sheets).
-constexpr int kFinRounds = 3;
+constexpr int kFinRounds = 5;
 
 using LatticeEdge = std::pair<std::uint64_t, std::uint64_t>;
 struct LatticeEdgeHash {
@@ -937,6 +938,32 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
   return out_faces;
 }
 
+/// The area of the faces from first_face on with a sample beyond the bound (where->faces): what a
+/// refinement is judged by. Counting samples would not do: cutting a face whose surface no cut
+/// reaches (a step of the blend between two sheets farther apart than its push) turns its four
+/// samples beyond into sixteen, on a quarter of the area each.
+double area_beyond(const PolygonMesh& m, const BeyondSamples& where, double bound, std::size_t first_face) {
+  double area = 0;
+  for (std::size_t f = first_face; f < m.face_count() && f < where.faces.size(); ++f) {
+    if (!(where.faces[f] > bound)) continue;
+    const auto t = m.face(f);
+    area += 0.5 * (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).norm();
+  }
+  return area;
+}
+
+/// Whether a local refinement made things worse and is to be undone: it left a larger area of
+/// faces beyond the bound than it found, or a maximum more than a quarter larger (a midpoint that
+/// jumped to another sheet). The maximum itself may stay: the faces over a step of the blend keep
+/// it whatever is cut, and are left out later (open_parts).
+bool refinement_worse(const PolygonMesh& before, const BeyondSamples& before_where, const MeshDistance& before_distance,
+                      const PolygonMesh& after, const BeyondSamples& after_where, const MeshDistance& after_distance,
+                      double bound, std::size_t first_face) {
+  if (after_distance.misses > before_distance.misses) return true;
+  if (after_distance.max > 1.25 * before_distance.max) return true;
+  return area_beyond(after, after_where, bound, first_face) > area_beyond(before, before_where, bound, first_face);
+}
+
 /// Local refinement of the SLIM triangles (faces from first_face on): rounds of bisect_marked on
 /// the faces with a sample beyond the bound (mesh → surface, measured on the new faces only) and,
 /// once there are none, on the faces nearest the drawn surface's points beyond it (surface →
@@ -1118,7 +1145,7 @@ FinSheets fin_sheets(const Model& model, const ReferenceScene& scene, const Trac
   PolygonMesh& out = fins.mesh;
   std::vector<int> patch_of(beyond.size(), -1);
   tbb::parallel_for(std::size_t{0}, beyond.size(), [&](std::size_t k) {
-    double best_d = 0.05 * bound;
+    double best_d = 0.5 * bound;
     for (std::size_t i = 0; i < model.slims.size(); ++i) {
       const SlimPatch& s = model.slims[i];
       if ((beyond[k].point - s.centre).squaredNorm() >= s.radius * s.radius) continue;
@@ -1256,6 +1283,55 @@ MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double r
   TraceOptions trace;
   trace.slim = slim_blend_of(model);
   return mesh_to_surface(scene, trace, mesh, reach, bound);
+}
+
+/// The drawn surface under faces left out of a mesh, measured against the mesh that remains: at
+/// each such face's centroid, edge midpoints and the points halfway from its centroid to its
+/// corners, the drawn surface a view along the face's normal sees from either side (within
+/// reach), and that point's distance to `kept` (surface → mesh where the views' pixels may be
+/// wider than the gap). Lines that meet nothing are not counted: nothing is drawn there.
+MeshDistance gap_error(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& from,
+                       std::span<const std::size_t> faces, const PolygonMesh& kept, double reach, double bound,
+                       std::vector<SurfaceError::Beyond>* beyond_points = nullptr) {
+  MeshDistance out;
+  if (faces.empty()) return out;
+  if (kept.face_count() == 0) {
+    out.max = std::numeric_limits<double>::infinity();
+    out.samples = out.beyond = faces.size();
+    return out;
+  }
+  const DataSurface mesh = DataSurface::from_mesh(kept);
+  std::vector<std::array<double, 14>> d(faces.size());
+  std::vector<std::array<Eigen::Vector3d, 14>> at_hit(beyond_points ? faces.size() : 0);
+  tbb::parallel_for(std::size_t{0}, faces.size(), [&](std::size_t k) {
+    d[k].fill(-1);
+    const auto t = from.face(faces[k]);
+    const Eigen::Vector3d &a = from.vertices[t[0]], &b = from.vertices[t[1]], &c = from.vertices[t[2]];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (!(n.norm() > 0)) return;
+    n.normalize();
+    const Eigen::Vector3d g = (a + b + c) / 3.0;
+    const Eigen::Vector3d at[7] = {g, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), 0.5 * (g + a), 0.5 * (g + b), 0.5 * (g + c)};
+    for (int i = 0; i < 7; ++i)
+      for (int side = 0; side < 2; ++side)
+        if (const auto hit = along_normal(scene, trace, at[i], side ? Eigen::Vector3d(-n) : n, reach)) {
+          d[k][2 * i + side] = mesh.distance(hit->point);
+          if (beyond_points) at_hit[k][2 * i + side] = hit->point;
+        }
+  });
+  double sum2 = 0;
+  for (std::size_t k = 0; k < d.size(); ++k)
+    for (std::size_t j = 0; j < d[k].size(); ++j) {
+      const double x = d[k][j];
+      if (x < 0) continue;
+      ++out.samples;
+      sum2 += x * x;
+      out.max = std::max(out.max, x);
+      out.beyond += x > bound;
+      if (beyond_points && x > bound) beyond_points->push_back({at_hit[k][j], x});
+    }
+  out.rms = out.samples ? std::sqrt(sum2 / static_cast<double>(out.samples)) : 0.0;
+  return out;
 }
 
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
@@ -1399,13 +1475,14 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       r.mesh_to_surface = local.before;
       beyond = std::move(local.before_where);
     } else {
-      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, where ? &beyond : nullptr, &memo);
+      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, &beyond, &memo);
     }
-    // Local refinement that left more samples beyond the bound than it found (a blend whose sheets
-    // its normals cannot tell apart) is undone, with round 0's measure of the unrefined mesh.
-    if (local.rounds > 0 && local.before.beyond < r.mesh_to_surface.beyond) {
-      log::info("mesh: local refinement left {} samples beyond the bound, {} before it: undone", r.mesh_to_surface.beyond,
-                local.before.beyond);
+    // Local refinement that made things worse (refinement_worse: a blend whose sheets its normals
+    // cannot tell apart) is undone, with round 0's measure of the unrefined mesh.
+    if (local.rounds > 0 && refinement_worse(local.unrefined, local.before_where, local.before, r.mesh, beyond,
+                                             r.mesh_to_surface, bound, first_face)) {
+      log::info("mesh: local refinement left {} samples beyond the bound (max {:.3g}), {} before it (max {:.3g}): undone",
+                r.mesh_to_surface.beyond, r.mesh_to_surface.max, local.before.beyond, local.before.max);
       r.mesh = std::move(local.unrefined);
       r.mesh_to_surface = local.before;
       beyond = std::move(local.before_where);
@@ -1431,6 +1508,72 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     return r;
   };
   const auto total_beyond = [](const ToMeshResult& r) { return r.mesh_to_surface.beyond + r.surface_to_mesh.beyond; };
+  // Where the drawn surface's points beyond the bound lie on one patch's zero set, seen alone (a
+  // rim running on as a fin past where its neighbours' surface turns, which no closed labelling
+  // holds), that patch's surface there is added as an open sheet, in rounds (each round's points
+  // beyond the bound may lie on the last one's rims); a round kept only if it leaves fewer
+  // samples beyond the bound (both ways) and no larger maximum. Leaves the surface side measured.
+  // With `gap` (faces left out of that mesh), the drawn surface under them counts on the surface
+  // side too (gap_error), and its points beyond the bound are given to fin_sheets as the views' are.
+  struct Gap {
+    const PolygonMesh* from = nullptr;
+    std::span<const std::size_t> faces;
+  };
+  const auto surface_side_with_gap = [&](ToMeshResult& r, const Gap& gap, std::size_t keep) {
+    SurfaceError se = surface_error(r.mesh, keep);
+    set_surface_side(r, se);
+    if (gap.from) {
+      std::vector<SurfaceError::Beyond> points;
+      const MeshDistance g = gap_error(scene, trace, *gap.from, gap.faces, r.mesh, mesh_reach, bound, keep ? &points : nullptr);
+      r.surface_to_mesh.max = std::max(r.surface_to_mesh.max, g.max);
+      r.surface_to_mesh.beyond += g.beyond;
+      r.within = r.within && g.beyond == 0;
+      if (log::level() <= log::Level::debug && !points.empty()) {
+        std::vector<SurfaceError::Beyond> worst = points;
+        const std::size_t shown = std::min<std::size_t>(5, worst.size());
+        std::partial_sort(worst.begin(), worst.begin() + std::ptrdiff_t(shown), worst.end(),
+                          [](const auto& x, const auto& y) { return x.distance > y.distance; });
+        for (std::size_t k = 0; k < shown; ++k)
+          log::debug("mesh: drawn surface under a face left out at ({:.6g}, {:.6g}, {:.6g}): {:.3g} from the mesh",
+                     worst[k].point.x(), worst[k].point.y(), worst[k].point.z(), worst[k].distance);
+      }
+      se.beyond_points.insert(se.beyond_points.end(), points.begin(), points.end());
+    }
+    return se.beyond_points;
+  };
+  const auto add_fins = [&](ToMeshResult r, int level, const Gap& gap) {
+    for (int round = 0; round < kFinRounds && !r.within; ++round) {
+      const std::vector<SurfaceError::Beyond> beyond = surface_side_with_gap(r, gap, kKeepBeyond);
+      if (beyond.empty()) break;
+      const FinSheets fins = fin_sheets(model, scene, trace, r.mesh, beyond, bound,
+                                        std::min(0.5 * slim_h0 / (1 << level), 0.5 * bound));
+      if (fins.mesh.face_count() == 0) break;
+      ToMeshResult next = r;
+      const int base = static_cast<int>(next.mesh.vertices.size());
+      next.mesh.vertices.insert(next.mesh.vertices.end(), fins.mesh.vertices.begin(), fins.mesh.vertices.end());
+      if (!next.mesh.colours.empty()) next.mesh.colours.insert(next.mesh.colours.end(), fins.colours.begin(), fins.colours.end());
+      for (std::size_t f = 0; f < fins.mesh.face_count(); ++f) {
+        const auto t = fins.mesh.face(f);
+        const int tri[3] = {base + t[0], base + t[1], base + t[2]};
+        next.mesh.add_face(tri);
+      }
+      next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+      surface_side_with_gap(next, gap, 0);
+      next.open_edges = count_open_edges(next.mesh);
+      log::info("mesh: fin round {}: {} triangles on {} patches' rims; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
+                round + 1, fins.mesh.face_count(), fins.patches, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
+                r.mesh_to_surface.beyond, r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+      if (!next.within && (total_beyond(next) >= total_beyond(r) || next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
+                           next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
+        break;
+      next.fin_rounds = r.fin_rounds + 1;
+      next.fin_triangles = r.fin_triangles + fins.mesh.face_count();
+      r = std::move(next);
+    }
+    if (r.surface_to_mesh.samples == 0) surface_side_with_gap(r, gap, 0);
+    return r;
+  };
+
   // Progress never goes back: the grid's levels and the tetrahedra's lattices after them share it.
   double progress_shown = -1;
   const auto progress = [&](double fraction) {
@@ -1495,8 +1638,10 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       r.on_grid = true;
       r.local_rounds = local.rounds;
       r.mesh = std::move(b.mesh);
-      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, nullptr, &memo);
-      if (local.rounds > 0 && local.before.beyond < r.mesh_to_surface.beyond) {
+      BeyondSamples beyond;
+      r.mesh_to_surface = mesh_to_surface(scene, trace, r.mesh, reach, bound, &beyond, &memo);
+      if (local.rounds > 0 && refinement_worse(local.unrefined, local.before_where, local.before, r.mesh, beyond,
+                                               r.mesh_to_surface, bound, 0)) {
         r.mesh = std::move(local.unrefined);
         r.mesh_to_surface = local.before;
         r.local_rounds = 0;
@@ -1612,79 +1757,74 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         se = std::move(next_se);
       }
     }
-    // Faces over cracks of the blend (a sample beyond the bound, its centroid or an edge's midpoint
-    // in no patch's ball, so nothing is drawn there) are left out; kept only if that leaves fewer
-    // samples beyond the bound (both ways) and no larger maximum of the two (the drawn surface
-    // they covered at the crack's rims may move away from the mesh: the fins below may hold it).
-    if (!model.slims.empty() && !r.within && o.open_parts && r.mesh_to_surface.beyond > 0) {
-      set_surface_side(r, surface_error(r.mesh, 0));
-      surface_measured = true;
-      BeyondSamples where;
-      mesh_to_surface(scene, trace, r.mesh, mesh_reach, bound, &where, &memo);
-      std::vector<std::uint8_t> over_crack(r.mesh.face_count(), 0);
-      tbb::parallel_for(slim_first_face, r.mesh.face_count(), [&](std::size_t f) {
-        if (!(where.faces[f] > bound)) return;
-        const auto t = r.mesh.face(f);
-        const auto& V = r.mesh.vertices;
-        const Eigen::Vector3d samples[4] = {(V[t[0]] + V[t[1]] + V[t[2]]) / 3.0, 0.5 * (V[t[0]] + V[t[1]]),
-                                            0.5 * (V[t[1]] + V[t[2]]), 0.5 * (V[t[2]] + V[t[0]])};
-        for (const Eigen::Vector3d& c : samples)
-          if (std::none_of(model.slims.begin(), model.slims.end(), [&](const SlimPatch& s) {
-                return (c - s.centre).squaredNorm() < s.radius * s.radius && s.clips.keeps((c - s.centre) / s.radius);
-              }))
-            over_crack[f] = 1;
-      });
-      const std::size_t n_crack = static_cast<std::size_t>(std::count(over_crack.begin(), over_crack.end(), 1));
-      if (n_crack > 0) {
+    // Parts of the drawn surface no closed inside/outside labelling holds (open_parts), tried two
+    // ways and the better mesh kept (within the bound first, then the smaller maximum, then fewer
+    // samples beyond it):
+    //  - closed: the mesh as it is, with open sheets where a patch's rim is drawn alone (add_fins);
+    //  - opened: the SLIM faces with a sample still beyond the bound left out first, then add_fins.
+    //    They lie over cracks of the blend (nothing drawn there) or over steps: two sheets farther
+    //    apart than the blend's push, which the drawn surface jumps between at a ball's rim. A
+    //    closed mesh bridges the step, its samples between the sheets whatever is cut (the kitten's
+    //    scanned base fitted at 1e-3: sheets 6.6E apart over noisy points). The drawn surface under
+    //    the faces left out is measured against what remains (gap_error), since the views' pixels
+    //    may be wider than the gap.
+    if (!model.slims.empty() && !r.within && o.open_parts) {
+      const auto better = [&](const ToMeshResult& x, const ToMeshResult& y) {
+        if (x.within != y.within) return x.within;
+        if (x.max_error() != y.max_error()) return x.max_error() < y.max_error();
+        return total_beyond(x) < total_beyond(y);
+      };
+      std::optional<ToMeshResult> opened;
+      if (r.mesh_to_surface.beyond > 0) {
+        BeyondSamples where;
+        mesh_to_surface(scene, trace, r.mesh, mesh_reach, bound, &where, &memo);
         ToMeshResult next = r;
         next.mesh = PolygonMesh{};
         next.mesh.vertices = r.mesh.vertices;
         next.mesh.colours = r.mesh.colours;
+        // Faces over a crack (a sample in no patch's ball) always; the others only where the local
+        // refinement ran and left them beyond (a smooth surface's coarse faces are refined, not
+        // left out).
+        const bool refined = r.local_rounds > 0;
+        const auto over_crack = [&](std::size_t f) {
+          const auto t = r.mesh.face(f);
+          const auto& V = r.mesh.vertices;
+          const Eigen::Vector3d at[4] = {(V[t[0]] + V[t[1]] + V[t[2]]) / 3.0, 0.5 * (V[t[0]] + V[t[1]]),
+                                         0.5 * (V[t[1]] + V[t[2]]), 0.5 * (V[t[2]] + V[t[0]])};
+          return std::any_of(at, at + 4, [&](const Eigen::Vector3d& c) {
+            return std::none_of(model.slims.begin(), model.slims.end(), [&](const SlimPatch& s) {
+              return (c - s.centre).squaredNorm() < s.radius * s.radius && s.clips.keeps((c - s.centre) / s.radius);
+            });
+          });
+        };
+        std::vector<std::uint8_t> leave(r.mesh.face_count(), 0);
+        tbb::parallel_for(slim_first_face, r.mesh.face_count(), [&](std::size_t f) {
+          leave[f] = where.faces[f] > bound && (refined || over_crack(f));
+        });
+        std::vector<std::size_t> left_out;
         for (std::size_t f = 0; f < r.mesh.face_count(); ++f)
-          if (!over_crack[f]) next.mesh.add_face(r.mesh.face(f));
-        next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
-        set_surface_side(next, surface_error(next.mesh, 0));
-        next.open_edges = count_open_edges(next.mesh);
-        log::info("mesh: {} faces over cracks of the blend left out; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
-                  n_crack, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
-                  r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
-        if (next.within || (total_beyond(next) < total_beyond(r) && next.max_error() <= r.max_error())) r = std::move(next);
+          if (leave[f])
+            left_out.push_back(f);
+          else
+            next.mesh.add_face(r.mesh.face(f));
+        if (!left_out.empty()) {
+          next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+          next.open_edges = count_open_edges(next.mesh);
+          next.surface_to_mesh = {};
+          next.within = false;
+          log::info("mesh: {} faces beyond the bound left out; mesh -> surface: {} samples beyond the bound (was {}), max {:.3g}",
+                    left_out.size(), next.mesh_to_surface.beyond, r.mesh_to_surface.beyond, next.mesh_to_surface.max);
+          next = add_fins(std::move(next), level, Gap{&r.mesh, left_out});
+          opened = std::move(next);
+        }
       }
-    }
-    // Where the drawn surface's points beyond the bound lie on one patch's zero set, seen alone (a
-    // rim running on as a fin past where its neighbours' surface turns, which no closed labelling
-    // holds), that patch's surface there is added as an open sheet, in rounds (each round's points
-    // beyond the bound may lie on the last one's rims); a round kept only if it leaves fewer
-    // samples beyond the bound (both ways) and no larger maximum.
-    for (int round = 0; round < kFinRounds && !model.slims.empty() && !r.within && o.open_parts; ++round) {
-      const SurfaceError se = surface_error(r.mesh, kKeepBeyond);
-      set_surface_side(r, se);
+      r = add_fins(std::move(r), level, Gap{});
+      if (opened && better(*opened, r)) {
+        log::info("mesh: the mesh with faces left out kept (max {:.3g} against {:.3g} closed)", opened->max_error(),
+                  r.max_error());
+        r = std::move(*opened);
+      }
       surface_measured = true;
-      if (se.beyond_points.empty()) break;
-      const FinSheets fins = fin_sheets(model, scene, trace, r.mesh, se.beyond_points, bound,
-                                        std::min(0.5 * slim_h0 / (1 << level), 2.0 * bound));
-      if (fins.mesh.face_count() == 0) break;
-      ToMeshResult next = r;
-      const int base = static_cast<int>(next.mesh.vertices.size());
-      next.mesh.vertices.insert(next.mesh.vertices.end(), fins.mesh.vertices.begin(), fins.mesh.vertices.end());
-      if (!next.mesh.colours.empty()) next.mesh.colours.insert(next.mesh.colours.end(), fins.colours.begin(), fins.colours.end());
-      for (std::size_t f = 0; f < fins.mesh.face_count(); ++f) {
-        const auto t = fins.mesh.face(f);
-        const int tri[3] = {base + t[0], base + t[1], base + t[2]};
-        next.mesh.add_face(tri);
-      }
-      next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
-      set_surface_side(next, surface_error(next.mesh, 0));
-      next.open_edges = count_open_edges(next.mesh);
-      log::info("mesh: fin round {}: {} triangles on {} patches' rims; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
-                round + 1, fins.mesh.face_count(), fins.patches, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
-                r.mesh_to_surface.beyond, r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
-      if (!next.within && (total_beyond(next) >= total_beyond(r) || next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
-                           next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
-        break;
-      next.fin_rounds = round + 1;
-      next.fin_triangles = r.fin_triangles + fins.mesh.face_count();
-      r = std::move(next);
     }
     // A doubling is not converging where it leaves more than a quarter of the previous share of
     // samples beyond the bound (cracks or gaps of the blend itself, which no resolution closes),

@@ -19,10 +19,13 @@
 /// again, one level per round, while that helps (samples unchanged since an earlier round are not
 /// traced again: convert/mesh_measure.h). Where the drawn surface's pixels stay beyond the bound
 /// because grazing views see the per-ray blend off where head-on views do, the vertices there move
-/// part of the way towards them (convert/between_views.h). Faces over cracks of the blend are left
-/// out, and where the drawn surface's points lie on one patch's zero set seen alone (its rim
-/// running on as a fin, which no closed labelling holds), that patch's surface there is added as
-/// an open sheet. The resolution doubles until both are within the bound, or
+/// part of the way towards them (convert/between_views.h). Where the mesh is still outside the
+/// bound, it is tried two ways and the better kept: as it is, and with its faces still beyond the
+/// bound left out (over cracks of the blend, where nothing is drawn; after local refinement also
+/// over steps, where two sheets farther apart than the blend's push meet, which a closed mesh
+/// bridges), the drawn surface under them measured against what remains; each then gets open
+/// sheets where the drawn surface's points beyond the bound lie on one patch's zero set (its rim
+/// running on as a fin, or a sheet past a step, which no closed labelling holds). The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes) or the larger of the two maxima by half (parts of the
 /// drawn surface no closed labelling holds at any resolution: a patch's rim drawn alone, running
@@ -50,11 +53,12 @@ struct ToMeshOptions {
   /// per-ray blend shows them the surface off where a head-on view does (convert/between_views.h);
   /// a round kept only if it leaves fewer samples beyond the bound and no larger maximum; 0: off
   int view_rounds = 3;
-  /// SLIM: parts of the drawn surface no closed inside/outside labelling holds are made open: the
-  /// faces over cracks of the blend (a sample beyond the bound in no patch's ball) left out, and
-  /// where the drawn surface's points beyond the bound lie on one patch's rim seen alone (a fin
-  /// running on past where its neighbours' surface turns), that patch's surface there added as an
-  /// open sheet; each step kept only if it leaves fewer samples beyond the bound and no larger maximum
+  /// SLIM: parts of the drawn surface no closed inside/outside labelling holds are made open: a
+  /// mesh with the faces still beyond the bound left out (over cracks of the blend, a sample in no
+  /// patch's ball; after local refinement also over steps between sheets) is tried beside the
+  /// closed one, the better kept; each gets open sheets where the drawn surface's points beyond the
+  /// bound lie on one patch's zero set (a rim running on as a fin past where its neighbours'
+  /// surface turns), a round kept only if it leaves fewer samples beyond the bound and no larger maximum
   bool open_parts = true;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)

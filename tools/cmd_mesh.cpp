@@ -114,8 +114,8 @@ void add_mesh(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_flag("!--no-open-parts", a->options.open_parts,
-                "SLIM: keep the mesh closed: do not leave out faces over cracks of the blend, nor add open sheets "
-                "where a patch's rim is drawn alone (a fin no closed surface holds)");
+                "SLIM: keep the mesh closed: do not leave out faces over cracks or steps of the blend, nor add "
+                "open sheets where a patch's rim is drawn alone (a fin no closed surface holds)");
   app->add_option("--slim-offset", a->options.slim_offset,
                   "SLIM blend band, relative to the ball radius (default: the model's slim_offset, else 0.5)")
       ->check(number({.lo = 0.0, .hi = 10.0}))->default_str("");
