@@ -366,6 +366,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"error_measure", "distance along each point's normal to the blended SLIM surface "
                                                   "(fit/evaluate.h)"},
                                 {"fitted_points", fit_cloud.points.size()},
+                                {"normals_estimated", fit.stats.normals_estimated},
+                                {"normals_turned", fit.stats.normals_turned},
                                 {"fitter_surface_samples_beyond_2e", fit.stats.surface_failures},
                                 {"point_holes", fit.stats.point_holes},
                                 {"point_hole_balls", fit.stats.point_hole_balls},

@@ -325,6 +325,34 @@ TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
   EXPECT_EQ(coarse.out.find("below what the sampling resolves"), std::string::npos) << coarse.out;
 }
 
+// bench fit on a cloud without normals fits its points alone, as `quadrix fit` does: the bench's
+// own estimate (for the peers and the points' discs) was handed to the fit as the file's normals,
+// checked as a file's, and CGAL's blobby.xyz warned twice of normals "against their neighbours'"
+// that no user gave.
+TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
+  ScratchDir dir("cli-bench-fit-no-normals");
+  {
+    std::ofstream f(dir / "sphere.xyz");
+    const int n = 600;
+    for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, no normals
+      const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
+      f << fmt::format("{} {} {}\n", r * std::cos(phi), r * std::sin(phi), z);
+    }
+  }
+  const CmdResult run = quadrix_run("bench fit --no-peers --errors 0.01 --view-resolution 64 --models " +
+                                    q(dir / "sphere.xyz") + " --out " + q(dir.path()));
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(run.out.find("against their neighbours"), std::string::npos) << run.out;
+  std::ifstream in(dir / "bench_fit.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json& m = j.at("models").at("sphere");
+  EXPECT_EQ(m.at("normals"), "estimated (PCA + MST)");
+  const nlohmann::json& slim = m.at("runs").at(0).at("slim");
+  EXPECT_TRUE(slim.at("normals_estimated").get<bool>()) << slim.dump();
+  EXPECT_EQ(slim.at("normals_turned").get<int>(), 0);
+  EXPECT_EQ(slim.at("points_beyond_bound").get<int>(), 0);
+}
+
 // Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
 // speck floating beside the surface. --keep-outliers fits them all.
 TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
