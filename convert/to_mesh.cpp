@@ -1288,26 +1288,15 @@ MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double r
   return mesh_to_surface(scene, trace, mesh, reach, bound);
 }
 
-/// The drawn surface under faces left out of a mesh, measured against the mesh that remains: at
-/// each such face's centroid, edge midpoints and the points halfway from its centroid to its
-/// corners, the drawn surface a view along the face's normal sees from either side (within
-/// reach), and that point's distance to `kept` (surface → mesh where the views' pixels may be
-/// wider than the gap). Lines that meet nothing are not counted: nothing is drawn there.
-MeshDistance gap_error(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& from,
-                       std::span<const std::size_t> faces, const PolygonMesh& kept, double reach, double bound,
-                       std::vector<SurfaceError::Beyond>* beyond_points = nullptr) {
-  MeshDistance out;
-  if (faces.empty()) return out;
-  if (kept.face_count() == 0) {
-    out.max = std::numeric_limits<double>::infinity();
-    out.samples = out.beyond = faces.size();
-    return out;
-  }
-  const DataSurface mesh = DataSurface::from_mesh(kept);
-  std::vector<std::array<double, 14>> d(faces.size());
-  std::vector<std::array<Eigen::Vector3d, 14>> at_hit(beyond_points ? faces.size() : 0);
+/// The drawn surface under faces left out of a mesh: at each such face's centroid, edge midpoints
+/// and the points halfway from its centroid to its corners, what a view along the face's normal
+/// sees from either side (within reach). Traced once; gap_error measures them against each mesh
+/// that remains (surface → mesh where the views' pixels may be wider than the gap). Lines that
+/// meet nothing give no point: nothing is drawn there.
+std::vector<Eigen::Vector3d> drawn_under(const ReferenceScene& scene, const TraceOptions& trace, const PolygonMesh& from,
+                                         std::span<const std::size_t> faces, double reach) {
+  std::vector<std::array<std::optional<Eigen::Vector3d>, 14>> hits(faces.size());
   tbb::parallel_for(std::size_t{0}, faces.size(), [&](std::size_t k) {
-    d[k].fill(-1);
     const auto t = from.face(faces[k]);
     const Eigen::Vector3d &a = from.vertices[t[0]], &b = from.vertices[t[1]], &c = from.vertices[t[2]];
     Eigen::Vector3d n = (b - a).cross(c - a);
@@ -1317,23 +1306,39 @@ MeshDistance gap_error(const ReferenceScene& scene, const TraceOptions& trace, c
     const Eigen::Vector3d at[7] = {g, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), 0.5 * (g + a), 0.5 * (g + b), 0.5 * (g + c)};
     for (int i = 0; i < 7; ++i)
       for (int side = 0; side < 2; ++side)
-        if (const auto hit = along_normal(scene, trace, at[i], side ? Eigen::Vector3d(-n) : n, reach)) {
-          d[k][2 * i + side] = mesh.distance(hit->point);
-          if (beyond_points) at_hit[k][2 * i + side] = hit->point;
-        }
+        if (const auto hit = along_normal(scene, trace, at[i], side ? Eigen::Vector3d(-n) : n, reach))
+          hits[k][2 * i + side] = hit->point;
   });
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& row : hits)
+    for (const auto& h : row)
+      if (h) out.push_back(*h);
+  return out;
+}
+
+/// The drawn points under the faces left out (drawn_under) against the mesh that remains: their
+/// distances, and those beyond the bound (optional).
+MeshDistance gap_error(std::span<const Eigen::Vector3d> drawn, const PolygonMesh& kept, double bound,
+                       std::vector<SurfaceError::Beyond>* beyond_points = nullptr) {
+  MeshDistance out;
+  if (drawn.empty()) return out;
+  if (kept.face_count() == 0) {
+    out.max = std::numeric_limits<double>::infinity();
+    out.samples = out.beyond = drawn.size();
+    return out;
+  }
+  const DataSurface mesh = DataSurface::from_mesh(kept);
+  std::vector<double> d(drawn.size());
+  tbb::parallel_for(std::size_t{0}, drawn.size(), [&](std::size_t k) { d[k] = mesh.distance(drawn[k]); });
   double sum2 = 0;
-  for (std::size_t k = 0; k < d.size(); ++k)
-    for (std::size_t j = 0; j < d[k].size(); ++j) {
-      const double x = d[k][j];
-      if (x < 0) continue;
-      ++out.samples;
-      sum2 += x * x;
-      out.max = std::max(out.max, x);
-      out.beyond += x > bound;
-      if (beyond_points && x > bound) beyond_points->push_back({at_hit[k][j], x});
-    }
-  out.rms = out.samples ? std::sqrt(sum2 / static_cast<double>(out.samples)) : 0.0;
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    ++out.samples;
+    sum2 += d[k] * d[k];
+    out.max = std::max(out.max, d[k]);
+    out.beyond += d[k] > bound;
+    if (beyond_points && d[k] > bound) beyond_points->push_back({drawn[k], d[k]});
+  }
+  out.rms = std::sqrt(sum2 / static_cast<double>(out.samples));
   return out;
 }
 
@@ -1519,17 +1524,21 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   // With `gap` (faces left out of that mesh), the drawn surface under them counts on the surface
   // side too (gap_error), and its points beyond the bound are given to fin_sheets as the views' are.
   struct Gap {
-    const PolygonMesh* from = nullptr;
-    std::span<const std::size_t> faces;
+    std::span<const Eigen::Vector3d> drawn;  ///< drawn_under the faces left out
   };
   const auto surface_side_with_gap = [&](ToMeshResult& r, const Gap& gap, std::size_t keep) {
     SurfaceError se = surface_error(r.mesh, keep);
     set_surface_side(r, se);
-    if (gap.from) {
+    if (!gap.drawn.empty()) {
       std::vector<SurfaceError::Beyond> points;
-      const MeshDistance g = gap_error(scene, trace, *gap.from, gap.faces, r.mesh, mesh_reach, bound, keep ? &points : nullptr);
-      r.surface_to_mesh.max = std::max(r.surface_to_mesh.max, g.max);
-      r.surface_to_mesh.beyond += g.beyond;
+      const MeshDistance g = gap_error(gap.drawn, r.mesh, bound, keep ? &points : nullptr);
+      MeshDistance& side = r.surface_to_mesh;
+      const double n0 = static_cast<double>(side.samples), n1 = static_cast<double>(g.samples);
+      side.rms = std::sqrt((n0 * side.rms * side.rms + n1 * g.rms * g.rms) / (n0 + n1));
+      side.p99 = std::max(side.p99, g.p99);  // the views' (the gap's points are not ranked with them)
+      side.max = std::max(side.max, g.max);
+      side.samples += g.samples;
+      side.beyond += g.beyond;
       r.within = r.within && g.beyond == 0;
       if (log::level() <= log::Level::debug && !points.empty()) {
         std::vector<SurfaceError::Beyond> worst = points;
@@ -1631,8 +1640,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       mesh_slims(model, scene, trace, h, {}, b, on_surface);
       snap_to_surface(scene, trace, 1.5 * h, 0, on_surface, b, /*drop_unmet=*/true, nullptr, /*any_kind=*/true);
       // The SLIM grid's local refinement: the triangles with samples beyond the bound cut by
-      // longest-edge bisection, new vertices moved onto the surface (undone where it leaves more
-      // samples beyond than it found).
+      // longest-edge bisection, new vertices moved onto the surface (undone where it made things
+      // worse: refinement_worse).
       const double reach = std::max(4.0 * bound, 1.5 * h);
       LocalRefinement local = refine_locally(scene, trace, o, bound, reach, 1.5 * h, 0, b, memo,
                                              [&](const PolygonMesh& m) { return surface_error(m, kKeepBeyond); },
@@ -1763,23 +1772,24 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       }
     }
     // Parts of the drawn surface no closed inside/outside labelling holds (open_parts), tried two
-    // ways and the better mesh kept (within the bound first, then the smaller maximum, then fewer
-    // samples beyond it):
+    // ways and the better mesh kept (within the bound first, then the smaller maximum, then, with
+    // maxima within 2 % of each other, the smaller mesh):
     //  - closed: the mesh as it is, with open sheets where a patch's rim is drawn alone (add_fins);
-    //  - opened: the SLIM faces with a sample still beyond the bound left out first, then add_fins.
-    //    They lie over cracks of the blend (nothing drawn there) or over steps: two sheets farther
-    //    apart than the blend's push, which the drawn surface jumps between at a ball's rim. A
-    //    closed mesh bridges the step, its samples between the sheets whatever is cut (the kitten's
-    //    scanned base fitted at 1e-3: sheets 6.6E apart over noisy points). The drawn surface under
-    //    the faces left out is measured against what remains (gap_error), since the views' pixels
-    //    may be wider than the gap.
+    //  - opened: SLIM faces with a sample still beyond the bound left out first, then add_fins:
+    //    those over cracks of the blend (nothing drawn there) always; where the local refinement
+    //    ran, the others too, unless they are over 5 % of the faces. Those lie over steps: two
+    //    sheets farther apart than the blend's push, which the drawn surface jumps between at a
+    //    ball's rim. A closed mesh bridges the step, its samples between the sheets whatever is
+    //    cut (the kitten's scanned base fitted at 1e-3: sheets 6.6E apart over noisy points). The
+    //    drawn surface under the faces left out is measured against what remains (drawn_under,
+    //    gap_error), since the views' pixels may be wider than the gap.
     if (!model.slims.empty() && !r.within && o.open_parts) {
       const auto better = [&](const ToMeshResult& x, const ToMeshResult& y) {
         if (x.within != y.within) return x.within;
         // Maxima within 2 % of each other: the smaller mesh (sheets that do not bring the
         // maximum down cost triangles: CGAL's oni.ply fitted at 1e-3, 0.0101 either way).
-        if (std::abs(x.max_error() - y.max_error()) > 0.02 * std::max(x.max_error(), y.max_error()))
-          return x.max_error() < y.max_error();
+        const double mx = x.max_error(), my = y.max_error();
+        if (std::isinf(mx) || std::isinf(my) || std::abs(mx - my) > 0.02 * std::max(mx, my)) return mx < my;
         return x.mesh.face_count() < y.mesh.face_count();
       };
       std::optional<ToMeshResult> opened;
@@ -1805,27 +1815,32 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
             });
           });
         };
-        std::vector<std::uint8_t> leave(r.mesh.face_count(), 0);
+        std::vector<std::uint8_t> leave(r.mesh.face_count(), 0);  // 1: over a crack, 2: still beyond
         tbb::parallel_for(slim_first_face, r.mesh.face_count(), [&](std::size_t f) {
-          leave[f] = where.faces[f] > bound && (refined || over_crack(f));
+          if (where.faces[f] > bound) leave[f] = over_crack(f) ? 1 : refined ? 2 : 0;
         });
+        // More than 5 % of the SLIM faces still beyond the bound after refinement: not a surface
+        // with a few steps but one no mesh at this grid follows (CGAL's oni.ply fitted at 1e-3,
+        // below its sampling: 148,318 of 1.57M faces at the first doubling, their gap measured for
+        // minutes); only the faces over cracks are left out then.
+        if (static_cast<std::size_t>(std::count(leave.begin(), leave.end(), 2)) * 20 > r.mesh.face_count() - slim_first_face)
+          std::replace(leave.begin(), leave.end(), std::uint8_t{2}, std::uint8_t{0});
         std::vector<std::size_t> left_out;
         for (std::size_t f = 0; f < r.mesh.face_count(); ++f)
           if (leave[f])
             left_out.push_back(f);
           else
             next.mesh.add_face(r.mesh.face(f));
-        // More than 5 % of the SLIM faces beyond the bound after refinement: not a surface with a
-        // few steps but one no mesh at this grid follows (CGAL's oni.ply fitted at 1e-3, below its
-        // sampling: 148,318 of 1.57M faces at the first doubling, their gap measured for minutes).
-        if (!left_out.empty() && left_out.size() * 20 <= r.mesh.face_count() - slim_first_face) {
+        if (!left_out.empty()) {
           next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
           next.open_edges = count_open_edges(next.mesh);
           next.surface_to_mesh = {};
           next.within = false;
           log::info("mesh: {} faces beyond the bound left out; mesh -> surface: {} samples beyond the bound (was {}), max {:.3g}",
                     left_out.size(), next.mesh_to_surface.beyond, r.mesh_to_surface.beyond, next.mesh_to_surface.max);
-          next = add_fins(std::move(next), level, Gap{&r.mesh, left_out});
+          next.faces_left_out = left_out.size();
+          const std::vector<Eigen::Vector3d> drawn = drawn_under(scene, trace, r.mesh, left_out, mesh_reach);
+          next = add_fins(std::move(next), level, Gap{drawn});
           opened = std::move(next);
         }
       }

@@ -88,6 +88,7 @@ struct ToMeshResult {
   int view_rounds = 0;              ///< rounds of moves towards what grazing views see, kept
   int fin_rounds = 0;               ///< rounds of open sheets added on patches' rims drawn alone, kept
   std::size_t fin_triangles = 0;    ///< triangles of those sheets
+  std::size_t faces_left_out = 0;   ///< SLIM faces left out over cracks and steps of the blend
   bool within = false;              ///< both maxima ≤ bound and no misses
   /// A closed tetrahedron model meshed on one grid (nodes labelled by the drawn surface) instead
   /// of each tetrahedron's own lattice (a skin's slivers; refinements then counts its halvings)

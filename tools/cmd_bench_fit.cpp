@@ -306,7 +306,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       const PointCloud on_faces = fit_mesh ? points_from_mesh(*fit_mesh) : PointCloud{};
       const PointCloud& fit_cloud = fit_mesh ? on_faces : d.cloud;
       PointCloud points_alone;
-      if (!fit_mesh && d.normals_estimated) points_alone.points = d.cloud.points;
+      if (!fit_mesh && d.normals_estimated) points_alone.points = d.cloud.points, points_alone.colours = d.cloud.colours;
       const PointCloud& slim_input = !fit_mesh && d.normals_estimated ? points_alone : fit_cloud;
       if (d.mesh) {
         std::size_t t = 0;

@@ -58,6 +58,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"fin_rounds", r.fin_rounds},
                          {"on_grid", r.on_grid},
                          {"fin_triangles", r.fin_triangles},
+                         {"faces_left_out", r.faces_left_out},
                          {"within_bound", r.within}};
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
