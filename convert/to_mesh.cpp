@@ -1587,6 +1587,34 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     if (r.surface_to_mesh.samples == 0) surface_side_with_gap(r, gap, 0);
     return r;
   };
+  // Where grazing views see the blend off the surface the mesh follows (the per-ray blend differs
+  // by view direction), the vertices move part of the way towards what they see
+  // (convert/between_views.h; `offset` keeps how far each has moved); a round kept only while it
+  // leaves fewer samples beyond the bound (both ways) and no larger maximum. Leaves the surface
+  // side measured.
+  const auto view_moves = [&](ToMeshResult r, std::vector<double>& offset, const Gap& gap) {
+    std::vector<SurfaceError::Beyond> beyond = surface_side_with_gap(r, gap, kKeepBeyond);
+    for (int round = 0; round < o.view_rounds && !r.within && r.surface_to_mesh.beyond > 0; ++round) {
+      ToMeshResult next = r;
+      std::vector<double> next_offset = offset;
+      const std::size_t moved = move_between_views(next.mesh, beyond, {.bound = bound, .first_face = slim_first_face}, next_offset);
+      if (moved == 0) break;
+      next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
+      std::vector<SurfaceError::Beyond> next_beyond = surface_side_with_gap(next, gap, kKeepBeyond);
+      log::info("mesh: view round {}: {} vertices moved; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}", round + 1,
+                moved, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
+                r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+      if (!next.within && (total_beyond(next) >= total_beyond(r) ||
+                           next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
+                           next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
+        break;
+      next.view_rounds = r.view_rounds + 1;
+      r = std::move(next);
+      offset = std::move(next_offset);
+      beyond = std::move(next_beyond);
+    }
+    return r;
+  };
 
   // Progress never goes back: the grid's levels and the tetrahedra's lattices after them share it.
   double progress_shown = -1;
@@ -1744,32 +1772,10 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     // Where grazing views see the blend off the surface the mesh follows (the per-ray blend differs
     // by view direction), the vertices move part of the way towards what they see; a round kept
     // only while it leaves fewer samples beyond the bound (both ways) and no larger maximum.
+    std::vector<double> view_offset;  // per vertex: how far the view rounds moved it
     if (!model.slims.empty() && !undone && !r.within && o.view_rounds > 0) {
-      SurfaceError se = surface_error(r.mesh, kKeepBeyond);
-      set_surface_side(r, se);
+      r = view_moves(std::move(r), view_offset, Gap{});
       surface_measured = true;
-      std::vector<double> offset;
-      for (int round = 0; round < o.view_rounds && !r.within && r.surface_to_mesh.beyond > 0; ++round) {
-        ToMeshResult next = r;
-        std::vector<double> next_offset = offset;
-        const std::size_t moved = move_between_views(next.mesh, se.beyond_points,
-                                                     {.bound = bound, .first_face = slim_first_face}, next_offset);
-        if (moved == 0) break;
-        next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
-        SurfaceError next_se = surface_error(next.mesh, kKeepBeyond);
-        set_surface_side(next, next_se);
-        log::info("mesh: view round {}: {} vertices moved; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}", round + 1,
-                  moved, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond, r.mesh_to_surface.beyond,
-                  r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
-        if (!next.within && (total_beyond(next) >= total_beyond(r) ||
-                             next.mesh_to_surface.max > std::max(bound, r.mesh_to_surface.max) ||
-                             next.surface_to_mesh.max > std::max(bound, r.surface_to_mesh.max)))
-          break;
-        next.view_rounds = round + 1;
-        r = std::move(next);
-        offset = std::move(next_offset);
-        se = std::move(next_se);
-      }
     }
     // Parts of the drawn surface no closed inside/outside labelling holds (open_parts), tried two
     // ways and the better mesh kept (within the bound first, then the smaller maximum, then, with
@@ -1841,6 +1847,16 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
           next.faces_left_out = left_out.size();
           const std::vector<Eigen::Vector3d> drawn = drawn_under(scene, trace, r.mesh, left_out, mesh_reach);
           next = add_fins(std::move(next), level, Gap{drawn});
+          // The drawn points left beyond the bound may lie on no one patch's zero set (where two
+          // sheets blend): the vertices move towards them, as in the view rounds above.
+          // Twice: the moved vertices' points may lie on a patch's sheet again.
+          std::vector<double> offset = view_offset;
+          for (int pass = 0; pass < 2 && !next.within && o.view_rounds > 0; ++pass) {
+            const std::size_t before = total_beyond(next);
+            next = view_moves(std::move(next), offset, Gap{drawn});
+            if (pass == 0 && !next.within) next = add_fins(std::move(next), level, Gap{drawn});
+            if (total_beyond(next) >= before) break;
+          }
           opened = std::move(next);
         }
       }

@@ -25,7 +25,8 @@
 /// over steps, where two sheets farther apart than the blend's push meet, which a closed mesh
 /// bridges), the drawn surface under them measured against what remains; each then gets open
 /// sheets where the drawn surface's points beyond the bound lie on one patch's zero set (its rim
-/// running on as a fin, or a sheet past a step, which no closed labelling holds). The resolution doubles until both are within the bound, or
+/// running on as a fin, or a sheet past a step, which no closed labelling holds), and the opened
+/// one's vertices move towards the drawn points still beyond it, as in the view rounds. The resolution doubles until both are within the bound, or
 /// until a doubling no longer cuts the share of samples beyond it by 4 (a crack of the blend
 /// itself, which no resolution closes) or the larger of the two maxima by half (parts of the
 /// drawn surface no closed labelling holds at any resolution: a patch's rim drawn alone, running

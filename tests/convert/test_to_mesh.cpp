@@ -604,11 +604,12 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
   // The faces the local refinement left beyond the bound are left out too (steps of the blend:
   // on the scanned base, sheets 6.6E apart over noisy points, which a closed mesh bridges with
   // its samples 3 bounds off whatever is cut), and the drawn surface under them measured and
-  // given open sheets: 1.01 / 1.18 bounds (3.1 / 3.2 closed).
+  // given open sheets, then its vertices moved towards the drawn points left (a blend of two
+  // sheets, on neither): 1.01 / 1.05 bounds (3.1 / 3.2 closed).
   EXPECT_GT(with.faces_left_out, 0u);
   EXPECT_EQ(without.faces_left_out, 0u);
   EXPECT_LE(with.mesh_to_surface.max, 1.1 * with.bound);
-  EXPECT_LE(with.surface_to_mesh.max, 1.4 * with.bound);
+  EXPECT_LE(with.surface_to_mesh.max, 1.15 * with.bound);
   // Measured apart from the mesher: the drawn surface a view along each point's normal sees,
   // against the triangles (closest point); random points of the triangles against the drawn
   // surface along 13 lines. The views' pixels are wider than a face left out: this catches the
