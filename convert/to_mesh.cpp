@@ -1288,6 +1288,19 @@ MeshDistance mesh_distance(const Model& model, const PolygonMesh& mesh, double r
   return mesh_to_surface(scene, trace, mesh, reach, bound);
 }
 
+/// At -vv: the `shown` drawn points farthest from the mesh, each as "mesh: <what> at (x, y, z): d
+/// from the mesh".
+void log_farthest(std::span<const SurfaceError::Beyond> points, std::size_t shown, const char* what) {
+  if (log::level() > log::Level::debug || points.empty()) return;
+  std::vector<SurfaceError::Beyond> worst(points.begin(), points.end());
+  shown = std::min(shown, worst.size());
+  std::partial_sort(worst.begin(), worst.begin() + std::ptrdiff_t(shown), worst.end(),
+                    [](const auto& x, const auto& y) { return x.distance > y.distance; });
+  for (std::size_t k = 0; k < shown; ++k)
+    log::debug("mesh: {} at ({:.6g}, {:.6g}, {:.6g}): {:.3g} from the mesh", what, worst[k].point.x(), worst[k].point.y(),
+               worst[k].point.z(), worst[k].distance);
+}
+
 /// The drawn surface under faces left out of a mesh: at each such face's centroid, edge midpoints
 /// and the points halfway from its centroid to its corners, what a view along the face's normal
 /// sees from either side (within reach). Traced once; gap_error measures them against each mesh
@@ -1402,15 +1415,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     SurfaceError se = measure_surface_error(*views, DataSurface::from_mesh(mesh), so);
     log::debug("mesh: surface -> mesh measured in {:.2f} s: {} pixels beyond the bound, max {:.3g}", seconds_since(t0),
                se.beyond, se.max);
-    if (log::level() <= log::Level::debug) {  // where the mesh leaves the drawn surface most: -vv
-      std::vector<SurfaceError::Beyond> worst = se.beyond_points;
-      const std::size_t shown = std::min<std::size_t>(8, worst.size());
-      std::partial_sort(worst.begin(), worst.begin() + std::ptrdiff_t(shown), worst.end(),
-                        [](const auto& x, const auto& y) { return x.distance > y.distance; });
-      for (std::size_t k = 0; k < shown; ++k)
-        log::debug("mesh: drawn surface at ({:.6g}, {:.6g}, {:.6g}): {:.3g} from the mesh", worst[k].point.x(),
-                   worst[k].point.y(), worst[k].point.z(), worst[k].distance);
-    }
+    log_farthest(se.beyond_points, 8, "drawn surface");  // where the mesh leaves the drawn surface most
     return se;
   };
   const auto set_surface_side = [&](ToMeshResult& r, const SurfaceError& se) {
@@ -1540,22 +1545,15 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       side.samples += g.samples;
       side.beyond += g.beyond;
       r.within = r.within && g.beyond == 0;
-      if (log::level() <= log::Level::debug && !points.empty()) {
-        std::vector<SurfaceError::Beyond> worst = points;
-        const std::size_t shown = std::min<std::size_t>(5, worst.size());
-        std::partial_sort(worst.begin(), worst.begin() + std::ptrdiff_t(shown), worst.end(),
-                          [](const auto& x, const auto& y) { return x.distance > y.distance; });
-        for (std::size_t k = 0; k < shown; ++k)
-          log::debug("mesh: drawn surface under a face left out at ({:.6g}, {:.6g}, {:.6g}): {:.3g} from the mesh",
-                     worst[k].point.x(), worst[k].point.y(), worst[k].point.z(), worst[k].distance);
-      }
+      log_farthest(points, 5, "drawn surface under a face left out");
       se.beyond_points.insert(se.beyond_points.end(), points.begin(), points.end());
     }
     return se.beyond_points;
   };
   const auto add_fins = [&](ToMeshResult r, int level, const Gap& gap) {
+    // Each mesh's surface side measured once, its points beyond the bound kept for the next round.
+    std::vector<SurfaceError::Beyond> beyond = surface_side_with_gap(r, gap, kKeepBeyond);
     for (int round = 0; round < kFinRounds && !r.within; ++round) {
-      const std::vector<SurfaceError::Beyond> beyond = surface_side_with_gap(r, gap, kKeepBeyond);
       if (beyond.empty()) break;
       // Coarse sheets first (cells of 2 bounds), halved each round down to half a bound: the points
       // left beyond lie at sheets' rims, where cells that need three drawn corners stop short.
@@ -1572,7 +1570,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         next.mesh.add_face(tri);
       }
       next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
-      surface_side_with_gap(next, gap, 0);
+      std::vector<SurfaceError::Beyond> next_beyond = surface_side_with_gap(next, gap, kKeepBeyond);
       next.open_edges = count_open_edges(next.mesh);
       log::info("mesh: fin round {}: {} triangles on {} patches' rims; beyond the bound {} / {} (was {} / {}), max {:.3g} / {:.3g}",
                 round + 1, fins.mesh.face_count(), fins.patches, next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
@@ -1583,8 +1581,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
       next.fin_rounds = r.fin_rounds + 1;
       next.fin_triangles = r.fin_triangles + fins.mesh.face_count();
       r = std::move(next);
+      beyond = std::move(next_beyond);
     }
-    if (r.surface_to_mesh.samples == 0) surface_side_with_gap(r, gap, 0);
     return r;
   };
   // Where grazing views see the blend off the surface the mesh follows (the per-ray blend differs
