@@ -559,15 +559,17 @@ TEST(ToMesh, PiecesMeshedApartAreClosedAtTheirSeams) {
   }
 }
 
-// The kitten fitted from its points alone at 1e-3: its blend draws lone patches' rims running on
-// as fins past where their neighbours' surface turns and has cracks between balls the mesh spans
-// (mesh -> surface about 6 bounds there); no grid resolves the cracks, so a doubling that does not
-// halve the larger maximum stops the doublings instead of spending millions of triangles on them
-// (before: every doubling tried, 6.9M triangles in 224 s).
+// The kitten fitted from its points alone at 1e-3: its blend steps between sheets farther apart
+// than the blend's push (over its noisy scanned base) and draws lone patches' rims running on as
+// fins; a closed mesh (open_parts off: no faces left out, no sheets) bridges the steps whatever
+// the grid (mesh -> surface about 3 bounds), so a doubling that does not halve the larger maximum
+// stops the doublings instead of spending millions of triangles on them (before: every doubling
+// tried, 6.9M triangles in 224 s). With open parts the kitten now meshes within the bound at the
+// first grid (ToMesh.OpenWhereNoClosedSurfaceHoldsTheDrawnOne).
 TEST(ToMesh, DoublingsStopWhereTheyDoNotBringTheMaximumDown) {
   const Model* kitten = kitten_points_fit();
   if (!kitten) GTEST_SKIP() << "kitten.xyz not found";
-  const ToMeshResult r = mesh_model(*kitten, {.max_refinements = 2, .progress = {}});
+  const ToMeshResult r = mesh_model(*kitten, {.max_refinements = 2, .open_parts = false, .progress = {}});
   std::cout << "kitten: " << kitten->slims.size() << " patches; mesh " << r.mesh.face_count() << " triangles after "
             << r.refinements << " doublings, max " << r.mesh_to_surface.max << " / " << r.surface_to_mesh.max << ", bound "
             << r.bound << "\n";
@@ -605,11 +607,14 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
   // on the scanned base, sheets 6.6E apart over noisy points, which a closed mesh bridges with
   // its samples 3 bounds off whatever is cut), and the drawn surface under them measured and
   // given open sheets, then its vertices moved towards the drawn points left (a blend of two
-  // sheets, on neither): 1.01 / 1.05 bounds (3.1 / 3.2 closed).
+  // sheets, on neither) by up to the whole bound, and the few faces a move or a turned normal
+  // leaves beyond the bound left out too: within the bound (1.01 / 1.05 bounds with moves of 0.85
+  // bounds and no second leaving out; 3.1 / 3.2 closed).
   EXPECT_GT(with.faces_left_out, 0u);
   EXPECT_EQ(without.faces_left_out, 0u);
-  EXPECT_LE(with.mesh_to_surface.max, 1.1 * with.bound);
-  EXPECT_LE(with.surface_to_mesh.max, 1.15 * with.bound);
+  EXPECT_TRUE(with.within) << with.mesh_to_surface.max << " / " << with.surface_to_mesh.max;
+  EXPECT_LE(with.mesh_to_surface.max, with.bound);
+  EXPECT_LE(with.surface_to_mesh.max, with.bound);
   // Measured apart from the mesher: the drawn surface a view along each point's normal sees,
   // against the triangles (closest point); random points of the triangles against the drawn
   // surface along 13 lines. The views' pixels are wider than a face left out: this catches the
@@ -663,7 +668,7 @@ TEST(ToMesh, OpenWhereNoClosedSurfaceHoldsTheDrawnOne) {
             << "\n";
   ASSERT_GT(surface_side.size(), cloud.points.size() / 2);
   EXPECT_LE(quantile(surface_side, 0.999), with.bound);
-  EXPECT_LE(quantile(surface_side, 1.0), 1.4 * with.bound);
+  EXPECT_LE(quantile(surface_side, 1.0), 1.1 * with.bound);  // 0.98 bounds
   // Between the mesher's samples (vertices, edge midpoints, centroids) a triangle may lie farther:
   // 1.27 bounds at worst here (20,000 points drawn by area; p99.9 0.95 bounds), the mesher's
   // samples 1.01.
