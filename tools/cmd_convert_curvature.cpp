@@ -45,7 +45,7 @@ void add_convert_curvature(CLI::App& convert, Commands& commands) {
                                                   {"out", a->out},          {"vertices", mesh.vertices.size()},
                                                   {"glyphs", g.model.glyphs.size()}, {"skipped", g.skipped},
                                                   {"mean_edge", g.mean_edge}, {"seconds", report.elapsed() - t0}};
-                        log::info("wrote {}: {} ellipsoids ({} vertices skipped)", a->out, g.model.glyphs.size(), g.skipped);
+                        report.summary = fmt::format("wrote {}: {} ellipsoids ({} vertices skipped)", a->out, g.model.glyphs.size(), g.skipped);
                         return kOk;
                       }});
 }

@@ -142,9 +142,9 @@ void add_info(CLI::App& root, Commands& commands) {
   app->add_option("--spacing", raw->spacing, "Raw volume: voxel spacing SX,SY,SZ (default 1,1,1)");
   app->add_option("--header-bytes", raw->header_bytes, "Raw volume: bytes to skip at the start of the file")->check(non_negative());
   commands.push_back({app, [file, json, raw](const CommonOptions&, Report& report) {
-                        if (is_volume_file(*file, *raw)) return run_info_volume(*file, *raw, *json, report);
                         Model m;
                         try {
+                          if (is_volume_file(*file, *raw)) return run_info_volume(*file, *raw, *json, report);
                           // A mesh or a point cloud: what it is, rather than what a model reader finds wrong with it.
                           if (is_molecule_file(*file)) return info_molecule(*file, *json, report);
                           if (detect_file_kind(*file) == FileKind::mesh) return info_mesh(*file, read_mesh(*file), *json, report);

@@ -44,6 +44,9 @@ double sample_trilinear(const Volume& v, const Eigen::Vector3d& x, std::size_t v
   return s;
 }
 
+// The default largest tetrahedron: the enclosed volume over this many.
+constexpr double kDefaultVolumeCells = 4096;
+
 }  // namespace
 
 void add_tetrahedralize(CLI::App& root, Commands& commands) {
@@ -54,6 +57,7 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
     std::string mesh, out, values;
     std::vector<std::string> field{"distance"};
     SurfaceTetrahedralizeOptions options;
+    std::optional<double> max_volume;
   };
   auto a = std::make_shared<Args>();
   app->add_option("CLOSED_MESH", a->mesh, "Closed, manifold, consistently oriented mesh: PLY, OFF, OBJ, STL")
@@ -69,9 +73,11 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                   "TetGen's radius-edge ratio bound (>= 1.1; smaller: rounder tetrahedra, more points; 0: none)")
       ->check(number({.lo = 0, .hi = 100}))
       ->capture_default_str();
-  app->add_option("--max-volume", a->options.max_volume, "Largest tetrahedron volume, world units^3 (0: unbounded)")
-      ->check(non_negative())
-      ->capture_default_str();
+  app->add_option("--max-volume", a->max_volume,
+                  "Largest tetrahedron volume, world units^3 (0: unbounded; default: the volume the mesh encloses / "
+                  "4096, so the inside has vertices for the field: a cube's 6 tetrahedra have none, and its distance "
+                  "field was 0 everywhere)")
+      ->check(non_negative());
   commands.push_back({app, [a](const CommonOptions&, Report& report) {
                         const std::string kind = a->field.at(0);
                         if (!(kind == "distance" && a->field.size() == 1) && !(kind == "volume" && a->field.size() == 2))
@@ -95,6 +101,14 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                         }
                         SurfaceTetrahedralizeOptions o = a->options;
                         o.source = a->mesh;
+                        if (a->max_volume) {
+                          o.max_volume = *a->max_volume;
+                        } else {
+                          double enclosed = 0;  // |Σ a·(b × c)| / 6 over the triangles
+                          for (const auto& t : triangles)
+                            enclosed += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
+                          o.max_volume = std::abs(enclosed) / kDefaultVolumeCells;
+                        }
                         const SurfaceTetrahedralization tets = tetrahedralize_closed_surface(mesh.vertices, triangles, o);
                         const double tet_seconds = report.elapsed() - t0;
 
@@ -133,9 +147,9 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                                                          {"value_max", *hi},
                                                          {"tetrahedralize_seconds", tet_seconds},
                                                          {"field_seconds", field_seconds}};
-                        log::info("wrote {} ({} vertices, {} tetrahedra) and {} ({} from {:g} to {:g}) in {:.2f} s", a->out,
-                                  out.vertices.size(), out.tets.size(), values.string(),
-                                  volume ? "volume samples" : "distance to the boundary", *lo, *hi, report.elapsed());
+                        report.summary = fmt::format("wrote {} ({} vertices, {} tetrahedra) and {} ({} from {:g} to {:g})", a->out,
+                                                     out.vertices.size(), out.tets.size(), values.string(),
+                                                     volume ? "volume samples" : "distance to the boundary", *lo, *hi);
                         return kOk;
                       }});
 }

@@ -180,6 +180,19 @@ TEST(Cli, InfoJsonSaysWhyAFileIsInvalid) {
   EXPECT_NE(r.out.find("\"error\": "), std::string::npos) << r.out;
   // Without --json no JSON.
   EXPECT_EQ(quadrix_run("info " + q(bad)).out.find("\"valid\""), std::string::npos);
+  // A volume too: a header naming a data file that is not there, a raw file shorter than its dims.
+  const auto nhdr = dir / "bad.nhdr", raw = dir / "short.raw";
+  {
+    std::ofstream(nhdr) << "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\ndata file: missing.raw\n\n";
+    std::ofstream(raw) << "0123456789";
+  }
+  for (const auto& [cmd, code] : {std::pair{"info --json " + q(nhdr), 5},  // i/o: the data file is missing
+                                   std::pair{"info --json " + q(raw) + " --dims 4,4,4 --type uint8", 3}}) {
+    const CmdResult v = quadrix_run(cmd);
+    EXPECT_EQ(v.code, code) << cmd << "\n" << v.out;
+    EXPECT_NE(v.out.find("\"valid\": false"), std::string::npos) << cmd << "\n" << v.out;
+    EXPECT_NE(v.out.find("\"error\": "), std::string::npos) << cmd << "\n" << v.out;
+  }
 }
 
 // A cloud 1e11 from the origin and 2 across fits, but no renderer can place it: `fit` says so

@@ -6,7 +6,9 @@
 #include "tests/support.h"
 #include "tests/tools/cli_support.h"
 
+#include <cmath>
 #include <cstdlib>
+#include <numbers>
 #include <fstream>
 
 #include <fmt/format.h>
@@ -47,6 +49,35 @@ TEST_F(CliOutputs, EveryCommandSaysWhatItWroteUnlessQuiet) {
     xyz += fmt::format("{} {} {}\n", std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
   }
   const auto points = write("p.xyz", xyz);
+  const auto cube = write("c.off", "OFF\n8 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                                   "3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n"
+                                   "3 2 3 7\n3 2 7 6\n3 1 2 6\n3 1 6 5\n3 0 4 7\n3 0 7 3\n");
+  std::string uv = "OFF\n";  // a unit sphere, 12 rings of 24, for curvature glyphs
+  {
+    constexpr int kRings = 12, kSegments = 24;
+    std::string v, f;
+    int faces = 0;
+    v += "0 0 1\n";
+    for (int i = 1; i < kRings; ++i)
+      for (int j = 0; j < kSegments; ++j) {
+        const double t = std::numbers::pi * i / kRings, p = 2 * std::numbers::pi * j / kSegments;
+        v += fmt::format("{} {} {}\n", std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+      }
+    v += "0 0 -1\n";
+    const int south = 1 + (kRings - 1) * kSegments;
+    const auto at = [](int ring, int j) { return 1 + (ring - 1) * kSegments + (j % kSegments); };
+    for (int j = 0; j < kSegments; ++j, faces += 2) {
+      f += fmt::format("3 0 {} {}\n", at(1, j), at(1, j + 1));
+      f += fmt::format("3 {} {} {}\n", south, at(kRings - 1, j + 1), at(kRings - 1, j));
+    }
+    for (int i = 1; i + 1 < kRings; ++i)
+      for (int j = 0; j < kSegments; ++j, faces += 2) {
+        f += fmt::format("3 {} {} {}\n", at(i, j), at(i + 1, j), at(i + 1, j + 1));
+        f += fmt::format("3 {} {} {}\n", at(i, j), at(i + 1, j + 1), at(i, j + 1));
+      }
+    uv += fmt::format("{} {} 0\n", south + 1, faces) + v + f;
+  }
+  const auto sphere = write("uv.off", uv);
   struct Case {
     std::string name, args, fragment;  // the summary names what was written
   };
@@ -59,6 +90,8 @@ TEST_F(CliOutputs, EveryCommandSaysWhatItWroteUnlessQuiet) {
       {"convert skin", "convert skin " + q(balls) + " -o " + q(dir_ / "k.qxm"), "k.qxm"},
       {"convert volume", "convert volume --synth marschner-lobb --grid 8 --iso 0.5 -o " + q(dir_ / "v.qxm"), "v.qxm"},
       {"fit", "fit " + q(points) + " -o " + q(dir_ / "f.qxm") + " --max-error 0.02 --allow-exceed", "f.qxm"},
+      {"convert curvature-glyphs", "convert curvature-glyphs " + q(sphere) + " -o " + q(dir_ / "c.qxm"), "c.qxm"},
+      {"tetrahedralize", "tetrahedralize " + q(cube) + " -o " + q(dir_ / "c.mesh"), "c.mesh"},
   };
   for (const Case& c : cases) {
     CmdResult r = quadrix_run(c.args);

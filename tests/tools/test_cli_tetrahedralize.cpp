@@ -97,6 +97,37 @@ TEST_F(CliTetrahedralize, ClosedCubeGivesADistanceFieldWhoseIsoSurfaceIsTheInner
   }
 }
 
+// With the defaults the inside has vertices (the largest tetrahedron a 4096th of the enclosed
+// volume): TetGen alone fills a cube with 6 tetrahedra on its 8 corners, whose distance field was
+// 0 everywhere, and `convert volume --tets` then found no iso value ("constant data").
+TEST_F(CliTetrahedralize, DefaultsGiveTheInsideVerticesSoTheFieldHasAnIsoSurface) {
+  const auto cube = write("cube.off", cube_off(1.0));
+  const auto solid = dir_ / "solid.mesh";
+  const CmdResult r = quadrix_run("tetrahedralize " + q(cube) + " -o " + q(solid));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const TetMesh mesh = read_tet_mesh(solid);
+  EXPECT_GE(mesh.tets.size(), 4096u);
+  const std::vector<double> values = read_values(dir_ / "solid.values");
+  ASSERT_EQ(values.size(), mesh.vertices.size());
+  EXPECT_GT(*std::max_element(values.begin(), values.end()), 0.5);  // a vertex within ½ of the centre
+  // No --iso: the suggested one is used, and the patches lie inside the cube.
+  const auto model = dir_ / "inner.qxm";
+  const CmdResult c = quadrix_run("convert volume --tets " + q(solid) + " --values " + q(dir_ / "solid.values") +
+                                  " -o " + q(model));
+  ASSERT_EQ(c.code, 0) << c.out;
+  const Model m = read_model(model);
+  EXPECT_GT(m.tets.size(), 20u);
+  const Box3 box = bounds(m);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GE(box.min[a], -1.0) << a;
+    EXPECT_LE(box.max[a], 1.0) << a;
+  }
+  // --max-volume 0 keeps TetGen's own: no vertex inside.
+  ASSERT_EQ(quadrix_run("tetrahedralize " + q(cube) + " -o " + q(solid) + " --max-volume 0 --quality 0").code, 0);
+  const std::vector<double> bare = read_values(dir_ / "solid.values");
+  EXPECT_EQ(*std::max_element(bare.begin(), bare.end()), 0.0);
+}
+
 TEST_F(CliTetrahedralize, OpenOrDegenerateMeshesAreRefusedBeforeTetGenAndMisWoundFacesTurned) {
   const auto out = dir_ / "solid.mesh";
   struct Case {
