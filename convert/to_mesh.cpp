@@ -24,6 +24,7 @@
 #include "convert/mesh_measure.h"
 #include "core/bounds.h"
 #include "core/culling.h"
+#include "core/implicit/surface.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/reference.h"
@@ -119,6 +120,87 @@ double edge_root(const Quadric& f, const Eigen::Vector3d& p, const Eigen::Vector
     }
   }
   return std::clamp(best, 0.0, 1.0);
+}
+
+// ---- implicit surfaces --------------------------------------------------------------------------
+
+/// Cells along an implicit's bounds' longest side at level 0; doubled per level, at most kMaxImplicitCells.
+constexpr int kImplicitCells = 32;
+constexpr int kMaxImplicitCells = 256;
+
+/// An implicit surface (core/implicit) by marching tetrahedra over its bounds: a grid of
+/// kImplicitCells << k cells along the longest side (at most kMaxImplicitCells), each cube split
+/// in the 6 tetrahedra of Kuhn's split (the same diagonal in every cube, so neighbours share their
+/// faces' triangulation), S's sign at the nodes (not finite: outside), each crossing found by
+/// bisection on S along its grid edge, so the vertices lie on S = 0 to double precision. The mesh
+/// is open where the bounds cut the surface: the renderer draws S = 0 inside them only.
+void mesh_implicit(const ImplicitSurface& surface, int k, Builder& out) {
+  const implicit::CompiledImplicit c = implicit::compile(surface);
+  const Rgb colour = surface.colour.value_or(Rgb{200, 200, 200});
+  const Eigen::Vector3d lo = c.bounds.min, extent = c.bounds.max - c.bounds.min;
+  const int cells = std::min(kImplicitCells << std::min(k, 16), kMaxImplicitCells);
+  Eigen::Vector3i n;
+  for (int a = 0; a < 3; ++a) n[a] = std::max(1, static_cast<int>(std::ceil(cells * extent[a] / extent.maxCoeff())));
+  const Eigen::Vector3d h = extent.cwiseQuotient(n.cast<double>());
+  const Eigen::Vector3i nodes = n + Eigen::Vector3i::Ones();
+  const auto index = [&](const Eigen::Vector3i& i) {
+    return static_cast<std::uint64_t>(i.x()) + static_cast<std::uint64_t>(nodes.x()) * (i.y() + static_cast<std::uint64_t>(nodes.y()) * i.z());
+  };
+  const auto at = [&](const Eigen::Vector3i& i) -> Eigen::Vector3d {
+    Eigen::Vector3d p;
+    for (int a = 0; a < 3; ++a) p[a] = i[a] == n[a] ? c.bounds.max[a] : lo[a] + h[a] * i[a];
+    return p;
+  };
+  const auto value = [&](const Eigen::Vector3d& p) {
+    const double v = c.expression.value(p, c.parameters);
+    return std::isfinite(v) ? v : 1.0;
+  };
+  std::vector<double> f(static_cast<std::size_t>(nodes.x()) * nodes.y() * nodes.z());
+  tbb::parallel_for(0, nodes.z(), [&](int z) {
+    for (int y = 0; y < nodes.y(); ++y)
+      for (int x = 0; x < nodes.x(); ++x) {
+        const Eigen::Vector3i i(x, y, z);
+        f[index(i)] = value(at(i));
+      }
+  });
+  std::unordered_map<std::uint64_t, int> vertex_of_edge;  // key: lower node · node count + upper node
+  const std::uint64_t total = f.size();
+  constexpr int kPermutations[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int z = 0; z < n.z(); ++z)
+    for (int y = 0; y < n.y(); ++y)
+      for (int x = 0; x < n.x(); ++x) {
+        const Eigen::Vector3i base(x, y, z);
+        for (const auto& perm : kPermutations) {
+          std::array<Eigen::Vector3i, 4> node;
+          node[0] = base;
+          for (int j = 0; j < 3; ++j) node[j + 1] = node[j] + Eigen::Vector3i::Unit(perm[j]);
+          std::array<Eigen::Vector3d, 4> p;
+          std::array<double, 4> v;
+          std::array<std::uint64_t, 4> id;
+          bool positive = false, negative = false;
+          for (int j = 0; j < 4; ++j) {
+            id[j] = index(node[j]);
+            p[j] = at(node[j]);
+            v[j] = f[id[j]];
+            (v[j] >= 0.0 ? positive : negative) = true;
+          }
+          if (!positive || !negative) continue;
+          march(p, v, out, [&](int i, int j) {
+            const std::uint64_t a = std::min(id[i], id[j]), b = std::max(id[i], id[j]);
+            const auto [it, fresh] = vertex_of_edge.try_emplace(a * total + b, 0);
+            if (!fresh) return it->second;
+            // Bisection between the nodes' positions (signs as march splits them: ≥ 0 and < 0).
+            Eigen::Vector3d in = v[i] < 0.0 ? p[i] : p[j], outside = v[i] < 0.0 ? p[j] : p[i];
+            for (int step = 0; step < 60 && (outside - in).squaredNorm() > 0.0; ++step) {
+              const Eigen::Vector3d mid = 0.5 * (in + outside);
+              if (mid == in || mid == outside) break;
+              (value(mid) >= 0.0 ? outside : in) = mid;
+            }
+            it->second = out.add_vertex(0.5 * (in + outside), colour);
+            return it->second;
+          });
+        }
+      }
 }
 
 // ---- tetrahedron patches ----------------------------------------------------------------------
@@ -1470,6 +1552,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     b.colours = has_any_colour(model);
     if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
     for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
+    for (const ImplicitSurface& s : model.implicits) mesh_implicit(s, level, b);
     double reach = 4.0 * bound;
     LocalRefinement local;
     const std::size_t first_face = b.mesh.face_count();

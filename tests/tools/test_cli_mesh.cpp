@@ -67,3 +67,48 @@ TEST_F(CliMesh, OutsideTheBoundWritesTheMeshAndExitsSeven) {
   EXPECT_TRUE(std::filesystem::exists(out));
   EXPECT_EQ(quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-5 --max-refinements 0 --allow-exceed --quiet").code, 0);
 }
+
+// Implicit surfaces mesh too (they wrote 0 triangles, "max error inf", and exit 7): marching
+// tetrahedra on S's sign over the bounds, crossings bisected onto S = 0. A torus inside its
+// bounds comes out closed, within the bound, its vertices on the surface; cut by its bounds
+// (z ≤ 0.1), open along the cut and nothing outside the bounds.
+TEST_F(CliMesh, ImplicitSurfacesMeshOnTheirZeroSetWithinTheBound) {
+  const auto write_implicit = [&](const char* name, const std::string& expression, double max_z) {
+    const auto path = dir_ / name;
+    std::ofstream out(path);
+    out << "ply\nformat ascii 1.0\ncomment quadrix-format 2\nelement implicit 1\n"
+           "property list uint uchar expression\nproperty list uchar double parameters\n"
+           "property double min_x\nproperty double min_y\nproperty double min_z\n"
+           "property double max_x\nproperty double max_y\nproperty double max_z\nend_header\n"
+        << expression.size();
+    for (const unsigned char ch : expression) out << ' ' << int(ch);
+    out << " 0 -1.5 -1.5 -0.5 1.5 1.5 " << max_z << "\n";
+    return path;
+  };
+  // (x² + y² + z² + R² − r²)² − 4R²(x² + y²), R = 1, r = 0.3.
+  const std::string torus = "(x^2+y^2+z^2+0.91)^2-4*(x^2+y^2)";
+  const auto torus_value = [](const Eigen::Vector3d& p) {
+    const double s = p.squaredNorm() + 0.91;
+    return s * s - 4 * (p.x() * p.x() + p.y() * p.y());
+  };
+  for (const double max_z : {0.5, 0.1}) {
+    const auto model = write_implicit(max_z == 0.5 ? "t.qxm" : "cut.qxm", torus, max_z);
+    const auto out = dir_ / "t.ply", report = dir_ / "t.json";
+    const CmdResult r = quadrix_run("mesh " + q(model) + " -o " + q(out) + " --report " + q(report));
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto j = read_json(report)["mesh"];
+    EXPECT_TRUE(j["within_bound"].get<bool>());
+    EXPECT_GT(j["surface_to_mesh"]["samples"].get<std::size_t>(), 1000u);
+    const PolygonMesh m = read_mesh(out);
+    ASSERT_GT(m.face_count(), 1000u);
+    for (const auto& v : m.vertices) {
+      // On the torus: |S| / |∇S| (|∇S| ≈ 4R·r·2 = 2.4 near it) far below the bound.
+      ASSERT_LT(std::abs(torus_value(v)), 1e-9) << v.transpose();
+      ASSERT_LE(v.z(), max_z + 1e-12);
+    }
+    if (max_z == 0.5)
+      EXPECT_EQ(j["open_edges"].get<int>(), 0);
+    else
+      EXPECT_GT(j["open_edges"].get<int>(), 0);
+  }
+}
