@@ -1,6 +1,9 @@
 // quadrix mesh MODEL -o out.ply|obj|off|stl: any model as a triangle mesh within a measured
 // distance of the surface the renderer draws (convert/to_mesh.h).
+#include <cmath>
+#include <cstdlib>
 #include <iostream>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -15,9 +18,11 @@
 namespace quadrix::cli {
 namespace {
 
+constexpr double kDefaultMaxError = 1e-3;  // × the bounding-box diagonal
+
 struct MeshArgs {
   std::string model, out;
-  double max_error = 1e-3;  // relative to the bounding-box diagonal
+  std::optional<double> max_error;  // relative to the bounding-box diagonal
   double max_error_abs = 0;
   bool allow_exceed = false;
   ToMeshOptions options;
@@ -35,7 +40,21 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   const Model model = read_model(a.model);
   if (model.empty()) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
   ToMeshOptions o = a.options;
-  o.max_error = a.max_error_abs > 0 ? a.max_error_abs : a.max_error * bounds(model).diagonal();
+  // Unless given: 1e-3 of the diagonal, or a SLIM fit's own E where it is larger (a blend steps by
+  // up to a few E between its sheets: a fit at 1e-2 meshed at 1e-3 ended 5.6 bounds off with open
+  // edges, exit 7; at its own E, watertight and within the bound).
+  const double diagonal = bounds(model).diagonal();
+  o.max_error = a.max_error_abs > 0 ? a.max_error_abs : a.max_error.value_or(kDefaultMaxError) * diagonal;
+  if (a.max_error_abs <= 0 && !a.max_error && !model.slims.empty())
+    if (const auto it = model.metadata.find("max_error_abs"); it != model.metadata.end()) {
+      char* end = nullptr;
+      const double fit_e = std::strtod(it->second.c_str(), &end);
+      if (end != it->second.c_str() && std::isfinite(fit_e) && fit_e > o.max_error) {
+        log::info("mesh: the bound is the fit's own E, {:.3g} ({:.3g} of the diagonal; 1e-3 is the default for other models)",
+                  fit_e, fit_e / diagonal);
+        o.max_error = fit_e;
+      }
+    }
   Progress progress("mesh", progress_allowed(common));
   o.progress = progress.callback();
   const ToMeshResult r = mesh_model(model, o);
@@ -87,9 +106,9 @@ void add_mesh(CLI::App& root, Commands& commands) {
   app->add_option("-o,--out", a->out, "Output mesh; the extension picks the format: .ply (binary, colours), .obj, .off, .stl")
       ->required();
   app->add_option("--max-error", a->max_error, "Bound on the distance between mesh and drawn surface, relative to the "
-                                               "bounding-box diagonal")
-      ->check(number({.lo = 1e-7, .hi = 0.5}))
-      ->capture_default_str();
+                                               "bounding-box diagonal (default: 1e-3, or a SLIM fit's own E where the "
+                                               "model records a larger one)")
+      ->check(number({.lo = 1e-7, .hi = 0.5}));
   app->add_option("--max-error-abs", a->max_error_abs, "The bound in world units (overrides --max-error; default: unset)")
       ->check(positive())->default_str("");
   app->add_option("--max-refinements", a->options.max_refinements, "Resolution doublings tried to reach the bound")

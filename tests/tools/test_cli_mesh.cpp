@@ -9,7 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/bounds.h"
 #include "core/mesh_io.h"
+#include "core/model_io.h"
 
 using namespace quadrix;
 using test_support::CmdResult;
@@ -111,4 +113,28 @@ TEST_F(CliMesh, ImplicitSurfacesMeshOnTheirZeroSetWithinTheBound) {
     else
       EXPECT_GT(j["open_edges"].get<int>(), 0);
   }
+}
+
+// A SLIM fit is meshed at its own E by default where that is above 1e-3 of the diagonal (its
+// blend steps by up to a few E between sheets: the torus quads fitted at 1e-2 and meshed at 1e-3
+// ended 5.6 bounds off with open edges, exit 7); --max-error still sets the bound.
+TEST_F(CliMesh, AFitIsMeshedAtItsOwnErrorUnlessToldOtherwise) {
+  std::string xyz;
+  for (int i = 0; i < 2000; ++i) {
+    const double t = std::acos(1 - 2 * (i + 0.5) / 2000), p = i * 2.399963229728653;
+    xyz += std::to_string(std::sin(t) * std::cos(p)) + " " + std::to_string(std::sin(t) * std::sin(p)) + " " +
+           std::to_string(std::cos(t)) + "\n";
+  }
+  const auto points = dir_ / "p.xyz", model = dir_ / "f.qxm";
+  { std::ofstream(points) << xyz; }
+  ASSERT_EQ(quadrix_run("fit " + q(points) + " -o " + q(model) + " --max-error 0.01").code, 0);
+  const double fit_e = std::stod(read_model(model).metadata.at("max_error_abs"));
+  const auto report = dir_ / "r.json";
+  CmdResult r = quadrix_run("mesh " + q(model) + " -o " + q(dir_ / "m.ply") + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_DOUBLE_EQ(read_json(report)["mesh"]["bound"].get<double>(), fit_e);
+  r = quadrix_run("mesh " + q(model) + " -o " + q(dir_ / "m.ply") + " --max-error 0.005 --allow-exceed --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  // Of the model's own diagonal (its balls reach past the points).
+  EXPECT_DOUBLE_EQ(read_json(report)["mesh"]["bound"].get<double>(), 0.005 * bounds(read_model(model)).diagonal());
 }
