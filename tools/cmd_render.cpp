@@ -450,11 +450,14 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   j["shadows"] = a.shadows;
   j["outlines"] = a.outlines;
   std::vector<std::string> written;
+  std::string sheet_size;
   if (turntable > 0 && !a.contact_sheet) {
     for (std::size_t k = 0; k < images.size(); ++k) write_image(images[k], written.emplace_back(frame_name(a.out, int(k))));
   } else if (turntable > 0) {
     const std::uint8_t fill[4] = {background[0], background[1], background[2], std::uint8_t(transparent ? 0 : 255)};
-    write_image(contact_sheet(images, fill), written.emplace_back(a.out));
+    const Image8 sheet = contact_sheet(images, fill);
+    sheet_size = fmt::format("a contact sheet of {}x{}, {} frames of ", sheet.width, sheet.height, images.size());
+    write_image(sheet, written.emplace_back(a.out));
   } else {
     write_image(images.front(), written.emplace_back(a.out));
   }
@@ -463,9 +466,11 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
     for (const Camera& c : cameras) cams.push_back(camera_json(c));
     j["turntable"] = {{"frames", turntable}, {"contact_sheet", a.contact_sheet}, {"files", written}, {"cameras", cams}};
   }
-  report.summary = fmt::format("wrote {}{} ({}x{}{}, {} primitives, {} backend)", written.front(),
+  const std::string drawn = fmt::format("{}{}", model.empty() && mesh ? "" : fmt::format("{} primitives", model.size()),
+                                        mesh ? fmt::format("{}{} mesh faces", model.empty() ? "" : ", ", mesh->face_count()) : "");
+  report.summary = fmt::format("wrote {}{} ({}{}x{}{}, {}, {} backend)", written.front(),
                                written.size() > 1 ? fmt::format(" … {} ({} frames)", written.back(), written.size()) : "",
-                               width, height, ss > 1 ? fmt::format(", {}× supersampled", ss) : "", model.size(), backend);
+                               sheet_size, width, height, ss > 1 ? fmt::format(", {}× supersampled", ss) : "", drawn, backend);
   return kOk;
 }
 
