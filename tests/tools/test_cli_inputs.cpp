@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/image.h"
+#include "core/mesh_io.h"
+#include "core/model_io.h"
 
 using namespace quadrix;
 using test_support::CmdResult;
@@ -137,6 +139,24 @@ TEST_F(CliInputs, ViewOpensEveryInputRenderOpens) {
     EXPECT_EQ(r.code, 3) << r.out;
     EXPECT_NE(r.out.find("a point cloud"), std::string::npos) << r.out;
   }
+}
+
+// A mesh as `fit`'s input: its faces give the normals and are the surface the fit's two-sided
+// check measures against (not normals estimated from its vertices); as `render --mesh`, drawn
+// beside the model, its faces counted in the summary.
+TEST_F(CliInputs, AMeshFeedsFitAndRenderMesh) {
+  const auto model = dir_ / "s.qxm", mesh = dir_ / "s.stl", fitted = dir_ / "f.qxm", report = dir_ / "f.json";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  ASSERT_EQ(quadrix_run("mesh " + q(model) + " -o " + q(mesh) + " --max-error 0.01 --quiet").code, 0);
+  const CmdResult f = quadrix_run("fit " + q(mesh) + " -o " + q(fitted) + " --max-error 0.01 --report " + q(report));
+  ASSERT_EQ(f.code, 0) << f.out;
+  const auto j = read_json(report)["fit"];
+  EXPECT_EQ(j["normals"], "given");
+  EXPECT_TRUE(j["surface"]["checked"].get<bool>());
+  EXPECT_EQ(read_model(fitted).metadata.at("surface_reference"), "mesh");
+  const CmdResult r = quadrix_run("render " + q(fitted) + " --mesh " + q(mesh) + " -o " + q(dir_ / "r.png") + " --size 48x40");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(std::to_string(read_mesh(mesh).face_count()) + " mesh faces"), std::string::npos) << r.out;
 }
 
 // --style and --colour-by element|chain|residue reach the molecule reader in render (report,
