@@ -754,6 +754,16 @@ void snap_to_surface(const ReferenceScene& scene, const TraceOptions& trace, dou
   out.mesh = std::move(kept);
 }
 
+/// The mesh without the faces marked in `drop` (per face, non-zero: left out); every vertex kept.
+PolygonMesh without_faces(const PolygonMesh& m, std::span<const std::uint8_t> drop) {
+  PolygonMesh out;
+  out.vertices = m.vertices;
+  out.colours = m.colours;
+  for (std::size_t f = 0; f < m.face_count(); ++f)
+    if (f >= drop.size() || !drop[f]) out.add_face(m.face(f));
+  return out;
+}
+
 std::size_t count_open_edges(const PolygonMesh& m) {
   std::unordered_map<std::uint64_t, int> uses;
   for (std::size_t f = 0; f < m.face_count(); ++f) {
@@ -1897,9 +1907,6 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         BeyondSamples where;
         mesh_to_surface(scene, trace, r.mesh, mesh_reach, bound, &where, &memo);
         ToMeshResult next = r;
-        next.mesh = PolygonMesh{};
-        next.mesh.vertices = r.mesh.vertices;
-        next.mesh.colours = r.mesh.colours;
         // Faces over a crack (a sample in no patch's ball) always; the others only where the local
         // refinement ran and left them beyond (a smooth surface's coarse faces are refined, not
         // left out).
@@ -1927,10 +1934,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
           std::replace(leave.begin(), leave.end(), std::uint8_t{2}, std::uint8_t{0});
         std::vector<std::size_t> left_out;
         for (std::size_t f = 0; f < r.mesh.face_count(); ++f)
-          if (leave[f])
-            left_out.push_back(f);
-          else
-            next.mesh.add_face(r.mesh.face(f));
+          if (leave[f]) left_out.push_back(f);
+        next.mesh = without_faces(r.mesh, leave);
         if (!left_out.empty()) {
           next.mesh_to_surface = mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, nullptr, &memo);
           next.open_edges = count_open_edges(next.mesh);
@@ -1959,18 +1964,12 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
             BeyondSamples at;
             mesh_to_surface(scene, trace, next.mesh, mesh_reach, bound, &at, &memo);
             std::vector<std::size_t> out;
+            std::vector<std::uint8_t> drop(next.mesh.face_count(), 0);
             for (std::size_t f = 0; f < next.mesh.face_count() && f < at.faces.size(); ++f)
-              if (at.faces[f] > bound) out.push_back(f);
+              if (at.faces[f] > bound) out.push_back(f), drop[f] = 1;
             if (out.empty() || out.size() > std::max<std::size_t>(kTrimFaces, next.mesh.face_count() / 1000)) break;
             ToMeshResult t = next;
-            t.mesh = PolygonMesh{};
-            t.mesh.vertices = next.mesh.vertices;
-            t.mesh.colours = next.mesh.colours;
-            for (std::size_t f = 0, k = 0; f < next.mesh.face_count(); ++f)
-              if (k < out.size() && out[k] == f)
-                ++k;
-              else
-                t.mesh.add_face(next.mesh.face(f));
+            t.mesh = without_faces(next.mesh, drop);
             std::vector<Eigen::Vector3d> more_gap = gap;
             const std::vector<Eigen::Vector3d> under = drawn_under(scene, trace, next.mesh, out, mesh_reach);
             more_gap.insert(more_gap.end(), under.begin(), under.end());

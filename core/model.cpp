@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include <fmt/format.h>
 
@@ -158,6 +159,15 @@ Box3 bounds(const Model& m) {
   for (const auto& g : m.glyphs) b.extend(bounds(g));
   for (const auto& s : m.implicits) b.extend(s.bounds);
   return b;
+}
+
+std::optional<double> metadata_number(const Model& model, const std::string& key) {
+  const auto it = model.metadata.find(key);
+  if (it == model.metadata.end()) return std::nullopt;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (end == it->second.c_str()) return std::nullopt;
+  return v;
 }
 
 }  // namespace quadrix

@@ -167,6 +167,10 @@ struct Model {
   bool empty() const { return size() == 0; }
 };
 
+/// A metadata value read as a number (strtod: the whole leading number, any value it parses,
+/// infinities included; callers check the range they accept); nullopt when absent or not a number.
+std::optional<double> metadata_number(const Model& model, const std::string& key);
+
 /// The hierarchy's ball by id (see SlimHierarchy).
 inline const SlimPatch& slim_ball(const Model& m, std::size_t id) {
   return id < m.slims.size() ? m.slims[id] : m.slim_hierarchy.others[id - m.slims.size()];

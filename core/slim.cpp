@@ -107,22 +107,14 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
 }
 
 double slim_offset_of(const Model& model) {
-  if (const auto it = model.metadata.find("slim_offset"); it != model.metadata.end()) {
-    char* end = nullptr;
-    const double v = std::strtod(it->second.c_str(), &end);
-    if (end != it->second.c_str() && std::isfinite(v) && v >= 0.0) return v;
-  }
+  if (const auto v = metadata_number(model, "slim_offset"); v && std::isfinite(*v) && *v >= 0.0) return *v;
   return SlimBlendOptions{}.offset;
 }
 
 SlimBlendOptions slim_blend_of(const Model& model, double offset) {
   SlimBlendOptions b;
   b.offset = offset >= 0 ? offset : slim_offset_of(model);
-  if (const auto it = model.metadata.find("slim_max_push"); it != model.metadata.end()) {
-    char* end = nullptr;
-    const double v = std::strtod(it->second.c_str(), &end);
-    if (end != it->second.c_str() && v > 0.0) b.max_push = v;
-  }
+  if (const auto v = metadata_number(model, "slim_max_push"); v && *v > 0.0) b.max_push = *v;
   return b;
 }
 

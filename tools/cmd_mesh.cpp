@@ -1,7 +1,6 @@
 // quadrix mesh MODEL -o out.ply|obj|off|stl: any model as a triangle mesh within a measured
 // distance of the surface the renderer draws (convert/to_mesh.h).
 #include <cmath>
-#include <cstdlib>
 #include <iostream>
 #include <optional>
 
@@ -46,14 +45,10 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   const double diagonal = bounds(model).diagonal();
   o.max_error = a.max_error_abs > 0 ? a.max_error_abs : a.max_error.value_or(kDefaultMaxError) * diagonal;
   if (a.max_error_abs <= 0 && !a.max_error && !model.slims.empty())
-    if (const auto it = model.metadata.find("max_error_abs"); it != model.metadata.end()) {
-      char* end = nullptr;
-      const double fit_e = std::strtod(it->second.c_str(), &end);
-      if (end != it->second.c_str() && std::isfinite(fit_e) && fit_e > o.max_error) {
-        log::info("mesh: the bound is the fit's own E, {:.3g} ({:.3g} of the diagonal; 1e-3 is the default for other models)",
-                  fit_e, fit_e / diagonal);
-        o.max_error = fit_e;
-      }
+    if (const auto fit_e = metadata_number(model, "max_error_abs"); fit_e && std::isfinite(*fit_e) && *fit_e > o.max_error) {
+      log::info("mesh: the bound is the fit's own E, {:.3g} ({:.3g} of the diagonal; 1e-3 is the default for other models)",
+                *fit_e, *fit_e / diagonal);
+      o.max_error = *fit_e;
     }
   Progress progress("mesh", progress_allowed(common));
   o.progress = progress.callback();
