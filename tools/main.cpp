@@ -77,6 +77,12 @@ int main(int argc, char** argv) {
     return rc;
   };
 
+  // A subcommand's name as typed after `quadrix` ("convert quads", not "quads").
+  const auto full_name = [&app](const CLI::App* c) {
+    std::string name;
+    for (const CLI::App* a = c; a && a != &app; a = a->get_parent()) name = a->get_name() + (name.empty() ? "" : " " + name);
+    return name;
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -86,7 +92,7 @@ int main(int argc, char** argv) {
     // The options' values are stored only after every option validated: read --report's raw text.
     for (auto& c : commands)
       if (c.app->parsed()) {
-        report.json["command"] = c.app->get_name();
+        report.json["command"] = full_name(c.app);
         if (const CLI::Option* o = c.app->get_option_no_throw("--report"); o && !o->results().empty())
           common.report = o->results().front();
       }
@@ -105,9 +111,8 @@ int main(int argc, char** argv) {
     OutputTransaction outputs;
     for (auto& c : commands) {
       if (!c.app->parsed()) continue;
-      report.json["command"] = c.app->get_name();
-      for (const CLI::App* a = c.app; a && a != &app; a = a->get_parent())
-        command_name = a->get_name() + (command_name.empty() ? "" : " " + command_name);
+      command_name = full_name(c.app);
+      report.json["command"] = command_name;
       // An output into a folder that does not exist fails now, before the work (a fit of
       // minutes failed at its end). `bench` writes into a folder of its own making.
       if (!command_name.starts_with("bench"))

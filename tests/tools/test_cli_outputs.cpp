@@ -126,6 +126,12 @@ TEST_F(CliOutputs, TheReportIsWrittenOnFailureWithTheError) {
   j = read_json(report);
   EXPECT_EQ(j["exit_code"].get<int>(), 0);
   EXPECT_TRUE(j["error"].is_null());
+  // A subcommand of a subcommand is named as typed ("quads" before), on success and on a usage error.
+  const auto quads = write("q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0.2\nv 0 1 0\nf 1 2 3 4\n");
+  ASSERT_EQ(quadrix_run("convert quads " + q(quads) + " -o " + q(dir_ / "q.qxm") + " --report " + q(report)).code, 0);
+  EXPECT_EQ(read_json(report)["command"], "convert quads");
+  ASSERT_EQ(quadrix_run("convert quads " + q(quads) + " --report " + q(report) + " -o " + q(dir_ / "q.qxm") + " --no-such").code, 2);
+  EXPECT_EQ(read_json(report)["command"], "convert quads");
 }
 
 TEST_F(CliOutputs, ProducerRecordsTheCommandAsTyped) {
