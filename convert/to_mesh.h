@@ -61,6 +61,11 @@ struct ToMeshOptions {
   /// bound lie on one patch's zero set (a rim running on as a fin past where its neighbours'
   /// surface turns), a round kept only if it leaves fewer samples beyond the bound and no larger maximum
   bool open_parts = true;
+  /// Each vertex gets the drawn surface's normal there (the CPU reference's shading normal, core/
+  /// reference.h, seen along the vertex's own normal), so other programs shade the mesh smoothly
+  /// as the renderer does: a SLIM blend's sheets stand off each other by up to its push, and flat
+  /// faces following them show facets the blended normals do not. Else the mesh has none.
+  bool normals = true;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
   int views = 8;                  ///< surface → mesh: views (fit/surface_error.h)
@@ -77,7 +82,7 @@ struct MeshDistance {
 };
 
 struct ToMeshResult {
-  PolygonMesh mesh;                 ///< triangles, counter-clockwise seen from outside; colours if the model has any
+  PolygonMesh mesh;                 ///< triangles, counter-clockwise seen from outside; colours if the model has any; normals (ToMeshOptions::normals)
   double bound = 0;                 ///< the max_error aimed at (world units)
   MeshDistance mesh_to_surface;     ///< vertices, edge midpoints, face centroids → drawn surface
   MeshDistance surface_to_mesh;     ///< pixels of the drawn surface → mesh
@@ -94,6 +99,7 @@ struct ToMeshResult {
   /// A closed tetrahedron model meshed on one grid (nodes labelled by the drawn surface) instead
   /// of each tetrahedron's own lattice (a skin's slivers; refinements then counts its halvings)
   bool on_grid = false;
+  std::size_t normals_from_faces = 0;  ///< vertices whose normal line met no drawn surface nearby: their faces' normal
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
 

@@ -59,6 +59,8 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"vertices", r.mesh.vertices.size()},
                          {"triangles", r.mesh.face_count()},
                          {"colours", !r.mesh.colours.empty()},
+                         {"normals", !r.mesh.normals.empty()},
+                         {"normals_from_faces", r.normals_from_faces},
                          {"bound", r.bound},
                          {"max_error", r.max_error()},
                          {"mesh_to_surface", distance_json(r.mesh_to_surface)},
@@ -74,9 +76,14 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"fin_triangles", r.fin_triangles},
                          {"faces_left_out", r.faces_left_out},
                          {"within_bound", r.within}};
+  const bool colours = !r.mesh.colours.empty(), normals = !r.mesh.normals.empty();
+  const std::string with_what = colours && normals ? " with normals and colours"
+                                : colours          ? " with colours"
+                                : normals          ? " with normals"
+                                                   : "";
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
-                             a.out, r.mesh.face_count(), r.mesh.vertices.size(), r.mesh.colours.empty() ? "" : " with colours",
+                             a.out, r.mesh.face_count(), r.mesh.vertices.size(), with_what,
                              r.max_error(), r.bound, r.mesh_to_surface.max, r.surface_to_mesh.max,
                              r.mesh.face_count() == 0 ? "empty" : r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges));
   if (r.within) return kOk;
@@ -98,7 +105,8 @@ void add_mesh(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("mesh", "Export a model as a triangle mesh (PLY, OBJ, OFF, STL) within a measured error");
   auto a = std::make_shared<MeshArgs>();
   app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t)")->required();
-  app->add_option("-o,--out", a->out, "Output mesh; the extension picks the format: .ply (binary, colours), .obj, .off, .stl")
+  app->add_option("-o,--out", a->out,
+                  "Output mesh; the extension picks the format: .ply (binary, normals, colours), .obj, .off, .stl")
       ->required();
   app->add_option("--max-error", a->max_error, "Bound on the distance between mesh and drawn surface, relative to the "
                                                "bounding-box diagonal (default: 1e-3, or a SLIM fit's own E where the "
@@ -128,6 +136,9 @@ void add_mesh(CLI::App& root, Commands& commands) {
                   "kept while it leaves fewer samples beyond and no larger maximum; 0: off")
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
+  app->add_flag("!--no-normals", a->options.normals,
+                "Write no vertex normals (by default each vertex gets the drawn surface's normal, so other programs "
+                "shade the mesh smoothly as the renderer does; .ply, .obj and .off carry them, .stl has none)");
   app->add_flag("!--no-open-parts", a->options.open_parts,
                 "SLIM: keep the mesh closed: do not leave out faces over cracks or steps of the blend, nor add "
                 "open sheets where a patch's rim is drawn alone (a fin no closed surface holds)");

@@ -241,7 +241,9 @@ std::size_t orient_faces_coherently(PolygonMesh& mesh) {
 }
 
 PolygonMesh read_mesh(const fs::path& path) {
-  PolygonMesh mesh = read_surface(path, format_of(path)).mesh;
+  io::Surface s = read_surface(path, format_of(path));
+  PolygonMesh mesh = std::move(s.mesh);
+  if (s.normals.size() == mesh.vertices.size()) mesh.normals = std::move(s.normals);
   if (mesh.face_count() == 0) throw FormatError(fmt::format("{}: the mesh has no faces", path.string()));
   if (const std::size_t turned = orient_faces_coherently(mesh); turned > 0)
     log::warn("{}: {} of {} faces were wound against their neighbours (an edge run the same way by both of its "

@@ -18,6 +18,9 @@ struct PolygonMesh {
   /// Optional 8-bit sRGB colour per vertex: empty, or one per vertex (PLY red/green/blue,
   /// OFF's COFF columns, OBJ's "v x y z r g b").
   std::vector<std::array<std::uint8_t, 3>> colours;
+  /// Optional unit normal per vertex: empty, or one per vertex (PLY nx/ny/nz, OFF's NOFF
+  /// columns, OBJ's "vn"); what smooth shading uses in other programs.
+  std::vector<Eigen::Vector3d> normals;
 
   std::size_t face_count() const { return offsets.size() - 1; }
   std::span<const int> face(std::size_t f) const {
@@ -27,7 +30,8 @@ struct PolygonMesh {
     indices.insert(indices.end(), vs.begin(), vs.end());
     offsets.push_back(static_cast<int>(indices.size()));
   }
-  /// Drops the vertices no face uses (and their colours), renumbering the faces; returns how many.
+  /// Drops the vertices no face uses (and their colours and normals), renumbering the faces;
+  /// returns how many.
   std::size_t remove_unused_vertices() {
     std::vector<int> id(vertices.size(), -1);
     for (const int v : indices) id[static_cast<std::size_t>(v)] = 0;
@@ -37,11 +41,13 @@ struct PolygonMesh {
         id[v] = static_cast<int>(n);
         vertices[n] = vertices[v];
         if (!colours.empty()) colours[n] = colours[v];
+        if (!normals.empty()) normals[n] = normals[v];
         ++n;
       }
     const std::size_t removed = vertices.size() - n;
     vertices.resize(n);
     if (!colours.empty()) colours.resize(n);
+    if (!normals.empty()) normals.resize(n);
     for (int& v : indices) v = id[static_cast<std::size_t>(v)];
     return removed;
   }
@@ -57,6 +63,7 @@ struct PolygonMesh {
     PolygonMesh m;
     m.vertices = vertices;
     m.colours = colours;
+    m.normals = normals;
     for (std::size_t f = 0; f < face_count(); ++f) {
       const auto vs = face(f);
       for (std::size_t k = 1; k + 1 < vs.size(); ++k) m.add_face(std::array<int, 3>{vs[0], vs[k], vs[k + 1]});

@@ -1,7 +1,9 @@
 // Mesh writers, one place for every format: OFF and OBJ (shortest round-trip decimals), binary
 // little-endian PLY (double coordinates, uchar colours) and binary STL (float32, faces fanned into
-// triangles). Per-vertex colours go to PLY, OFF (COFF) and OBJ ("v x y z r g b", 0..1); STL has
-// none. Every file is written through a temporary file and a rename.
+// triangles). Per-vertex colours go to PLY, OFF (COFF) and OBJ ("v x y z r g b", 0..1), per-vertex
+// normals to PLY (float nx ny nz), OFF (NOFF, the normal before the colour) and OBJ ("vn", faces
+// "f v//v"); STL has neither (each triangle's own normal). Every file is written through a
+// temporary file and a rename.
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 
@@ -33,6 +35,12 @@ void validate_for_writing(const PolygonMesh& mesh, const fs::path& path) {
   if (!mesh.colours.empty() && mesh.colours.size() != mesh.vertices.size())
     throw InvalidInput(fmt::format("{}: cannot write mesh: {} colours for {} vertices", path.string(),
                                    mesh.colours.size(), mesh.vertices.size()));
+  if (!mesh.normals.empty() && mesh.normals.size() != mesh.vertices.size())
+    throw InvalidInput(fmt::format("{}: cannot write mesh: {} normals for {} vertices", path.string(),
+                                   mesh.normals.size(), mesh.vertices.size()));
+  for (std::size_t v = 0; v < mesh.normals.size(); ++v)
+    if (!mesh.normals[v].allFinite() || !(mesh.normals[v].norm() > 0))
+      throw InvalidInput(fmt::format("{}: cannot write mesh: vertex {} has a zero or non-finite normal", path.string(), v));
   for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
     if (!mesh.vertices[v].allFinite())
       throw InvalidInput(fmt::format("{}: cannot write mesh: vertex {} is not finite", path.string(), v));
@@ -45,7 +53,7 @@ void validate_for_writing(const PolygonMesh& mesh, const fs::path& path) {
 
 void write_text_mesh(const PolygonMesh& mesh, const fs::path& path, bool is_obj) {
   validate_for_writing(mesh, path);
-  const bool has_colours = !mesh.colours.empty();
+  const bool has_colours = !mesh.colours.empty(), has_normals = !mesh.normals.empty();
   // fmt's "{}" prints the shortest decimal that reads back to the same double, i.e. lossless
   // like max_digits10 (17 significant digits) but without the noise digits.
   write_file_atomically(path, [&](std::ostream& out) {
@@ -54,11 +62,15 @@ void write_text_mesh(const PolygonMesh& mesh, const fs::path& path, bool is_obj)
       fmt::format_to(std::back_inserter(buf), "# quadrix: {} vertices, {} faces\n", mesh.vertices.size(),
                      mesh.face_count());
     else
-      fmt::format_to(std::back_inserter(buf), "{}OFF\n{} {} 0\n", has_colours ? "C" : "", mesh.vertices.size(),
-                     mesh.face_count());
+      fmt::format_to(std::back_inserter(buf), "{}{}OFF\n{} {} 0\n", has_colours ? "C" : "", has_normals ? "N" : "",
+                     mesh.vertices.size(), mesh.face_count());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       const Eigen::Vector3d& p = mesh.vertices[i];
       fmt::format_to(std::back_inserter(buf), "{}{} {} {}", is_obj ? "v " : "", p.x(), p.y(), p.z());
+      if (has_normals && !is_obj) {
+        const Eigen::Vector3f n = mesh.normals[i].normalized().cast<float>();
+        fmt::format_to(std::back_inserter(buf), " {} {} {}", n.x(), n.y(), n.z());
+      }
       if (has_colours) {
         const auto& c = mesh.colours[i];
         if (is_obj)
@@ -69,13 +81,23 @@ void write_text_mesh(const PolygonMesh& mesh, const fs::path& path, bool is_obj)
       buf.push_back('\n');
       if (buf.size() > kChunk) flush(out, buf);
     }
+    if (has_normals && is_obj)
+      for (const Eigen::Vector3d& n : mesh.normals) {
+        const Eigen::Vector3f m = n.normalized().cast<float>();
+        fmt::format_to(std::back_inserter(buf), "vn {} {} {}\n", m.x(), m.y(), m.z());
+        if (buf.size() > kChunk) flush(out, buf);
+      }
     for (std::size_t f = 0; f < mesh.face_count(); ++f) {
       const auto vs = mesh.face(f);
       if (is_obj)
         buf.append(std::string_view("f"));
       else
         fmt::format_to(std::back_inserter(buf), "{}", vs.size());
-      for (const int v : vs) fmt::format_to(std::back_inserter(buf), " {}", is_obj ? v + 1 : v);
+      for (const int v : vs)
+        if (is_obj && has_normals)
+          fmt::format_to(std::back_inserter(buf), " {}//{}", v + 1, v + 1);
+        else
+          fmt::format_to(std::back_inserter(buf), " {}", is_obj ? v + 1 : v);
       buf.push_back('\n');
       if (buf.size() > kChunk) flush(out, buf);
     }
@@ -98,18 +120,23 @@ void write_obj(const PolygonMesh& mesh, const fs::path& path) { write_text_mesh(
 
 void write_ply(const PolygonMesh& mesh, const fs::path& path) {
   validate_for_writing(mesh, path);
-  const bool has_colours = !mesh.colours.empty();
+  const bool has_colours = !mesh.colours.empty(), has_normals = !mesh.normals.empty();
   write_file_atomically(path, [&](std::ostream& out) {
     fmt::memory_buffer buf;
     fmt::format_to(std::back_inserter(buf),
                    "ply\nformat binary_little_endian 1.0\ncomment written by quadrix\nelement vertex {}\n"
                    "property double x\nproperty double y\nproperty double z\n",
                    mesh.vertices.size());
+    if (has_normals) buf.append(std::string_view("property float nx\nproperty float ny\nproperty float nz\n"));
     if (has_colours) buf.append(std::string_view("property uchar red\nproperty uchar green\nproperty uchar blue\n"));
     fmt::format_to(std::back_inserter(buf), "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
                    mesh.face_count());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) put(buf, mesh.vertices[i][k]);
+      if (has_normals) {
+        const Eigen::Vector3f n = mesh.normals[i].normalized().cast<float>();
+        for (int k = 0; k < 3; ++k) put(buf, n[k]);
+      }
       if (has_colours)
         for (int k = 0; k < 3; ++k) put(buf, mesh.colours[i][k]);
       if (buf.size() > kChunk) flush(out, buf);

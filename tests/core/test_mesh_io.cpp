@@ -192,6 +192,33 @@ TEST_F(MeshIoRoundTrip, PlyColoursAndStlTrianglesReadBack) {
   }
 }
 
+TEST_P(MeshIoRoundTrip, NormalsAndColoursReadBack) {
+  // Per-vertex normals (float32 in every format) beside colours: PLY nx/ny/nz, OFF's CNOFF
+  // columns (the normal before the colour), OBJ's vn with faces v//vn.
+  PolygonMesh m = mixed_mesh();
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    m.normals.push_back(Eigen::Vector3d(std::cos(0.7 * v), std::sin(0.7 * v), 0.3 * v - 1.0).normalized());
+    m.colours.push_back({static_cast<std::uint8_t>(10 * v), 20, static_cast<std::uint8_t>(255 - v)});
+  }
+  const fs::path p = dir_ / (std::string("n") + GetParam());
+  write_mesh(m, p);
+  const PolygonMesh r = read_mesh(p);
+  ASSERT_EQ(r.normals.size(), m.normals.size()) << p;
+  for (std::size_t v = 0; v < m.normals.size(); ++v) EXPECT_LT((r.normals[v] - m.normals[v]).norm(), 1e-6) << "vertex " << v;
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) EXPECT_EQ(r.vertices[v], m.vertices[v]) << "vertex " << v;
+  EXPECT_EQ(r.indices, m.indices);
+  if (std::string(GetParam()) == ".ply") EXPECT_EQ(r.colours, m.colours);  // the OFF reader skips colours
+  // Without normals, none come back.
+  m.normals.clear();
+  write_mesh(m, p);
+  EXPECT_TRUE(read_mesh(p).normals.empty());
+  // A normal per vertex or none.
+  m.normals.assign(m.vertices.size() - 1, Eigen::Vector3d::UnitZ());
+  EXPECT_THROW(write_mesh(m, dir_ / (std::string("bad") + GetParam())), InvalidInput);
+  m.normals.assign(m.vertices.size(), Eigen::Vector3d::Zero());
+  EXPECT_THROW(write_mesh(m, dir_ / (std::string("bad") + GetParam())), InvalidInput);
+}
+
 class MeshIo : public TempDir {};
 
 TEST_F(MeshIo, WriteRejectsBadInput) {
