@@ -299,7 +299,9 @@ ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camer
     for (int y = rows.begin(); y < rows.end(); ++y) {
       for (int x = 0; x < img.width; ++x) {
         const Ray ray = camera.pixel_ray(x + 0.5, y + 0.5);
-        const auto hit = scene.trace(ray, 0.0, kInf, trace);
+        // From the near plane on, as the GL passes see (rasterised proxies clipped there, ray casts
+        // skipping hits in front of it): a glyph the near plane cuts shows its far side.
+        const auto hit = scene.trace(ray, camera.near_plane / ray.dir.dot(fwd), kInf, trace);
         if (!hit) continue;
         const std::size_t i = static_cast<std::size_t>(y) * img.width + x;
         img.coverage[i] = 1;

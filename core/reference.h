@@ -91,7 +91,7 @@ struct ReferenceRenderOptions {
   std::function<void(double)> progress{};
 };
 
-/// Renders every pixel of the camera (TBB-parallel over rows).
+/// Renders every pixel of the camera (TBB-parallel over rows): each pixel's ray from the near plane on.
 ReferenceImage render_reference(const ReferenceScene& scene, const Camera& camera,
                                 const ReferenceRenderOptions& options = {});
 

@@ -28,6 +28,7 @@ uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform vec2 u_viewport;
 uniform float u_target_distance;
+uniform float u_near;  // hits nearer the eye than the near plane are skipped (glyph_lib.glsl)
 uniform int u_cull;
 uniform int u_count_stats;
 uniform int u_proxy;  // debug: every proxy fragment is written, flat, without ray casting
@@ -49,7 +50,7 @@ void main() {
   // Only the ray's direction and the glyph's index come interpolated (llvmpipe sets up every
   // input of every triangle); the rest is read here.
   GlyphRay r = glyph_ray(glyphs[v_index], v_dir.xy, u_view_rot, u_target_distance);
-  GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_cull != 0);
+  GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_near, u_cull != 0);
   if (!h.found) discard;
   if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);
   ivec2 p = ivec2(gl_FragCoord.xy);
@@ -70,7 +71,7 @@ void main() {
     h.s = 0.0;
     h.grad = -d;
   } else {
-    h = cast_glyph(o, d, v_kind, v_scale, v_centre_z, u_cull != 0);
+    h = cast_glyph(o, d, v_kind, v_scale, v_centre_z, u_near, u_cull != 0);
   }
   if (!h.found) discard;
   if (u_count_stats != 0) atomicAdd(stats.glyph_hit_fragments, 1u);

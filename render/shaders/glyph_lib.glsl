@@ -51,24 +51,26 @@ GlyphRay glyph_ray(Glyph g, vec2 k, mat3 view_rot, float target_distance) {
 int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 : n - i / 2; }
 
 // The nearest hit along a ray u(σ) = o + σ·d in parameter space, s = σ·scale measured from the
-// centre's view plane towards the eye (the eye at s = centre_z). With cull, front faces only
-// (as the CPU reference).
+// centre's view plane towards the eye (the eye at s = centre_z), beyond the near plane (eye depth
+// ≥ near: a glyph the near plane cuts shows its far side there, as the CPU reference's rays start
+// at the near plane). With cull, front faces only (as the CPU reference).
 struct GlyphHit {
   bool found;
   float s;
   vec3 grad;  // gradient in parameter space at the hit
 };
 
-void glyph_consider(inout GlyphHit h, float sigma, vec3 grad_u, vec3 d, float scale, float centre_z, bool cull) {
+void glyph_consider(inout GlyphHit h, float sigma, vec3 grad_u, vec3 d, float scale, float centre_z, float near,
+                    bool cull) {
   float s = sigma * scale;
-  if (s <= centre_z || (h.found && s >= h.s)) return;  // behind the eye, or not nearer
+  if (s < centre_z + near || (h.found && s >= h.s)) return;  // in front of the near plane, or not nearer
   if (cull && dot(grad_u, d) >= 0.0) return;           // back-facing
   h.found = true;
   h.s = s;
   h.grad = grad_u;
 }
 
-GlyphHit cast_glyph(vec3 o, vec3 d, uint kind, float scale, float centre_z, bool cull) {
+GlyphHit cast_glyph(vec3 o, vec3 d, uint kind, float scale, float centre_z, float near, bool cull) {
   GlyphHit h;
   h.found = false;
   h.s = 0.0;
@@ -76,20 +78,20 @@ GlyphHit cast_glyph(vec3 o, vec3 d, uint kind, float scale, float centre_z, bool
   float s0, s1;
   if (kind != 2u) {
     int n = solve_quadratic(dot(d, d), dot(o, d), dot(o, o) - 1.0, s0, s1);
-    if (n > 0) glyph_consider(h, s0, o + s0 * d, d, scale, centre_z, cull);
-    if (n > 1) glyph_consider(h, s1, o + s1 * d, d, scale, centre_z, cull);
+    if (n > 0) glyph_consider(h, s0, o + s0 * d, d, scale, centre_z, near, cull);
+    if (n > 1) glyph_consider(h, s1, o + s1 * d, d, scale, centre_z, near, cull);
   } else {
     float a = dot(d.xy, d.xy);  // 0: the ray runs along the axis and meets only the caps
     int n = a > 0.0 ? solve_quadratic(a, dot(o.xy, d.xy), dot(o.xy, o.xy) - 1.0, s0, s1) : 0;
     vec3 u0 = o + s0 * d, u1 = o + s1 * d;
-    if (n > 0 && abs(u0.z) <= 1.0) glyph_consider(h, s0, vec3(u0.xy, 0.0), d, scale, centre_z, cull);
-    if (n > 1 && abs(u1.z) <= 1.0) glyph_consider(h, s1, vec3(u1.xy, 0.0), d, scale, centre_z, cull);
+    if (n > 0 && abs(u0.z) <= 1.0) glyph_consider(h, s0, vec3(u0.xy, 0.0), d, scale, centre_z, near, cull);
+    if (n > 1 && abs(u1.z) <= 1.0) glyph_consider(h, s1, vec3(u1.xy, 0.0), d, scale, centre_z, near, cull);
     if (d.z != 0.0) {
       for (int i = 0; i < 2; ++i) {
         float side = i == 0 ? 1.0 : -1.0;
         float s = (side - o.z) / d.z;
         vec2 uxy = o.xy + s * d.xy;
-        if (dot(uxy, uxy) <= 1.0) glyph_consider(h, s, vec3(0.0, 0.0, side), d, scale, centre_z, cull);
+        if (dot(uxy, uxy) <= 1.0) glyph_consider(h, s, vec3(0.0, 0.0, side), d, scale, centre_z, near, cull);
       }
     }
   }

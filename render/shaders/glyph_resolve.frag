@@ -7,6 +7,7 @@ layout(std430, binding = 2) readonly buffer Nearest { uint nearest[]; };  // per
 uniform mat4 u_proj;
 uniform mat3 u_view_rot;
 uniform float u_target_distance;
+uniform float u_near;  // hits nearer the eye than the near plane are skipped (glyph_lib.glsl)
 uniform vec2 u_viewport;
 uniform int u_cull;
 
@@ -22,7 +23,7 @@ void main() {
   Glyph g = glyphs[index];
   vec2 k = (2.0 * gl_FragCoord.xy / u_viewport - 1.0) / vec2(u_proj[0][0], u_proj[1][1]);
   GlyphRay r = glyph_ray(g, k, u_view_rot, u_target_distance);
-  GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_cull != 0);
+  GlyphHit h = cast_glyph(r.o, r.d, r.kind, r.scale, r.centre_z, u_near, u_cull != 0);
   if (!h.found) discard;
   float z = r.centre_z - h.s;
   gl_FragDepth = window_depth(z, u_proj);

@@ -250,6 +250,39 @@ TEST_F(GlGlyphs, FarCameraNarrowFieldOfView) {
   EXPECT_LE(c.depth_p99, 2e-4);
 }
 
+TEST_F(GlGlyphs, TheNearPlaneCutsGlyphsInFrontOfIt) {
+  // Two spheres whose near sides both lie in front of the near plane (0.1 and 0.23 from the eye,
+  // the plane at 0.5): the rays start at the plane, inside both, so the nearer far side shows, the
+  // unit sphere's at 2.1 from the eye, whichever is drawn first. GL clamped both hits to depth 0
+  // and the first drawn won (100 % of the pixels off the reference with one order).
+  Glyph a, b;
+  a.radius = 1.0, a.colour = Rgb{200, 50, 50};
+  b.centre = {0.3, 0.0, -0.5}, b.radius = 1.4, b.colour = Rgb{50, 200, 50};
+  Camera cam;
+  cam.eye = {0.0, 0.0, 1.1};
+  cam.target = {0.0, 0.0, 0.0};
+  cam.fov_y_deg = 40;
+  cam.near_plane = 0.5;
+  cam.far_plane = 50;
+  cam.width = cam.height = 120;
+  for (const bool a_first : {true, false})
+    for (const bool early : {true, false}) {
+      SCOPED_TRACE(testing::Message() << "a first " << a_first << ", early depth " << early);
+      Model m;
+      m.glyphs = a_first ? std::vector<Glyph>{a, b} : std::vector<Glyph>{b, a};
+      const ReferenceImage ref = reference(m, cam);
+      const std::size_t centre = static_cast<std::size_t>(cam.height / 2) * cam.width + cam.width / 2;
+      ASSERT_TRUE(ref.coverage[centre]);
+      EXPECT_NEAR(ref.depth[centre], 2.1, 1e-3);
+      EXPECT_EQ(ref.albedo[centre], *a.colour);
+      render::RenderOptions o;
+      o.glyph_early_depth = early;
+      const render::GBuffer g = draw(m, cam, o);
+      const Comparison c = testing_gl::compare(ref, g);
+      expect_accurate(c, cam.width * cam.height / 2);
+    }
+}
+
 TEST_F(GlGlyphs, StressHundredThousandGlyphsTinyAndHugeAcrossTheNearPlane) {
   // 10⁵ glyphs of every kind with radii from 10⁻³ to 10 (log-uniform), the eye inside the cloud
   // so glyphs straddle the near plane, wrap the eye and lie behind it.
