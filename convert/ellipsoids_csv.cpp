@@ -5,6 +5,8 @@
 
 #include <Eigen/LU>
 
+#include <fmt/format.h>
+
 #include "core/error.h"
 #include "core/limits.h"
 #include "core/io/file.h"
@@ -13,7 +15,35 @@
 namespace quadrix {
 
 Model read_ellipsoids_csv(const std::filesystem::path& path) {
-  std::string text = io::read_file(path);
+  const std::string raw = io::read_file(path);
+  // An empty cell (",,", a comma at either end of a line) would shift the columns after it once
+  // commas read as blanks: refused where it is (a comment's commas aside).
+  {
+    std::size_t line = 1, col = 1;
+    bool in_comment = false, cell_empty = true, line_has_comma = false;
+    const auto refuse = [&] {
+      throw FormatError(fmt::format("{}:{}:{}: empty cell (a value missing between commas)", path.string(), line, col));
+    };
+    for (const char c : raw) {
+      if (c == '\n') {
+        if (line_has_comma && cell_empty) refuse();
+        ++line, col = 1, in_comment = false, cell_empty = true, line_has_comma = false;
+        continue;
+      }
+      if (c == '#') in_comment = true;
+      if (!in_comment) {
+        if (c == ',') {
+          if (cell_empty) refuse();
+          cell_empty = true, line_has_comma = true;
+        } else if (c != ' ' && c != '\t' && c != '\r') {
+          cell_empty = false;
+        }
+      }
+      ++col;
+    }
+    if (line_has_comma && cell_empty) refuse();
+  }
+  std::string text = raw;
   std::replace(text.begin(), text.end(), ',', ' ');  // commas as blanks: columns keep their place
   io::TextReader in(text, path);
   Model m;
@@ -21,14 +51,20 @@ Model read_ellipsoids_csv(const std::filesystem::path& path) {
   while (in.next_line()) {
     std::string_view tok = in.token();
     double v = 0;
-    if (first && !io::TextReader::parse(tok, v)) {  // a header row
+    if (first) {
       first = false;
-      continue;
+      // A header row names the columns: not one of its cells is a number (a data row with a typo,
+      // "O,0,0,…", is a data row and its bad cell is refused below).
+      bool any_number = false;
+      for (std::string_view t = tok; !t.empty(); t = in.token()) any_number = any_number || io::TextReader::parse(t, v);
+      if (!any_number) continue;
+      in = io::TextReader(text, path);  // read the row again as data
+      in.next_line();
+      tok = in.token();
     }
-    first = false;
     double x[15];
     int count = 0;
-    const std::size_t row = m.glyphs.size();
+    const std::size_t row = m.glyphs.size() + 1;  // the ellipsoids counted from 1
     for (; !tok.empty() && count < 15; tok = in.token(), ++count) {
       if (!io::TextReader::parse(tok, x[count]) || !std::isfinite(x[count]))
         in.fail("ellipsoid {} value {}: '{}' is not a finite number", row, count + 1, io::echo(tok));

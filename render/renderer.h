@@ -78,13 +78,13 @@ struct RenderOptions {
   /// hits, then one ray per pixel: render/passes/glyph_pass.h); false: each proxy fragment writes
   /// its hit's depth (no early test on llvmpipe). Unset: the platform's faster way (below).
   std::optional<bool> glyph_early_depth;
-  /// The proxies of the direct way (glyph_early_depth false): rectangles (two triangles, 21.5 %
+  /// The proxies of either way: rectangles (two triangles, 21.5 %
   /// of a sphere's square outside it) or polygons around the exact outline (octagons, 12-gons
   /// around cylinders: 5.2 %). Unset: the platform's faster way. On a software rasterizer
   /// (llvmpipe), whose cost is per triangle more than per fragment, the direct way with
   /// rectangles (1aon at 1024², one run each: spacefill 152 ms against 202 early and 221 with
-  /// octagons; balls-and-sticks 130 against 284 and 259); elsewhere the early-depth way, and
-  /// polygons where the direct way is asked for (the light's view).
+  /// octagons; balls-and-sticks 130 against 284 and 259); elsewhere polygons, in the early-depth
+  /// way (unmeasured on a GPU) and where the direct way is asked for (the light's view).
   std::optional<bool> glyph_rectangles;
   /// Shadows of the key light (core/lighting.h) from a shadow map of every primitive kind, with
   /// adaptive percentage-closer filtering ([Sigg06] §5: 8 samples, 64 in the penumbra).

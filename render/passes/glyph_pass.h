@@ -4,13 +4,14 @@
 /// 12-gons around cylinders), ray-cast in the glyph's parameter space into the G-buffer.
 ///
 /// On a software rasterizer the default is the direct path with rectangles (RenderOptions::
-/// glyph_rectangles: measured fastest there), elsewhere the early-depth path below.
+/// glyph_rectangles: measured fastest there), elsewhere the early-depth path below with the
+/// polygons (unmeasured on a GPU: none was lent).
 ///
 /// Early-depth path (RenderOptions::glyph_early_depth): a fragment that writes its hit's depth
 /// keeps llvmpipe from testing depth before the shader, so every proxy fragment of every glyph
 /// behind the surface would be ray-cast. Instead: (1) depth-only occluders, a square inside each
 /// sphere and ellipsoid at a depth no nearer than the glyph there (glyph_occluder.vert); (2) the
-/// proxies (rectangles), depth-tested before the shader against them and writing no depth, keep
+/// proxies (polygons, or rectangles where glyph_rectangles says), depth-tested before the shader against them and writing no depth, keep
 /// the nearest hit's depth per pixel (atomic min), then, drawn again, the index of the glyph hit
 /// at that depth; (3) one ray per pixel into that glyph writes the G-buffer and the depth
 /// (glyph_resolve.frag). Exact: the occluders' depth bounds the nearest glyph's from behind, so

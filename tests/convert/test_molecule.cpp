@@ -266,6 +266,16 @@ TEST_F(Molecules, EllipsoidsFromCsv) {
   expect_format("0,0,0, 1,0,0, 0,1,0, 0,0,x\n", "'x' is not a finite number");
   expect_format("0,0,0, 1,0,0, 2,0,0, 0,0,1\n", "singular");
   expect_format("0,0,0, 1,0,0, 0,1,0, 0,0,1, 256,0,0\n", "0..255");
+  // A first row with a typo is data, not a header (it was skipped as one, silently).
+  expect_format("O,0,0, 1,0,0, 0,1,0, 0,0,1\n1,0,0, 1,0,0, 0,1,0, 0,0,1\n", "bad.csv:1:1: ellipsoid 1 value 1: 'O'");
+  // Empty cells would shift the columns after them: refused where they are.
+  expect_format("0,0,0, 1,0,0, 0,,0, 1,0,0,1\n", "bad.csv:1:17: empty cell");
+  expect_format("0,0,0, 1,0,0, 0,1,0, 0,0,1,\n", "bad.csv:1:28: empty cell");
+  expect_format("# a header comment, with commas,,\n0,0,0, 1,0,0, 0,1,0, 0,0,1\n,1,0,0, 1,0,0, 0,1,0, 0,0,1\n",
+                "bad.csv:3:1: empty cell");
+  // Rows are counted from 1.
+  expect_format("cx,cy,cz,a,b,c,d,e,f,g,h,i\n0,0,0, 1,0,0, 0,1,0, 0,0,1\n0,0,0, 1,0,0, 0,1,0, 0,0,y\n",
+                "bad.csv:3:26: ellipsoid 2 value 12: 'y'");
   const fs::path out = dir_ / "e.qxm";
   const auto r = test_support::run_command(QUADRIX_BINARY, "convert glyphs --ellipsoids " + (dir_ / "e.csv").string() +
                                                                " -o " + out.string());
