@@ -3,6 +3,7 @@
 /// over 16 centroid bins per axis, else at the median of the longest axis), for ray and
 /// nearest-point queries: the CPU reference, the fit's data surface.
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -62,28 +63,38 @@ inline double ray_box(const Eigen::Vector3d& inv_dir, const Eigen::Vector3d& ori
 template <typename Bound, typename Visit>
 void Bvh::traverse(const Ray& ray, double tmin, Bound&& bound, Visit&& visit) const {
   if (nodes_.empty()) return;
+  constexpr double kMiss = std::numeric_limits<double>::infinity();
   const Eigen::Vector3d inv = ray.dir.cwiseInverse();
-  std::uint32_t stack[128];
+  // Each node is pushed with its box's entry distance, tested against the bound when pushed; on
+  // pop only that distance is compared with the bound, which may have shrunk since (the box test
+  // again would give the same answer).
+  struct Entry {
+    std::uint32_t node;
+    double t;
+  };
+  Entry stack[128];
   int sp = 0;
-  stack[sp++] = 0;
+  if (const double t = detail::ray_box(inv, ray.origin, nodes_[0].min, nodes_[0].max, tmin, bound()); t != kMiss)
+    stack[sp++] = {0, t};
   while (sp > 0) {
-    const Node& n = nodes_[stack[--sp]];
-    if (detail::ray_box(inv, ray.origin, n.min, n.max, tmin, bound()) == std::numeric_limits<double>::infinity())
-      continue;
+    const Entry e = stack[--sp];
+    if (e.t > bound()) continue;
+    const Node& n = nodes_[e.node];
     if (n.count > 0) {
       for (std::uint32_t i = 0; i < n.count; ++i) visit(items_[n.first + i]);
       continue;
     }
-    const std::uint32_t left = static_cast<std::uint32_t>(&n - nodes_.data()) + 1, right = n.first;
-    const double tl = detail::ray_box(inv, ray.origin, nodes_[left].min, nodes_[left].max, tmin, bound());
-    const double tr = detail::ray_box(inv, ray.origin, nodes_[right].min, nodes_[right].max, tmin, bound());
+    const std::uint32_t left = e.node + 1, right = n.first;
+    const double b = bound();
+    const double tl = detail::ray_box(inv, ray.origin, nodes_[left].min, nodes_[left].max, tmin, b);
+    const double tr = detail::ray_box(inv, ray.origin, nodes_[right].min, nodes_[right].max, tmin, b);
     // Push the far child first so the near one is visited first.
     if (tl <= tr) {
-      if (tr != std::numeric_limits<double>::infinity()) stack[sp++] = right;
-      if (tl != std::numeric_limits<double>::infinity()) stack[sp++] = left;
+      if (tr != kMiss) stack[sp++] = {right, tr};
+      if (tl != kMiss) stack[sp++] = {left, tl};
     } else {
-      if (tl != std::numeric_limits<double>::infinity()) stack[sp++] = left;
-      stack[sp++] = right;
+      if (tl != kMiss) stack[sp++] = {left, tl};
+      stack[sp++] = {right, tr};
     }
   }
 }
