@@ -15,7 +15,8 @@ MeshPass::MeshPass() : program_("mesh", shader_source("mesh.vert"), shader_sourc
 namespace {
 
 // One vertex as the vertex stage reads it: its offset from the mesh's fixed-point origin, and
-// its face's normal.
+// its normal: the mesh's own per-vertex normal where it has them (`quadrix mesh` writes the drawn
+// surface's), turned to its face's side, else its face's.
 struct GpuVertex {
   std::int32_t q[3];
   float rest[3];
@@ -30,18 +31,23 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
   for (const auto& v : mesh.vertices) box.extend(v);
   origin_ = box.empty() ? FixedOrigin{} : FixedOrigin::of(box);
   colour_ = colour;
-  std::vector<GpuVertex> data;  // flat face normals
+  const bool smooth = mesh.normals.size() == mesh.vertices.size();
+  std::vector<GpuVertex> data;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto face = mesh.face(f);
     for (std::size_t k = 1; k + 1 < face.size(); ++k) {
-      const Eigen::Vector3d a = mesh.vertices[face[0]], b = mesh.vertices[face[k]], c = mesh.vertices[face[k + 1]];
+      const int corner[3] = {face[0], face[k], face[k + 1]};
+      const Eigen::Vector3d a = mesh.vertices[corner[0]], b = mesh.vertices[corner[1]], c = mesh.vertices[corner[2]];
       Eigen::Vector3d n = (b - a).cross(c - a);
       if (!(n.norm() > 0)) continue;
       n.normalize();
-      for (const auto* p : {&a, &b, &c}) {
-        const FixedOrigin::Offset o = origin_.offset(*p - origin_.origin);
+      for (const int v : corner) {
+        Eigen::Vector3d m = n;
+        if (smooth && mesh.normals[v].allFinite() && mesh.normals[v].norm() > 0)
+          m = mesh.normals[v].dot(n) < 0 ? Eigen::Vector3d(-mesh.normals[v].normalized()) : mesh.normals[v].normalized();
+        const FixedOrigin::Offset o = origin_.offset(mesh.vertices[v] - origin_.origin);
         data.push_back({{o.q.x(), o.q.y(), o.q.z()}, {o.rest.x(), o.rest.y(), o.rest.z()},
-                        {float(n.x()), float(n.y()), float(n.z())}});
+                        {float(m.x()), float(m.y()), float(m.z())}});
       }
     }
   }

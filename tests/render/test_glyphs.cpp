@@ -5,12 +5,15 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include <filesystem>
 
 #include "convert/molecule.h"
 #include "convert/molecule_glyphs.h"
+#include "convert/to_mesh.h"
+#include "core/bounds.h"
 #include "core/primitive.h"
 #include "core/reference.h"
 #include "core/synth.h"
@@ -281,6 +284,39 @@ TEST_F(GlGlyphs, TheNearPlaneCutsGlyphsInFrontOfIt) {
       const Comparison c = testing_gl::compare(ref, g);
       expect_accurate(c, cam.width * cam.height / 2);
     }
+}
+
+TEST_F(GlGlyphs, AMeshWithVertexNormalsShadesAsTheSurfaceItWasMeshedFrom) {
+  // `quadrix mesh` gives each vertex the drawn surface's normal; the mesh pass shades with them
+  // (flat face normals without). The sphere glyph meshed at 1e-3 of its box, drawn as a mesh,
+  // against the CPU reference's normals of the sphere itself.
+  const Model m = synth_model("sphere");
+  ToMeshResult r = mesh_model(m, {.max_error = 1e-3 * bounds(m).diagonal(), .progress = {}});
+  ASSERT_EQ(r.mesh.normals.size(), r.mesh.vertices.size());
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 200, .height = 200});
+  const ReferenceImage truth = reference(m, cam);
+  const auto angles = [&](const PolygonMesh& mesh) {
+    renderer_->set_mesh(mesh);
+    renderer_->draw(cam, {});
+    const render::GBuffer g = renderer_->read_gbuffer();
+    std::vector<double> deg;
+    for (std::size_t i = 0; i < g.coverage.size(); ++i)
+      if (g.coverage[i] && truth.coverage[i])
+        deg.push_back(std::acos(std::clamp(double(g.normal[i].normalized().dot(truth.normal[i].normalized())), -1.0, 1.0)) *
+                      180 / std::numbers::pi);
+    std::sort(deg.begin(), deg.end());
+    return deg;
+  };
+  const std::vector<double> smooth = angles(r.mesh);
+  r.mesh.normals.clear();
+  const std::vector<double> flat = angles(r.mesh);
+  ASSERT_GT(smooth.size(), 8000u);
+  ASSERT_GT(flat.size(), 8000u);
+  const auto q = [](const std::vector<double>& d, double p) { return d[static_cast<std::size_t>(p * double(d.size() - 1))]; };
+  std::printf("normal error against the sphere: vertex normals median %.3f p99 %.3f deg, flat median %.3f p99 %.3f deg\n",
+              q(smooth, 0.5), q(smooth, 0.99), q(flat, 0.5), q(flat, 0.99));
+  EXPECT_LT(q(smooth, 0.99), 0.25 * q(flat, 0.99));
+  EXPECT_LT(q(smooth, 0.5), 0.25 * q(flat, 0.5));
 }
 
 TEST_F(GlGlyphs, StressHundredThousandGlyphsTinyAndHugeAcrossTheNearPlane) {
