@@ -754,8 +754,8 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
     stack.pop_back();
     const int a1 = (c.axis + 1) % 3, a2 = (c.axis + 2) % 3;
     // Cells wholly outside the ball's cross-section hold no part of the zero set.
-    const double nearest = std::hypot(std::max(0.0, std::abs(c.a) - 0.5 * c.h), std::max(0.0, std::abs(c.b) - 0.5 * c.h));
-    if (nearest >= 1.0) continue;
+    const double ea = std::max(0.0, std::abs(c.a) - 0.5 * c.h), eb = std::max(0.0, std::abs(c.b) - 0.5 * c.h);
+    if (ea * ea + eb * eb >= 1.0) continue;  // (std::hypot: 5 % of a fit at 1e-4)
     Ray line;
     line.origin = Eigen::Vector3d::Zero();
     line.origin[a1] = c.a;
