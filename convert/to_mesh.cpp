@@ -768,25 +768,36 @@ PolygonMesh without_faces(const PolygonMesh& m, std::span<const std::uint8_t> dr
 }
 
 /// Sets each vertex's normal to the drawn surface's (the CPU reference's shading normal) where the
-/// line along the vertex's area-weighted normal meets it within reach (the hit nearest the vertex,
-/// seen from outside first), else to that area-weighted normal; returns how many took the latter.
+/// line along the vertex's angle-weighted normal meets it within reach (the hit nearest the vertex,
+/// seen from outside first), else to that angle-weighted normal. Where the drawn surface has a
+/// crease at the vertex (its drawn normal more than kCreaseDeg off a neighbouring vertex's: a
+/// polyhedral model's edges and corners, a clipped patch's crease), one normal cannot hold it:
+/// such a vertex gets its faces' angle-weighted normal, as programs reading a mesh without normals
+/// compute (a cube's corner drawn by one face's normal was 90° off the other two). Returns how
+/// many vertices took their faces' normal.
 std::size_t set_drawn_normals(PolygonMesh& mesh, const ReferenceScene& scene, const TraceOptions& trace, double reach) {
-  std::vector<Eigen::Vector3d> faces(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  constexpr double kCreaseDeg = 45.0;
+  const double crease_cos = std::cos(kCreaseDeg * std::numbers::pi / 180.0);
+  const std::size_t V = mesh.vertices.size();
+  // Per vertex: its faces' unit normals weighted by their angles there (a cube's corner gets the
+  // diagonal whichever way its faces are split).
+  std::vector<Eigen::Vector3d> faces(V, Eigen::Vector3d::Zero());
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto t = mesh.face(f);
     if (t.size() != 3) continue;
     const Eigen::Vector3d n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    for (const int v : t) faces[v] += n;
-  }
-  mesh.normals.assign(mesh.vertices.size(), Eigen::Vector3d::UnitZ());
-  std::atomic<std::size_t> from_faces{0};
-  tbb::parallel_for(std::size_t{0}, mesh.vertices.size(), [&](std::size_t v) {
-    const double len = faces[v].norm();
-    if (!(len > 0)) {
-      mesh.normals[v] = Eigen::Vector3d::UnitZ();  // a vertex of degenerate faces only: any unit vector
-      ++from_faces;
-      return;
+    const double area = n.norm();
+    if (!(area > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int v = t[k];
+      const Eigen::Vector3d e1 = mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[v], e2 = mesh.vertices[t[(k + 2) % 3]] - mesh.vertices[v];
+      faces[v] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / area * n;
     }
+  }
+  std::vector<Eigen::Vector3d> drawn(V, Eigen::Vector3d::Zero());  // zero: none met
+  tbb::parallel_for(std::size_t{0}, V, [&](std::size_t v) {
+    const double len = faces[v].norm();
+    if (!(len > 0)) return;
     const Eigen::Vector3d n = faces[v] / len, p = mesh.vertices[v];
     std::optional<SurfaceHit> best;
     double best_d = std::numeric_limits<double>::infinity();
@@ -796,15 +807,30 @@ std::size_t set_drawn_normals(PolygonMesh& mesh, const ReferenceScene& scene, co
       const double d = std::abs(hit->t - reach);
       if (d < best_d) best_d = d, best = hit;
     }
-    if (!best || !best->normal.allFinite() || !(best->normal.norm() > 0)) {
-      mesh.normals[v] = n;
-      ++from_faces;
-      return;
-    }
+    if (!best || !best->normal.allFinite() || !(best->normal.norm() > 0)) return;
     const Eigen::Vector3d m = best->normal.normalized();
-    mesh.normals[v] = m.dot(n) < 0 ? Eigen::Vector3d(-m) : m;  // the shading normal faces the ray
+    drawn[v] = m.dot(n) < 0 ? Eigen::Vector3d(-m) : m;  // the shading normal faces the ray
   });
-  return from_faces.load();
+  std::vector<std::uint8_t> crease(V, 0);
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const auto t = mesh.face(f);
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      const int a = t[k], b = t[(k + 1) % t.size()];
+      if (drawn[a].squaredNorm() > 0 && drawn[b].squaredNorm() > 0 && drawn[a].dot(drawn[b]) < crease_cos) crease[a] = crease[b] = 1;
+    }
+  }
+  mesh.normals.assign(V, Eigen::Vector3d::UnitZ());  // a vertex of degenerate faces only: any unit vector
+  std::size_t from_faces = 0;
+  for (std::size_t v = 0; v < V; ++v) {
+    const double len = faces[v].norm();
+    if (drawn[v].squaredNorm() > 0 && !crease[v]) {
+      mesh.normals[v] = drawn[v];
+      continue;
+    }
+    ++from_faces;
+    if (len > 0) mesh.normals[v] = faces[v] / len;
+  }
+  return from_faces;
 }
 
 std::size_t count_open_edges(const PolygonMesh& m) {

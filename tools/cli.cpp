@@ -25,7 +25,10 @@ struct Progress::Impl {
   std::mutex mutex;
   int last_percent = -1;
   bool drawn = false;
-  // Indeterminate work: a ticker thread until `stop`.
+  // The last fraction reported; < 0: indeterminate work.
+  double fraction = -1;
+  // A ticker thread until `stop`: redraws every 250 ms, so the elapsed time moves between
+  // fractions too (a mesh reports one per resolution, minutes apart).
   std::thread ticker;
   std::condition_variable wake;
   bool stop = false;
@@ -37,12 +40,21 @@ struct Progress::Impl {
   }();
 };
 
+namespace {
+// The bar for a fraction of the work done (the caller holds the mutex).
+void draw_fraction(const std::string& label, double fraction, double secs) {
+  const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
+  constexpr int width = 30;
+  const int filled = percent * width / 100;
+  std::fprintf(stderr, "\r%s [%s%s] %3d%% %.1fs", label.c_str(), std::string(filled, '#').c_str(),
+               std::string(width - filled, '.').c_str(), percent, secs);
+  std::fflush(stderr);
+}
+}  // namespace
+
 Progress::Progress(std::string label, bool enabled) : impl_(std::make_unique<Impl>()) {
   impl_->label = std::move(label);
   impl_->enabled = enabled;
-}
-
-Progress::Progress(std::string label, bool enabled, Indeterminate) : Progress(std::move(label), enabled) {
   if (!enabled) return;
   impl_->ticker = std::thread([impl = impl_.get()] {
     std::unique_lock lock(impl->mutex);
@@ -51,16 +63,22 @@ Progress::Progress(std::string label, bool enabled, Indeterminate) : Progress(st
          ++tick) {
       const double secs = impl->seconds();
       if (secs < impl->delay) continue;
-      constexpr int width = 30;
-      std::string bar(width, '.');
-      const int at = tick % (2 * width - 2);
-      bar[at < width ? at : 2 * width - 2 - at] = '#';
-      std::fprintf(stderr, "\r%s [%s] %.1fs", impl->label.c_str(), bar.c_str(), secs);
-      std::fflush(stderr);
+      if (impl->fraction >= 0) {
+        draw_fraction(impl->label, impl->fraction, secs);
+      } else {
+        constexpr int width = 30;
+        std::string bar(width, '.');
+        const int at = tick % (2 * width - 2);
+        bar[at < width ? at : 2 * width - 2 - at] = '#';
+        std::fprintf(stderr, "\r%s [%s] %.1fs", impl->label.c_str(), bar.c_str(), secs);
+        std::fflush(stderr);
+      }
       impl->drawn = true;
     }
   });
 }
+
+Progress::Progress(std::string label, bool enabled, Indeterminate) : Progress(std::move(label), enabled) {}
 
 Progress::~Progress() {
   if (impl_->ticker.joinable()) {
@@ -77,16 +95,13 @@ Progress::~Progress() {
 void Progress::update(double fraction) {
   if (!impl_->enabled) return;
   std::lock_guard lock(impl_->mutex);
+  impl_->fraction = std::clamp(fraction, 0.0, 1.0);
   const double secs = impl_->seconds();
   if (secs < impl_->delay) return;  // short work stays silent
-  const int percent = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 100.0);
+  const int percent = static_cast<int>(impl_->fraction * 100.0);
   if (percent == impl_->last_percent) return;
   impl_->last_percent = percent;
-  constexpr int width = 30;
-  const int filled = percent * width / 100;
-  std::fprintf(stderr, "\r%s [%s%s] %3d%% %.1fs", impl_->label.c_str(), std::string(filled, '#').c_str(),
-               std::string(width - filled, '.').c_str(), percent, secs);
-  std::fflush(stderr);
+  draw_fraction(impl_->label, impl_->fraction, secs);
   impl_->drawn = true;
 }
 

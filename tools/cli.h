@@ -47,10 +47,13 @@ struct Report {
   /// One line main prints on stderr after a success unless --quiet: what was written, counts
   /// (main appends the time).
   std::string summary;
+  /// Exit 7 (finished outside the requested bound): what was not reached, the report's "error".
+  std::string exceeded;
 };
 
 /// A text progress bar on stderr, shown only when stderr is a terminal, not --quiet, and the work
-/// has run for more than about a second. Thread-safe update().
+/// has run for more than about a second; redrawn every 250 ms with the last fraction reported
+/// and the elapsed time, so it moves between fractions too. Thread-safe update().
 class Progress {
 public:
   Progress(std::string label, bool enabled);

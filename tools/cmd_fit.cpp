@@ -328,6 +328,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                           return kOk;
                         }
                         std::cerr << "quadrix: " << what << " (--allow-exceed accepts it)\n";
+                        report.exceeded = what;
                         return kExceeded;
                       }});
 }

@@ -13,6 +13,7 @@
 #include "core/mesh_io.h"
 #include "core/model_io.h"
 #include "tools/cli.h"
+#include "tools/scene_input.h"
 
 namespace quadrix::cli {
 namespace {
@@ -24,6 +25,7 @@ struct MeshArgs {
   std::optional<double> max_error;  // relative to the bounding-box diagonal
   double max_error_abs = 0;
   bool allow_exceed = false;
+  std::string style;  ///< a molecule MODEL's glyphs (--style)
   ToMeshOptions options;
 };
 
@@ -36,7 +38,16 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   const std::string ext = io::lower_extension(a.out);
   if (ext != ".ply" && ext != ".obj" && ext != ".off" && ext != ".stl")
     throw CLI::ValidationError("--out", fmt::format("{}: the extension picks the format: .ply, .obj, .off or .stl", a.out));
-  const Model model = read_model(a.model);
+  // MODEL as `render` reads it (tools/scene_input.h): a model, or a molecule as glyphs; a mesh or
+  // a point cloud is no model to mesh (a mesh file was refused as "bad magic: not a PLY file").
+  if (is_point_cloud_file(a.model))
+    throw InvalidInput(fmt::format("{}: a point cloud, not a model: fit it first (quadrix fit) and mesh the model", a.model));
+  Scene scene = read_scene({.model = a.model, .mesh = {}, .style = a.style, .colour_by = {}});
+  if (scene.kind == SceneInputKind::mesh)
+    throw InvalidInput(fmt::format("{}: a triangle mesh already; mesh takes a model (.qxm, Kanai's .slim2t) or a molecule "
+                                   "file (.pdb, .cif, …)",
+                                   a.model));
+  const Model model = std::move(scene.model);
   if (model.empty()) throw InvalidInput(fmt::format("{}: the model holds no primitives", a.model));
   ToMeshOptions o = a.options;
   // Unless given: 1e-3 of the diagonal, or a SLIM fit's own E where it is larger (a blend steps by
@@ -52,9 +63,12 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
     }
   Progress progress("mesh", progress_allowed(common));
   o.progress = progress.callback();
-  const ToMeshResult r = mesh_model(model, o);
+  ToMeshResult r = mesh_model(model, o);
+  // STL holds no vertex normals (each triangle's own): none claimed.
+  if (io::lower_extension(a.out) == ".stl") r.mesh.normals.clear();
   write_mesh(r.mesh, a.out);
   report.json["mesh"] = {{"model", a.model},
+                         {"input", scene_input_name(scene.kind)},
                          {"out", a.out},
                          {"vertices", r.mesh.vertices.size()},
                          {"triangles", r.mesh.face_count()},
@@ -85,7 +99,9 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                              "surface->mesh {:.3g}), {}",
                              a.out, r.mesh.face_count(), r.mesh.vertices.size(), with_what,
                              r.max_error(), r.bound, r.mesh_to_surface.max, r.surface_to_mesh.max,
-                             r.mesh.face_count() == 0 ? "empty" : r.open_edges == 0 ? "watertight" : fmt::format("{} open edges", r.open_edges));
+                             r.mesh.face_count() == 0 ? "empty"
+                             : r.open_edges == 0 ? "closed (no open edges; self-intersections not checked)"
+                                                 : fmt::format("{} open edges", r.open_edges));
   if (r.within) return kOk;
   const std::string what = fmt::format(
       "{}: the mesh is outside the bound {:.3g} after {} refinements (max error {:.3g}, {} samples whose normal met no "
@@ -96,6 +112,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
     return kOk;
   }
   std::cerr << "quadrix: " << what << " (--allow-exceed accepts it)\n";
+  report.exceeded = what;
   return kExceeded;
 }
 
@@ -104,7 +121,9 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
 void add_mesh(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("mesh", "Export a model as a triangle mesh (PLY, OBJ, OFF, STL) within a measured error");
   auto a = std::make_shared<MeshArgs>();
-  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t)")->required();
+  app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), or a molecule (PDB or mmCIF, converted as render does)")
+      ->required();
+  add_molecule_style_option(*app, a->style);
   app->add_option("-o,--out", a->out,
                   "Output mesh; the extension picks the format: .ply (binary, normals, colours), .obj, .off, .stl")
       ->required();

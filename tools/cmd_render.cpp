@@ -295,12 +295,14 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
 
   std::string backend = a.backend;
   if (backend == "auto") backend = "gl";
-  if (model_is_mesh && backend == "cpu") throw InvalidInput("a mesh MODEL needs the GL backend");
+  // The CPU reference draws no triangle meshes: a usage error (exit 2), as --shading npr with it.
+  if (model_is_mesh && backend == "cpu")
+    throw CLI::ValidationError("--backend", "cpu draws no triangle meshes: a mesh MODEL needs --backend gl (or auto)");
   j["backend"] = backend;
   j["slim_offset"] = blend.offset;
   if (std::isfinite(blend.max_push)) j["slim_max_push"] = blend.max_push;
   if (backend == "cpu") {
-    if (mesh) throw InvalidInput("--mesh needs the GL backend");
+    if (mesh) throw CLI::ValidationError("--backend", "cpu draws no triangle meshes: --mesh needs --backend gl (or auto)");
     if (a.shading != "phong")
       throw CLI::ValidationError("--shading", fmt::format("the CPU reference shades phong only, not {}; use --backend gl", a.shading));
   }

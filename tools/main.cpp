@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
     if (common.report.empty()) return rc;
     report.json["exit_code"] = rc;
     report.json["seconds"] = report.elapsed();
-    report.json["error"] = error.empty() ? nlohmann::json(nullptr) : nlohmann::json(error);
+    const std::string& what = !error.empty() ? error : rc == kExceeded ? report.exceeded : error;
+    report.json["error"] = what.empty() ? nlohmann::json(nullptr) : nlohmann::json(what);
     try {
       write_file_atomically(common.report, [&](std::ostream& out) { out << report.json.dump(2) << "\n"; });
     } catch (const std::exception& e) {

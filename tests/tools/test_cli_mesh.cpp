@@ -50,7 +50,39 @@ TEST_F(CliMesh, EveryFormatReadsBackWithinTheReportedError) {
       ASSERT_EQ(m.colours.size(), m.vertices.size());  // the glyph's colour carried over
       EXPECT_TRUE(j["colours"].get<bool>());
     }
+    // The sphere's own normals, except in STL (face normals only; it claimed them).
+    EXPECT_EQ(j["normals"].get<bool>(), std::string(ext) != ".stl") << ext;
+    if (std::string(ext) != ".stl") {
+      ASSERT_EQ(m.normals.size(), m.vertices.size()) << ext;
+      for (std::size_t v = 0; v < m.vertices.size(); ++v) ASSERT_NEAR(m.normals[v].dot(m.vertices[v].normalized()), 1.0, 1e-6) << ext;
+    }
   }
+}
+
+TEST_F(CliMesh, AMoleculeIsMeshedAndAMeshOrACloudRefusedSayingWhatToDo) {
+  const auto pdb = std::filesystem::path(QUADRIX_DATASETS) / "molecules" / "4lfq.pdb";
+  if (!std::filesystem::exists(pdb)) GTEST_SKIP() << pdb << " not found";
+  const auto report = dir_ / "m.json";
+  CmdResult r = quadrix_run("mesh " + q(pdb) + " --style spacefill -o " + q(dir_ / "m.ply") + " --report " + q(report));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = read_json(report)["mesh"];
+  EXPECT_EQ(j["input"].get<std::string>(), "molecule");
+  EXPECT_GT(j["triangles"].get<std::size_t>(), 1000u);
+  EXPECT_NE(r.out.find("closed (no open edges"), std::string::npos) << r.out;
+  EXPECT_EQ(read_mesh(dir_ / "m.ply").face_count(), j["triangles"].get<std::size_t>());
+  // A mesh: "a triangle mesh already" (it read "bad magic: not a PLY file"), exit 3, nothing written.
+  r = quadrix_run("mesh " + q(dir_ / "m.ply") + " -o " + q(dir_ / "again.ply"));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("a triangle mesh already"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "again.ply"));
+  std::ofstream(dir_ / "p.xyz") << "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  r = quadrix_run("mesh " + q(dir_ / "p.xyz") + " -o " + q(dir_ / "p.ply"));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("fit it first"), std::string::npos) << r.out;
+  // --style belongs to molecules.
+  const auto model = dir_ / "s.qxm";
+  ASSERT_EQ(quadrix_run("synth sphere -o " + q(model)).code, 0);
+  EXPECT_EQ(quadrix_run("mesh " + q(model) + " --style licorice -o " + q(dir_ / "s.ply")).code, 2);
 }
 
 TEST_F(CliMesh, UnknownExtensionIsAUsageError) {
@@ -68,6 +100,13 @@ TEST_F(CliMesh, OutsideTheBoundWritesTheMeshAndExitsSeven) {
   EXPECT_EQ(r.code, 7) << r.out;
   EXPECT_TRUE(std::filesystem::exists(out));
   EXPECT_EQ(quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-5 --max-refinements 0 --allow-exceed --quiet").code, 0);
+  // The report says why too (its error was null).
+  const auto report = dir_ / "h.json";
+  ASSERT_EQ(quadrix_run("mesh " + q(model) + " -o " + q(out) + " --max-error-abs 1e-5 --max-refinements 0 --quiet --report " + q(report)).code, 7);
+  const auto j = read_json(report);
+  EXPECT_EQ(j["exit_code"].get<int>(), 7);
+  ASSERT_TRUE(j["error"].is_string()) << j.dump();
+  EXPECT_NE(j["error"].get<std::string>().find("outside the bound"), std::string::npos) << j.dump();
 }
 
 // Implicit surfaces mesh too (they wrote 0 triangles, "max error inf", and exit 7): marching
