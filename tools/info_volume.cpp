@@ -108,8 +108,12 @@ ExitCode run_info_volume(const std::string& path, const RawVolumeArgs& raw, bool
   for (const auto& [p, value] : s.percentiles) std::cout << fmt::format(" {:g}%: {:.6g}", p, value);
   std::cout << "\n";
   const std::size_t most = *std::max_element(s.histogram.begin(), s.histogram.end());
-  std::cout << fmt::format("  histogram    {} bins, bar length ∝ log(1 + count)\n", s.histogram.size());
-  for (std::size_t b = 0; b < s.histogram.size(); ++b) {
+  // A constant volume: one value, not a column of bins all from it to itself.
+  if (s.min == s.max)
+    std::cout << fmt::format("  histogram    every sample is {:.6g}\n", s.min);
+  else
+    std::cout << fmt::format("  histogram    {} bins, bar length ∝ log(1 + count)\n", s.histogram.size());
+  for (std::size_t b = 0; b < s.histogram.size() && s.min != s.max; ++b) {
     const int bar = most ? int(std::lround(40.0 * std::log1p(double(s.histogram[b])) / std::log1p(double(most)))) : 0;
     std::cout << fmt::format("    {:>11.5g} – {:<11.5g}{:>12} {}\n", edges[b], edges[b + 1], s.histogram[b],
                              std::string(std::size_t(bar), '#'));

@@ -365,6 +365,19 @@ TEST_F(CliSee, InfoOnAVolumeSuggestsOtsusThreshold) {
   EXPECT_NEAR(cj["iso"].get<double>(), 105.0, bin);
   EXPECT_GT(cj["tets"].get<int>(), 0);
   EXPECT_EQ(read_model(model).metadata.at("iso_source"), "otsu");
+  // A constant volume: one line for its one value (16 rows "7 – 7" before), and no suggestion.
+  const auto flat = dir_ / "flat.raw";
+  {
+    std::ofstream out(flat, std::ios::binary);
+    for (int i = 0; i < 16 * 16 * 16; ++i) out.put(char(7));
+  }
+  const CmdResult t = quadrix_run("info " + q(flat) + " --dims 16,16,16 --type uint8");
+  ASSERT_EQ(t.code, 0) << t.out;
+  EXPECT_NE(t.out.find("histogram    every sample is 7\n"), std::string::npos) << t.out;
+  std::size_t dashes = 0;  // the range's "7 – 7" only
+  for (std::size_t at = t.out.find(" – "); at != std::string::npos; at = t.out.find(" – ", at + 1)) ++dashes;
+  EXPECT_EQ(dashes, 1u) << t.out;
+  EXPECT_NE(t.out.find("suggested iso none"), std::string::npos) << t.out;
 }
 
 TEST_F(CliSee, InfoOnMarschnerLobbPrintsTheSummary) {
