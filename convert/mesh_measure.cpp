@@ -17,12 +17,21 @@
 
 namespace quadrix {
 
-std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m) {
+std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m, NormalWeight weight) {
   std::vector<Eigen::Vector3d> n(m.vertices.size(), Eigen::Vector3d::Zero());
   for (std::size_t f = 0; f < m.face_count(); ++f) {
     const auto v = m.face(f);
     const Eigen::Vector3d fn = (m.vertices[v[1]] - m.vertices[v[0]]).cross(m.vertices[v[2]] - m.vertices[v[0]]);
-    for (const int i : v) n[i] += fn;
+    if (weight == NormalWeight::area) {
+      for (const int i : v) n[i] += fn;
+      continue;
+    }
+    const double area = fn.norm();
+    if (v.size() != 3 || !(area > 0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e1 = m.vertices[v[(k + 1) % 3]] - m.vertices[v[k]], e2 = m.vertices[v[(k + 2) % 3]] - m.vertices[v[k]];
+      n[v[k]] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / area * fn;
+    }
   }
   for (auto& x : n)
     if (x.norm() > 0) x.normalize();

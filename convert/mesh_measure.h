@@ -17,8 +17,14 @@
 
 namespace quadrix {
 
-/// Area-weighted vertex normals (unit; zero where a vertex has no face of non-zero area).
-std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m);
+/// How vertex_normals weighs a vertex's faces.
+enum class NormalWeight {
+  area,   ///< by area (the faces' cross products summed)
+  angle,  ///< by the face's angle at the vertex (a cube's corner gets the diagonal however its faces are split)
+};
+/// Vertex normals from the faces around each vertex (unit; zero where a vertex has no face of
+/// non-zero area). Angle weights take each face's first three corners.
+std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m, NormalWeight weight = NormalWeight::area);
 
 /// Where samples lie beyond the bound: per face, its samples' largest distance (its vertices'
 /// included; +inf where one met no surface) and which of its edges' midpoints are beyond (bit i:

@@ -779,26 +779,13 @@ std::size_t set_drawn_normals(PolygonMesh& mesh, const ReferenceScene& scene, co
   constexpr double kCreaseDeg = 45.0;
   const double crease_cos = std::cos(kCreaseDeg * std::numbers::pi / 180.0);
   const std::size_t V = mesh.vertices.size();
-  // Per vertex: its faces' unit normals weighted by their angles there (a cube's corner gets the
-  // diagonal whichever way its faces are split).
-  std::vector<Eigen::Vector3d> faces(V, Eigen::Vector3d::Zero());
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    const auto t = mesh.face(f);
-    if (t.size() != 3) continue;
-    const Eigen::Vector3d n = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    const double area = n.norm();
-    if (!(area > 0)) continue;
-    for (int k = 0; k < 3; ++k) {
-      const int v = t[k];
-      const Eigen::Vector3d e1 = mesh.vertices[t[(k + 1) % 3]] - mesh.vertices[v], e2 = mesh.vertices[t[(k + 2) % 3]] - mesh.vertices[v];
-      faces[v] += std::atan2(e1.cross(e2).norm(), e1.dot(e2)) / area * n;
-    }
-  }
+  // Per vertex: its faces' normal weighted by their angles there (unit; zero for a vertex of
+  // degenerate faces only).
+  const std::vector<Eigen::Vector3d> faces = vertex_normals(mesh, NormalWeight::angle);
   std::vector<Eigen::Vector3d> drawn(V, Eigen::Vector3d::Zero());  // zero: none met
   tbb::parallel_for(std::size_t{0}, V, [&](std::size_t v) {
-    const double len = faces[v].norm();
-    if (!(len > 0)) return;
-    const Eigen::Vector3d n = faces[v] / len, p = mesh.vertices[v];
+    if (faces[v].squaredNorm() == 0) return;
+    const Eigen::Vector3d &n = faces[v], &p = mesh.vertices[v];
     std::optional<SurfaceHit> best;
     double best_d = std::numeric_limits<double>::infinity();
     for (const double side : {1.0, -1.0}) {
@@ -822,13 +809,12 @@ std::size_t set_drawn_normals(PolygonMesh& mesh, const ReferenceScene& scene, co
   mesh.normals.assign(V, Eigen::Vector3d::UnitZ());  // a vertex of degenerate faces only: any unit vector
   std::size_t from_faces = 0;
   for (std::size_t v = 0; v < V; ++v) {
-    const double len = faces[v].norm();
     if (drawn[v].squaredNorm() > 0 && !crease[v]) {
       mesh.normals[v] = drawn[v];
       continue;
     }
     ++from_faces;
-    if (len > 0) mesh.normals[v] = faces[v] / len;
+    if (faces[v].squaredNorm() > 0) mesh.normals[v] = faces[v];
   }
   return from_faces;
 }

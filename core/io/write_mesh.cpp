@@ -28,6 +28,10 @@ void flush(std::ostream& out, fmt::memory_buffer& buf) {
   buf.clear();
 }
 
+// A vertex normal as written: unit, float32 (PLY's float nx ny nz; the text formats print that
+// float's shortest round trip).
+Eigen::Vector3f written_normal(const Eigen::Vector3d& n) { return n.normalized().cast<float>(); }
+
 void validate_for_writing(const PolygonMesh& mesh, const fs::path& path) {
   if (mesh.offsets.empty() || mesh.offsets.front() != 0 ||
       static_cast<std::size_t>(mesh.offsets.back()) != mesh.indices.size())
@@ -68,7 +72,7 @@ void write_text_mesh(const PolygonMesh& mesh, const fs::path& path, bool is_obj)
       const Eigen::Vector3d& p = mesh.vertices[i];
       fmt::format_to(std::back_inserter(buf), "{}{} {} {}", is_obj ? "v " : "", p.x(), p.y(), p.z());
       if (has_normals && !is_obj) {
-        const Eigen::Vector3f n = mesh.normals[i].normalized().cast<float>();
+        const Eigen::Vector3f n = written_normal(mesh.normals[i]);
         fmt::format_to(std::back_inserter(buf), " {} {} {}", n.x(), n.y(), n.z());
       }
       if (has_colours) {
@@ -83,7 +87,7 @@ void write_text_mesh(const PolygonMesh& mesh, const fs::path& path, bool is_obj)
     }
     if (has_normals && is_obj)
       for (const Eigen::Vector3d& n : mesh.normals) {
-        const Eigen::Vector3f m = n.normalized().cast<float>();
+        const Eigen::Vector3f m = written_normal(n);
         fmt::format_to(std::back_inserter(buf), "vn {} {} {}\n", m.x(), m.y(), m.z());
         if (buf.size() > kChunk) flush(out, buf);
       }
@@ -134,7 +138,7 @@ void write_ply(const PolygonMesh& mesh, const fs::path& path) {
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
       for (int k = 0; k < 3; ++k) put(buf, mesh.vertices[i][k]);
       if (has_normals) {
-        const Eigen::Vector3f n = mesh.normals[i].normalized().cast<float>();
+        const Eigen::Vector3f n = written_normal(mesh.normals[i]);
         for (int k = 0; k < 3; ++k) put(buf, n[k]);
       }
       if (has_colours)
