@@ -128,7 +128,7 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   out.points = cloud.points.size();
   double h = options.probe_height;
   if (!(h > 0)) {
-    if (auto it = model.metadata.find("max_error_abs"); it != model.metadata.end()) h = 4.0 * std::stod(it->second);
+    if (const auto e = metadata_number(model, "max_error_abs"); e && std::isfinite(*e)) h = 4.0 * *e;
     if (!(h > 0)) {
       Box3 box;
       for (const auto& p : cloud.points) box.extend(p);
@@ -144,8 +144,7 @@ SlimError evaluate_slim(const Model& model, const PointCloud& cloud, const SlimE
   const std::vector<double> heights = probe_heights(cloud.points, normals, h, options.surface);
   // Sheets crossed more than E above a point are passed (probe_point): the fit's E, else h/4.
   double E = 0.25 * h;
-  if (auto it = model.metadata.find("max_error_abs"); it != model.metadata.end())
-    if (const double e = std::stod(it->second); e > 0 && e < h) E = e;
+  if (const auto e = metadata_number(model, "max_error_abs"); e && *e > 0 && *e < h) E = *e;
   std::vector<Eigen::Vector3d> unit(normals.size());
   for (std::size_t i = 0; i < normals.size(); ++i) unit[i] = normals[i].normalized();
   const PointIndex index{std::span<const Eigen::Vector3d>(cloud.points)};

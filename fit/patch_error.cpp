@@ -28,7 +28,7 @@ PatchErrors slim_patch_errors(const Model& model, const PointCloud& cloud, const
   // The probe height and sheet-passing E of evaluate_slim (fit/evaluate.h).
   double h = options.probe_height;
   double E_fit = 0;
-  if (auto it = model.metadata.find("max_error_abs"); it != model.metadata.end()) E_fit = std::stod(it->second);
+  if (const auto e = metadata_number(model, "max_error_abs"); e && std::isfinite(*e)) E_fit = *e;
   if (!(h > 0)) h = 4.0 * E_fit;
   if (!(h > 0)) {
     Box3 box;

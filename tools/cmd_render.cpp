@@ -285,11 +285,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   const Rgb background = a.background == "none" ? Rgb{255, 255, 255} : parse_rgb(a.background, "--background");
   const bool transparent = a.background == "none";
   nlohmann::json& j = report.json["render"];
-  const auto [azimuth, elevation] = view_angles(a.view);
   j = {{"model", a.model}, {"primitives", model.size()}, {"width", width}, {"height", height}, {"camera", camera_json(cameras.front())},
-       {"framing", {{"up", a.view.up}, {"view", a.view.view.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.view)},
-                    {"azimuth_deg", azimuth}, {"elevation_deg", elevation}, {"fill", a.view.fill}, {"zoom", a.view.zoom},
-                    {"camera_file", a.view.camera_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(a.view.camera_file)}}},
+       {"framing", framing_json(a.view)},
        {"background", a.background}, {"supersample", ss}, {"input", scene_input_name(scene.kind)}};
   if (scene.kind == SceneInputKind::molecule) j["molecule"] = molecule_json(model);
 

@@ -97,6 +97,20 @@ std::pair<double, double> view_angles(const ViewArgs& a) {
   return {a.azimuth, a.elevation};
 }
 
+nlohmann::json framing_json(const ViewArgs& a) {
+  const bool file = !a.camera_file.empty();
+  const bool angles = !file || a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
+  const auto [azimuth, elevation] = view_angles(a);
+  const auto applied = [&](bool used, const nlohmann::json& value) { return used ? value : nlohmann::json(nullptr); };
+  return {{"up", applied(!file || a.typed("--up"), a.up)},
+          {"view", applied(angles && !a.view.empty(), a.view)},
+          {"azimuth_deg", applied(angles, azimuth)},
+          {"elevation_deg", applied(angles, elevation)},
+          {"fill", applied(!file || a.typed("--fill"), a.fill)},
+          {"zoom", a.zoom},
+          {"camera_file", applied(file, a.camera_file)}};
+}
+
 void add_view_options(CLI::App& app, ViewArgs& a) {
   a.app = &app;
   app.add_option("--camera", a.camera_file, "Start from this camera JSON (as --save-camera writes, or a render report); "

@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "core/slim.h"
 #include "core/camera.h"
@@ -35,6 +36,11 @@ struct ViewArgs {
 
 /// Azimuth and elevation in degrees: the named --view's, else --azimuth and --elevation.
 std::pair<double, double> view_angles(const ViewArgs& args);
+
+/// What framed the view, for a render report: without --camera, every view option's value (typed
+/// or default); with --camera, the file and only the options typed beside it (the others null:
+/// the file's camera held them), as resolve_camera applies them.
+nlohmann::json framing_json(const ViewArgs& args);
 
 /// Adds the shared view options to a command, with their defaults shown in --help.
 void add_view_options(CLI::App& app, ViewArgs& args);

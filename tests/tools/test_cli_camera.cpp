@@ -189,6 +189,16 @@ TEST_F(CliCamera, OptionsTypedBesideACameraFileOverrideIt) {
   EXPECT_TRUE(ta.isApprox(te));
   EXPECT_NEAR((vec(je["camera"]["eye"]) - te).norm(), (vec(ja["camera"]["eye"]) - ta).norm(), 1e-9);
   EXPECT_TRUE((vec(je["camera"]["eye"]) - te).normalized().isApprox(Eigen::Vector3d::UnitX(), 1e-9));
+  // The report's framing records what framed each view: every option without a camera file;
+  // with one, the file and only the options typed beside it (the file held the rest).
+  EXPECT_EQ(ja["framing"]["view"], "front");
+  EXPECT_EQ(ja["framing"]["up"], "+y");
+  EXPECT_TRUE(ja["framing"]["camera_file"].is_null());
+  EXPECT_EQ(jb["framing"]["camera_file"], cam.string());
+  for (const char* key : {"view", "azimuth_deg", "elevation_deg", "up", "fill"}) EXPECT_TRUE(jb["framing"][key].is_null()) << key;
+  EXPECT_EQ(je["framing"]["view"], "side");
+  EXPECT_EQ(je["framing"]["azimuth_deg"].get<double>(), 90.0);
+  EXPECT_TRUE(je["framing"]["up"].is_null());
 }
 
 TEST_F(CliCamera, BadCameraFilesNameTheFileAndTheKey) {
