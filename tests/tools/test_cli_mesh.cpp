@@ -37,6 +37,9 @@ TEST_F(CliMesh, EveryFormatReadsBackWithinTheReportedError) {
     EXPECT_TRUE(j["within_bound"].get<bool>());
     EXPECT_LE(j["max_error"].get<double>(), 1e-3);
     EXPECT_EQ(j["open_edges"].get<int>(), 0);
+    // Checked on the positions as written (STL's float32 included): none cross.
+    EXPECT_EQ(j["self_intersecting_pairs"].get<std::size_t>(), 0u) << ext;
+    EXPECT_NE(r.out.find("closed (no open edges), no self-intersections"), std::string::npos) << r.out;
     EXPECT_EQ(j["fin_rounds"].get<int>(), 0);  // a sphere glyph: nothing open
     EXPECT_EQ(j["fin_triangles"].get<std::size_t>(), 0u);
     const PolygonMesh m = read_mesh(out);
@@ -69,6 +72,11 @@ TEST_F(CliMesh, AMoleculeIsMeshedAndAMeshOrACloudRefusedSayingWhatToDo) {
   EXPECT_EQ(j["input"].get<std::string>(), "molecule");
   EXPECT_GT(j["triangles"].get<std::size_t>(), 1000u);
   EXPECT_NE(r.out.find("closed (no open edges"), std::string::npos) << r.out;
+  // Each atom is its own closed sphere, so overlapping atoms' triangles cross: counted, named in
+  // the summary (what a slicer or a boolean operation would refuse).
+  EXPECT_GT(j["self_intersecting_pairs"].get<std::size_t>(), 1000u);
+  EXPECT_FALSE(j["self_intersecting_examples"].empty());
+  EXPECT_NE(r.out.find("pairs of triangles crossing"), std::string::npos) << r.out;
   EXPECT_EQ(read_mesh(dir_ / "m.ply").face_count(), j["triangles"].get<std::size_t>());
   // A mesh: "a triangle mesh already" (it read "bad magic: not a PLY file"), exit 3, nothing written.
   r = quadrix_run("mesh " + q(dir_ / "m.ply") + " -o " + q(dir_ / "again.ply"));
