@@ -24,6 +24,7 @@
 #include "convert/between_views.h"
 #include "convert/kuhn_bisection.h"
 #include "convert/mesh_measure.h"
+#include "convert/mesh_union.h"
 #include "core/bounds.h"
 #include "core/culling.h"
 #include "core/implicit/surface.h"
@@ -32,6 +33,7 @@
 #include "core/reference.h"
 #include "core/slim.h"
 #include "fit/data_surface.h"
+#include "fit/point_index.h"
 #include "fit/surface_error.h"
 
 namespace quadrix {
@@ -350,16 +352,20 @@ void icosphere(int levels, std::vector<Eigen::Vector3d>& v, std::vector<std::arr
   }
 }
 
+/// Sides of a cylinder of radius r: the sagitta r(1 − cos(π/n)) ≤ bound/2, doubled `extra` times.
+int cylinder_segments(double r, double bound, int extra) {
+  const double ratio = std::clamp(1.0 - 0.5 * bound / r, -1.0, 1.0);
+  const int n = std::clamp(static_cast<int>(std::ceil(std::numbers::pi / std::acos(ratio))), 8, 4096);
+  return std::min(n << extra, 1 << 16);
+}
+
 void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   const Rgb colour = g.colour.value_or(Rgb{200, 200, 200});
   if (g.kind == GlyphKind::cylinder) {
     const Eigen::Vector3d half = g.axes.col(0);
     const Eigen::Vector3d axis = half.normalized();
     const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
-    // Sagitta r(1 − cos(π/n)) ≤ bound/2.
-    const double ratio = std::clamp(1.0 - 0.5 * bound / g.radius, -1.0, 1.0);
-    int n = std::clamp(static_cast<int>(std::ceil(std::numbers::pi / std::acos(ratio))), 8, 4096);
-    n = std::min(n << extra, 1 << 16);
+    const int n = cylinder_segments(g.radius, bound, extra);
     const int base = static_cast<int>(out.mesh.vertices.size());
     for (int end = 0; end < 2; ++end)
       for (int i = 0; i < n; ++i) {
@@ -394,6 +400,67 @@ void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   const int base = static_cast<int>(out.mesh.vertices.size());
   for (const auto& u : v) out.add_vertex(g.centre + M * u, colour);
   for (const auto& [a, b, c] : tris) flips ? out.add_triangle(base + a, base + c, base + b) : out.add_triangle(base + a, base + b, base + c);
+}
+
+/// Whether the glyphs are meshed as their union (ToMeshOptions::union_glyphs): more than one, and
+/// spheres and ellipsoids only. Molecules' bonds (capped cylinders) are meshed whole: their tubes'
+/// unions with the atoms came out self-intersecting with rounded constructions, and with exact
+/// ones CGAL 5.5's corefinement crashed on them (4lfq balls-and-sticks, round 8).
+bool unions_glyphs(const Model& model) {
+  return model.glyphs.size() > 1 && std::none_of(model.glyphs.begin(), model.glyphs.end(),
+                                                 [](const Glyph& g) { return g.kind == GlyphKind::cylinder; });
+}
+
+/// The glyphs (spheres, ellipsoids: unions_glyphs) as their union (convert/mesh_union.h), added to
+/// `out`: each glyph meshed closed on its own, the union's vertices coloured as the glyph vertex at
+/// their place, or, made on an intersection curve, the nearest glyph vertex. Returns how many
+/// unions CGAL refused.
+std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int extra, Builder& out) {
+  std::vector<PolygonMesh> parts;
+  std::vector<Eigen::Vector3d> at;
+  std::vector<Rgb> colour;
+  parts.reserve(glyphs.size());
+  // A glyph given twice is meshed once: the union of two equal meshes is all coplanar faces.
+  std::set<std::array<double, 13>> seen;
+  std::size_t repeated = 0;
+  for (const Glyph& g : glyphs) {
+    std::array<double, 13> key{g.centre.x(), g.centre.y(), g.centre.z(), g.radius};
+    for (int k = 0; k < 9; ++k) key[std::size_t(4 + k)] = g.axes(k / 3, k % 3);
+    if (!seen.insert(key).second) {
+      ++repeated;
+      continue;
+    }
+    Builder one;
+    one.colours = out.colours;
+    mesh_glyph(g, bound, extra, one);
+    for (std::size_t v = 0; v < one.mesh.vertices.size(); ++v) {
+      at.push_back(one.mesh.vertices[v]);
+      if (out.colours) colour.push_back(one.mesh.colours[v]);
+    }
+    one.mesh.colours.clear();
+    parts.push_back(std::move(one.mesh));
+  }
+  if (repeated > 0) log::info("mesh: {} glyphs given more than once meshed once", repeated);
+  MeshUnion u = union_of_closed_meshes(std::move(parts));
+  if (u.failed > 0)
+    log::warn("mesh: {} of {} unions of overlapping glyphs refused by CGAL (not a closed manifold): those glyphs are "
+              "meshed whole and cross", u.failed, u.parts - 1);
+  const int base = static_cast<int>(out.mesh.vertices.size());
+  if (out.colours) {
+    const PointIndex index{std::span<const Eigen::Vector3d>(at)};
+    std::vector<Neighbour> nb;
+    for (const auto& p : u.mesh.vertices) {
+      index.nearest(p, 1, nb);
+      out.add_vertex(p, colour[nb.front().first]);
+    }
+  } else {
+    for (const auto& p : u.mesh.vertices) out.add_vertex(p, Rgb{});
+  }
+  for (std::size_t f = 0; f < u.mesh.face_count(); ++f) {
+    const auto face = u.mesh.face(f);
+    out.add_triangle(base + face[0], base + face[1], base + face[2]);
+  }
+  return u.failed;
 }
 
 // ---- SLIM -------------------------------------------------------------------------------------
@@ -1616,7 +1683,12 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     Builder b;
     b.colours = has_any_colour(model);
     if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
-    for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
+    std::size_t unions_failed = 0;
+    const bool glyph_union = o.union_glyphs && unions_glyphs(model) && model.glyphs.size() <= o.union_max_glyphs;
+    if (glyph_union)
+      unions_failed = mesh_glyph_union(model.glyphs, bound, level, b);
+    else
+      for (const Glyph& g : model.glyphs) mesh_glyph(g, bound, level, b);
     for (const ImplicitSurface& s : model.implicits) mesh_implicit(s, level, b);
     double reach = 4.0 * bound;
     LocalRefinement local;
@@ -1640,6 +1712,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     }
     ToMeshResult r;
     r.bound = bound;
+    r.glyph_union = glyph_union;
+    r.glyph_unions_failed = unions_failed;
     r.refinements = level;
     r.local_rounds = local.rounds;
     r.mesh = std::move(b.mesh);

@@ -14,6 +14,7 @@
 
 #include "convert/mesh_measure.h"
 #include "convert/quads.h"
+#include "convert/self_intersections.h"
 #include "convert/to_mesh.h"
 #include "core/bounds.h"
 #include "core/error.h"
@@ -181,6 +182,60 @@ TEST(ToMesh, EllipsoidAndCylinderGlyphsWithinTheirBound) {
       EXPECT_LE(worst, 1.01 * bound);
     }
   }
+}
+
+// Overlapping spheres (a spacefill molecule's atoms) meshed as their union: one closed surface
+// without crossing triangles, nothing of a sphere left inside another, each part in its own
+// colour; glyph by glyph (union off) the shells cross. A sphere given twice is meshed once.
+TEST(ToMesh, OverlappingSpheresMeshedAsTheirUnion) {
+  Model m;
+  const std::vector<std::pair<Eigen::Vector3d, Rgb>> atoms{{{0, 0, 0}, {255, 0, 0}}, {{1.2, 0, 0}, {0, 255, 0}},
+                                                           {{0.6, 1.0, 0.2}, {0, 0, 255}}, {{1.2, 0, 0}, {0, 255, 0}}};
+  for (const auto& [c, rgb] : atoms) m.glyphs.push_back({GlyphKind::sphere, c, 1.0, Eigen::Matrix3d::Identity(), rgb});
+  const double bound = 5e-3;
+  const ToMeshResult u = mesh_model(m, {.max_error = bound, .progress = {}});
+  EXPECT_TRUE(u.glyph_union);
+  EXPECT_EQ(u.glyph_unions_failed, 0u);
+  EXPECT_TRUE(u.within) << u.max_error();
+  EXPECT_EQ(u.open_edges, 0u);
+  EXPECT_EQ(self_intersections(u.mesh).pairs, 0u);
+  // Every vertex on the union's boundary: at least one sphere's radius out (within the bound,
+  // the faces being inscribed), none deeper than the bound inside any sphere.
+  ASSERT_EQ(u.mesh.colours.size(), u.mesh.vertices.size());
+  for (std::size_t v = 0; v < u.mesh.vertices.size(); ++v) {
+    const Eigen::Vector3d& p = u.mesh.vertices[v];
+    double inside = -1e9;  // the most any sphere holds p by
+    std::size_t nearest = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double depth = 1.0 - (p - atoms[a].first).norm();
+      if (depth > inside) inside = depth;
+      if (std::abs(1.0 - (p - atoms[a].first).norm()) < std::abs(1.0 - (p - atoms[nearest].first).norm())) nearest = a;
+    }
+    ASSERT_LE(inside, bound) << "vertex " << v << " lies inside a sphere";
+    ASSERT_GE(inside, -bound) << "vertex " << v << " lies off every sphere";
+    // A vertex on one sphere only (away from the intersection curves) has that sphere's colour.
+    if (std::abs(1.0 - (p - atoms[nearest].first).norm()) < 1e-9) {
+      int on = 0;
+      for (std::size_t a = 0; a < 3; ++a) on += std::abs(1.0 - (p - atoms[a].first).norm()) < 0.05;
+      if (on == 1) EXPECT_EQ(u.mesh.colours[v], atoms[nearest].second) << "vertex " << v;
+    }
+  }
+  ToMeshOptions apart{.max_error = bound, .progress = {}};
+  apart.union_glyphs = false;
+  const ToMeshResult w = mesh_model(m, apart);
+  EXPECT_FALSE(w.glyph_union);
+  EXPECT_GT(self_intersections(w.mesh).pairs, 100u);
+  // The union's area is less than the shells' (the hidden caps are gone).
+  const auto area = [](const PolygonMesh& mesh) {
+    double s = 0;
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+      const auto t = mesh.face(f);
+      s += 0.5 * (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]).norm();
+    }
+    return s;
+  };
+  EXPECT_LT(area(u.mesh), 0.8 * area(w.mesh) * 3.0 / 4.0);  // w holds the repeated sphere twice
+  EXPECT_GT(signed_volume(u.mesh), 0.0);
 }
 
 TEST(ToMesh, HyperboloidTetPatchesOnTheQuadricAndClosedInside) {

@@ -72,12 +72,21 @@ TEST_F(CliMesh, AMoleculeIsMeshedAndAMeshOrACloudRefusedSayingWhatToDo) {
   EXPECT_EQ(j["input"].get<std::string>(), "molecule");
   EXPECT_GT(j["triangles"].get<std::size_t>(), 1000u);
   EXPECT_NE(r.out.find("closed (no open edges"), std::string::npos) << r.out;
-  // Each atom is its own closed sphere, so overlapping atoms' triangles cross: counted, named in
-  // the summary (what a slicer or a boolean operation would refuse).
-  EXPECT_GT(j["self_intersecting_pairs"].get<std::size_t>(), 1000u);
-  EXPECT_FALSE(j["self_intersecting_examples"].empty());
-  EXPECT_NE(r.out.find("pairs of triangles crossing"), std::string::npos) << r.out;
+  // The atoms' union: one closed surface, no triangles crossing.
+  EXPECT_TRUE(j["glyph_union"].get<bool>());
+  EXPECT_EQ(j["self_intersecting_pairs"].get<std::size_t>(), 0u);
+  EXPECT_NE(r.out.find("no self-intersections"), std::string::npos) << r.out;
   EXPECT_EQ(read_mesh(dir_ / "m.ply").face_count(), j["triangles"].get<std::size_t>());
+  // --union off: each atom its own closed sphere, so overlapping atoms' triangles cross: counted,
+  // named in the summary (what a slicer or a boolean operation would refuse).
+  const auto apart = dir_ / "apart.json";
+  r = quadrix_run("mesh " + q(pdb) + " --style spacefill --union off -o " + q(dir_ / "a.ply") + " --report " + q(apart));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto ja = read_json(apart)["mesh"];
+  EXPECT_FALSE(ja["glyph_union"].get<bool>());
+  EXPECT_GT(ja["self_intersecting_pairs"].get<std::size_t>(), 1000u);
+  EXPECT_FALSE(ja["self_intersecting_examples"].empty());
+  EXPECT_NE(r.out.find("pairs of triangles crossing"), std::string::npos) << r.out;
   // A mesh: "a triangle mesh already" (it read "bad magic: not a PLY file"), exit 3, nothing written.
   r = quadrix_run("mesh " + q(dir_ / "m.ply") + " -o " + q(dir_ / "again.ply"));
   EXPECT_EQ(r.code, 3) << r.out;
