@@ -3,6 +3,7 @@
 /// quadric decimation bounded by a Hausdorff tolerance, CGAL Poisson surface reconstruction,
 /// and the point-to-triangle-mesh distance both are measured with.
 #include <cstddef>
+#include <limits>
 #include <span>
 
 #include <Eigen/Core>
@@ -39,10 +40,13 @@ struct MeshDistance {
   std::size_t points = 0;
   double max = 0;  ///< world units
   double rms = 0;  ///< world units
+  std::size_t beyond = 0;  ///< points farther than the bound asked about (none asked: 0)
 };
 
 /// Euclidean distance of every point to the nearest point of the triangles of mesh (CGAL
 /// AABB tree; TBB-parallel over the points). \throws InvalidInput for a mesh without faces.
-MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const PolygonMesh& mesh);
+/// beyond: counts the points farther than `bound`.
+MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const PolygonMesh& mesh,
+                                 double bound = std::numeric_limits<double>::infinity());
 
 }  // namespace quadrix::peers

@@ -71,7 +71,7 @@ Poisson reconstruct_poisson(const PointCloud& cloud) {
   return out;
 }
 
-MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const PolygonMesh& mesh) {
+MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const PolygonMesh& mesh, double bound) {
   if (mesh.face_count() == 0) throw InvalidInput("point_mesh_distance: the mesh has no faces");
   std::vector<Triangle> triangles;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
@@ -87,6 +87,7 @@ MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const 
   tree.accelerate_distance_queries();
   struct Sum {
     double max = 0, sq = 0;
+    std::size_t beyond = 0;
   };
   const Sum total = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, points.size(), 1024), Sum{},
@@ -95,17 +96,20 @@ MeshDistance point_mesh_distance(std::span<const Eigen::Vector3d> points, const 
           const double d2 = CGAL::to_double(tree.squared_distance(to_cgal(points[i])));
           s.max = std::max(s.max, std::sqrt(d2));
           s.sq += d2;
+          s.beyond += std::sqrt(d2) > bound;
         }
         return s;
       },
       [](Sum a, const Sum& b) {
         a.max = std::max(a.max, b.max);
         a.sq += b.sq;
+        a.beyond += b.beyond;
         return a;
       });
   MeshDistance d;
   d.points = points.size();
   d.max = total.max;
+  d.beyond = total.beyond;
   d.rms = points.empty() ? 0.0 : std::sqrt(total.sq / double(points.size()));
   return d;
 }

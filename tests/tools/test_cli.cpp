@@ -366,6 +366,59 @@ TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
   EXPECT_EQ(slim.at("points_beyond_bound").get<int>(), 0);
 }
 
+// bench fit's peers rows: decimation counts its points beyond E (it wrote 0 whatever its maximum:
+// 40E with 0 beyond), Poisson, fitted to no bound, leaves the counts beyond E and 2E empty (it
+// wrote 0).
+TEST(Cli, BenchFitPeersCountWhatTheyHaveABoundFor) {
+  ScratchDir dir("cli-bench-fit-peers");
+  {
+    // Two flat 30 × 30 grids 0.004 apart, facing away from each other: the decimation collapses
+    // them onto each other, about 40E off some points at E = 1e-3.
+    std::ofstream f(dir / "sheets.off");
+    const int n = 30;
+    f << "OFF\n" << 2 * n * n << " " << 4 * (n - 1) * (n - 1) << " 0\n";
+    for (const double z : {0.004, 0.0})
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) f << fmt::format("{} {} {}\n", double(i) / (n - 1), double(j) / (n - 1), z);
+    for (int s = 0; s < 2; ++s)
+      for (int i = 0; i + 1 < n; ++i)
+        for (int j = 0; j + 1 < n; ++j) {
+          const int a = s * n * n + i * n + j, b = a + n, c = a + n + 1, d = a + 1;
+          if (s == 0)
+            f << "3 " << a << " " << b << " " << c << "\n3 " << a << " " << c << " " << d << "\n";
+          else
+            f << "3 " << a << " " << c << " " << b << "\n3 " << a << " " << d << " " << c << "\n";
+        }
+  }
+  const CmdResult run = quadrix_run("bench fit --errors 0.001 --view-resolution 64 --models " + q(dir / "sheets.off") +
+                                    " --out " + q(dir.path()));
+  ASSERT_EQ(run.code, 0) << run.out;
+  std::ifstream in(dir / "bench_fit.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json& m = j.at("models").at("sheets");
+  const nlohmann::json& dec = m.at("runs").at(0).at("decimation");
+  const auto beyond = dec.at("points_beyond_bound").get<std::size_t>();
+  EXPECT_GT(dec.at("max_rel").get<double>(), 0.001) << dec.dump();
+  EXPECT_GT(beyond, 0u) << dec.dump();
+  EXPECT_TRUE(m.at("poisson").at("surface").at("share_beyond_2e").is_null());
+  std::ifstream csv(dir / "bench_fit.csv");
+  std::string line;
+  bool poisson = false;
+  while (std::getline(csv, line))
+    if (line.rfind("sheets,poisson,", 0) == 0) {
+      poisson = true;
+      std::vector<std::string> cell;
+      std::stringstream s(line);
+      for (std::string c; std::getline(s, c, ',');) cell.push_back(c);
+      ASSERT_GE(cell.size(), 12u) << line;
+      EXPECT_EQ(cell[8], "") << line;   // points_beyond_bound
+      EXPECT_EQ(cell[11], "") << line;  // surface_share_beyond_2e
+    } else if (line.rfind("sheets,decimation,", 0) == 0) {
+      EXPECT_NE(line.find(fmt::format(",{},", beyond)), std::string::npos) << line;
+    }
+  EXPECT_TRUE(poisson);
+}
+
 // Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
 // speck floating beside the surface. --keep-outliers fits them all.
 TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
