@@ -8,6 +8,7 @@
 #include "convert/mesh_union.h"
 #include "convert/self_intersections.h"
 #include "core/log.h"
+#include "core/morton.h"
 
 #include <algorithm>
 #include <array>
@@ -147,45 +148,26 @@ void append(const Surface& s, PolygonMesh& out) {
   }
 }
 
-// A part's place along a Morton curve of the parts' centres (21 bits an axis).
-std::uint64_t spread(std::uint64_t x) {
-  x &= 0x1fffff;
-  x = (x | x << 32) & 0x1f00000000ffffULL;
-  x = (x | x << 16) & 0x1f0000ff0000ffULL;
-  x = (x | x << 8) & 0x100f00f00f00f00fULL;
-  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-  x = (x | x << 2) & 0x1249249249249249ULL;
-  return x;
-}
-
 }  // namespace
 
 MeshUnion union_of_closed_meshes(std::vector<PolygonMesh> parts, const std::function<void(double)>& progress) {
   MeshUnion out;
   out.parts = parts.size();
   if (parts.empty()) return out;
-  // Neighbours first: the parts in Morton order of their centres.
+  // Neighbours first: the parts in Morton order of their centres (core/morton.h).
   std::vector<Eigen::Vector3d> centre(parts.size(), Eigen::Vector3d::Zero());
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (std::size_t i = 0; i < parts.size(); ++i) {
     for (const auto& p : parts[i].vertices) centre[i] += p;
     if (!parts[i].vertices.empty()) centre[i] /= double(parts[i].vertices.size());
-    lo = lo.cwiseMin(centre[i]), hi = hi.cwiseMax(centre[i]);
   }
-  const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
-  std::vector<std::pair<std::uint64_t, std::size_t>> key(parts.size());
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const Eigen::Vector3d u = (centre[i] - lo) / extent * double((1 << 21) - 1);
-    key[i] = {spread(std::uint64_t(u.x())) | spread(std::uint64_t(u.y())) << 1 | spread(std::uint64_t(u.z())) << 2, i};
-  }
-  std::sort(key.begin(), key.end());
+  const std::vector<std::uint32_t> order = morton_order(centre);
   // Each slot: the union so far, and the meshes a refused union left beside it.
   struct Slot {
     Surface mesh;
     std::vector<Surface> apart;
   };
   std::vector<Slot> level(parts.size());
-  for (std::size_t i = 0; i < parts.size(); ++i) level[i].mesh = to_surface(parts[key[i].second]);
+  for (std::size_t i = 0; i < parts.size(); ++i) level[i].mesh = to_surface(parts[order[i]]);
   parts.clear();
   std::size_t failed = 0;
   const double rounds = std::max(1.0, std::ceil(std::log2(double(level.size()))));
