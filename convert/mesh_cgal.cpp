@@ -185,7 +185,8 @@ MeshUnion union_of_closed_meshes(std::vector<PolygonMesh> parts, const std::func
         // In place into a. A refusal (the union would not be a closed manifold) leaves both
         // corefined only: the same surfaces with the intersection curves' vertices added.
         ok = CGAL::Polygon_mesh_processing::corefine_and_compute_union(a.mesh, b.mesh, a.mesh);
-      } catch (const std::exception&) {
+      } catch (const std::exception& e) {
+        log::debug("union: CGAL refused a pair: {}", e.what());
         ok = false;
       }
       c.mesh = std::move(a.mesh);

@@ -14,7 +14,7 @@
 namespace quadrix {
 
 struct MeshUnion {
-  PolygonMesh mesh;          ///< the union's triangles (outward), with the parts that failed appended as they were
+  PolygonMesh mesh;          ///< the union's triangles (outward), with the parts that failed appended (same shape; corefined: vertices added on the intersection curves)
   std::size_t parts = 0;     ///< meshes given
   std::size_t failed = 0;    ///< unions CGAL refused (a result that would not be a closed manifold): both kept as they were
 };

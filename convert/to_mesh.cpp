@@ -421,11 +421,13 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
   std::vector<Rgb> colour;
   parts.reserve(glyphs.size());
   // A glyph given twice is meshed once: the union of two equal meshes is all coplanar faces.
+  // Keyed by what is meshed: a sphere's centre and radius, an ellipsoid's centre and axes.
   std::set<std::array<double, 13>> seen;
   std::size_t repeated = 0;
   for (const Glyph& g : glyphs) {
-    std::array<double, 13> key{g.centre.x(), g.centre.y(), g.centre.z(), g.radius};
-    for (int k = 0; k < 9; ++k) key[std::size_t(4 + k)] = g.axes(k / 3, k % 3);
+    const bool sphere = g.kind == GlyphKind::sphere;
+    std::array<double, 13> key{double(sphere), g.centre.x(), g.centre.y(), g.centre.z()};
+    for (int k = 0; k < 9; ++k) key[std::size_t(4 + k)] = sphere ? (k == 0 ? g.radius : 0.0) : g.axes(k / 3, k % 3);
     if (!seen.insert(key).second) {
       ++repeated;
       continue;

@@ -116,7 +116,7 @@ SlimFitResult SlimFitter::run() {
   // not track them to the end: where the points' holes were filled, the coverage discs came out
   // held while the patches' repairs left gaps between them (3,000 points of an exact sphere at
   // 1e-6: 0 holes said, 55 % of bench fit's pixels open).
-  const bool count_seen = !surface_ && opt_.cover_point_holes && opt_.see_point_holes && !see_point_holes_;
+  const bool count_seen = !surface_ && opt_.cover_point_holes && opt_.see_point_holes && fill_point_holes_;
   if (!surface_ && opt_.cover_point_holes && (!point_holes_fresh_ || count_seen) && !result_.model.slims.empty()) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& s : result_.model.slims) centres.push_back(s.centre);

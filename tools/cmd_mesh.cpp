@@ -124,6 +124,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   std::string shape = r.open_edges == 0 ? "closed (no open edges)" : fmt::format("{} open edges", r.open_edges);
   shape += crossing.pairs == 0 ? ", no self-intersections"
                                : fmt::format(", {} pair{} of triangles crossing", crossing.pairs, crossing.pairs == 1 ? "" : "s");
+  if (crossing.degenerate > 0) shape += fmt::format(", {} triangles of zero area", crossing.degenerate);
   report.summary = fmt::format("wrote {}: {} triangles, {} vertices{}; max error {:.3g} (bound {:.3g}; mesh->surface {:.3g}, "
                              "surface->mesh {:.3g}), {}",
                              a.out, r.mesh.face_count(), r.mesh.vertices.size(), with_what,

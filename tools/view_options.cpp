@@ -99,7 +99,8 @@ std::pair<double, double> view_angles(const ViewArgs& a) {
 
 nlohmann::json framing_json(const ViewArgs& a) {
   const bool file = !a.camera_file.empty();
-  const bool angles = !file || a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
+  // A typed --up re-places the eye about the file's target at the (default or typed) angles.
+  const bool angles = !file || a.typed("--up") || a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
   const auto [azimuth, elevation] = view_angles(a);
   const auto applied = [&](bool used, const nlohmann::json& value) { return used ? value : nlohmann::json(nullptr); };
   return {{"up", applied(!file || a.typed("--up"), a.up)},

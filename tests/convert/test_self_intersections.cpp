@@ -62,7 +62,7 @@ TEST(SelfIntersections, ACubeAndTwoApartDoNotCross) {
 TEST(SelfIntersections, OverlappingCubesCrossAndTheExamplesNameThePairs) {
   PolygonMesh m;
   add_cube(m, Eigen::Vector3d::Zero());
-  add_cube(m, Eigen::Vector3d(0.5, 0.25, 0.25), 0.5);  // pokes out of the +x face
+  add_cube(m, Eigen::Vector3d(0.75, 0.25, 0.25), 0.5);  // pokes out through the +x face
   const SelfIntersections s = self_intersections(m, 100);
   EXPECT_GT(s.pairs, 0u);
   ASSERT_EQ(s.examples.size(), s.pairs);

@@ -199,6 +199,11 @@ TEST_F(CliCamera, OptionsTypedBesideACameraFileOverrideIt) {
   EXPECT_EQ(je["framing"]["view"], "side");
   EXPECT_EQ(je["framing"]["azimuth_deg"].get<double>(), 90.0);
   EXPECT_TRUE(je["framing"]["up"].is_null());
+  // --up alone re-places the eye at the default angles: they are recorded.
+  const auto [f, jf] = render(model, "--camera " + q(cam) + " --up +z", "f");
+  EXPECT_EQ(jf["framing"]["up"], "+z");
+  EXPECT_EQ(jf["framing"]["azimuth_deg"].get<double>(), 30.0);
+  EXPECT_EQ(jf["framing"]["elevation_deg"].get<double>(), 20.0);
 }
 
 TEST_F(CliCamera, BadCameraFilesNameTheFileAndTheKey) {
