@@ -402,15 +402,6 @@ void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   for (const auto& [a, b, c] : tris) flips ? out.add_triangle(base + a, base + c, base + b) : out.add_triangle(base + a, base + b, base + c);
 }
 
-/// Whether the glyphs are meshed as their union (ToMeshOptions::union_glyphs): more than one, and
-/// spheres and ellipsoids only. Molecules' bonds (capped cylinders) are meshed whole: their tubes'
-/// unions with the atoms came out self-intersecting with rounded constructions, and with exact
-/// ones CGAL 5.5's corefinement crashed on them (4lfq balls-and-sticks, round 8).
-bool unions_glyphs(const Model& model) {
-  return model.glyphs.size() > 1 && std::none_of(model.glyphs.begin(), model.glyphs.end(),
-                                                 [](const Glyph& g) { return g.kind == GlyphKind::cylinder; });
-}
-
 /// The glyphs (spheres, ellipsoids: unions_glyphs) as their union (convert/mesh_union.h), added to
 /// `out`: each glyph meshed closed on its own, the union's vertices coloured as the glyph vertex at
 /// their place, or, made on an intersection curve, the nearest glyph vertex. Returns how many
@@ -1581,6 +1572,11 @@ MeshDistance gap_error(std::span<const Eigen::Vector3d> drawn, const PolygonMesh
   }
   out.rms = std::sqrt(sum2 / static_cast<double>(out.samples));
   return out;
+}
+
+bool unions_glyphs(const Model& model) {
+  return model.glyphs.size() > 1 && std::none_of(model.glyphs.begin(), model.glyphs.end(),
+                                                 [](const Glyph& g) { return g.kind == GlyphKind::cylinder; });
 }
 
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {

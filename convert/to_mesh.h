@@ -113,6 +113,12 @@ struct ToMeshResult {
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
 
+/// Whether ToMeshOptions::union_glyphs applies to the model's glyphs: more than one, spheres and
+/// ellipsoids only. Molecules' bonds (capped cylinders) are meshed whole: their tubes' unions with
+/// the atoms came out self-intersecting with rounded constructions, and with exact ones CGAL 5.5's
+/// corefinement crashed on them (4lfq balls-and-sticks, round 8).
+bool unions_glyphs(const Model& model);
+
 /// Meshes every primitive of the model. \throws InvalidInput for an empty model.
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& options = {});
 

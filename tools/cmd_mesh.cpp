@@ -56,8 +56,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   ToMeshOptions o = a.options;
   o.union_glyphs = a.union_mode != "off";
   if (a.union_mode == "on") o.union_max_glyphs = std::numeric_limits<std::size_t>::max();
-  if (a.union_mode == "auto" && model.glyphs.size() > o.union_max_glyphs &&
-      std::none_of(model.glyphs.begin(), model.glyphs.end(), [](const Glyph& g) { return g.kind == GlyphKind::cylinder; }))
+  if (a.union_mode == "auto" && model.glyphs.size() > o.union_max_glyphs && unions_glyphs(model))
     log::info("mesh: {} glyphs, over {}: meshed glyph by glyph, overlapping ones crossing (--union on makes their union, "
               "about 28 ms a sphere)", model.glyphs.size(), o.union_max_glyphs);
   // Unless given: 1e-3 of the diagonal, or a SLIM fit's own E where it is larger (a blend steps by
