@@ -13,7 +13,11 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/compute_average_spacing.h>
-#include <CGAL/poisson_surface_reconstruction.h>
+#include <CGAL/IO/facets_in_complex_2_to_triangle_mesh.h>
+#include <CGAL/Implicit_surface_3.h>
+#include <CGAL/Poisson_reconstruction_function.h>
+#include <CGAL/Surface_mesh_default_triangulation_3.h>
+#include <CGAL/make_surface_mesh.h>
 #include <CGAL/property_map.h>
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -53,11 +57,32 @@ Poisson reconstruct_poisson(const PointCloud& cloud) {
   const auto normal_map = CGAL::Second_of_pair_property_map<PointWithNormal>();
   out.spacing = CGAL::compute_average_spacing<CGAL::Parallel_if_available_tag>(
       input, 6, CGAL::parameters::point_map(point_map));
+  // CGAL's poisson_surface_reconstruction_delaunay, step by step with its defaults (angle 20°,
+  // radius 30 and distance 0.375 spacings), so that a surface mesher that finds no facet is a
+  // failure: the convenience function converts the empty complex anyway and dereferences its
+  // first facet (800 points of a sphere: a segfault in 5 of 8 runs of bench fit).
+  using Function = CGAL::Poisson_reconstruction_function<Kernel>;
+  using Tr = CGAL::Surface_mesher::Surface_mesh_default_triangulation_3_generator<Kernel>::Type;
+  using C2t3 = CGAL::Surface_mesh_complex_2_in_triangulation_3<Tr>;
+  const auto failed = [&](const char* why) {
+    return SolverError(fmt::format("CGAL Poisson reconstruction failed on {} points (spacing {:.3g}): {}", input.size(),
+                                   out.spacing, why));
+  };
+  Function function(input.begin(), input.end(), point_map, normal_map);
+  if (!function.compute_implicit_function()) throw failed("no implicit function (its linear solver failed)");
+  const Point inner = function.get_inner_point();
+  const Kernel::Sphere_3 bsphere = function.bounding_sphere();
+  const double sphere_radius = 5.0 * std::sqrt(bsphere.squared_radius());
+  const double sm_angle = 20.0, sm_radius = 30.0, sm_distance = 0.375;
+  CGAL::Implicit_surface_3<Kernel, Function> surface(function, Kernel::Sphere_3(inner, sphere_radius * sphere_radius),
+                                                     sm_distance * out.spacing / 1000.0 / sphere_radius);
+  CGAL::Surface_mesh_default_criteria_3<Tr> criteria(sm_angle, sm_radius * out.spacing, sm_distance * out.spacing);
+  Tr tr;
+  C2t3 c2t3(tr);
+  CGAL::make_surface_mesh(c2t3, surface, criteria, CGAL::Manifold_with_boundary_tag());
+  if (tr.number_of_vertices() == 0 || c2t3.number_of_facets() == 0) throw failed("the surface mesher found no facet");
   Mesh mesh;
-  if (!CGAL::poisson_surface_reconstruction_delaunay(input.begin(), input.end(), point_map, normal_map, mesh,
-                                                     out.spacing))
-    throw SolverError(fmt::format("CGAL Poisson reconstruction failed on {} points (spacing {:.3g})", input.size(),
-                                  out.spacing));
+  CGAL::facets_in_complex_2_to_triangle_mesh(c2t3, mesh);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const auto v : mesh.vertices()) {
     const Point& p = mesh.point(v);

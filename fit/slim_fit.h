@@ -228,6 +228,10 @@ struct SlimFitOptions {
   /// nothing) are closed by moving the plane of the patch whose zero set runs across the slit
   /// (kitten at 1e-3: the far side showed through its mouth). Verified as any repair.
   bool relax_clips = true;
+  /// The share of the data a view may see through and the fit still keep its promise (its part
+  /// (c), no holes): SlimFitStats::hole_share above it is a fit outside its bound (`fit` exits 7),
+  /// as points beyond E or surface beyond 2E are. 1e-4 is DESIGN's target for holes.
+  double max_hole_share = 1e-4;
   /// A face seen through for the first time gets a regular ball at its centroid (the radius
   /// search and surface side as for any candidate) instead of a face patch: one such ball mends
   /// the slits of the faces around it too, and lets pruning drop balls it makes redundant. A
@@ -294,6 +298,13 @@ struct SlimFitStats {
   std::size_t disc_patches = 0;      ///< disc patches added on points with a hole
   std::size_t clips_relaxed = 0;     ///< patches of the model returned whose crease plane moved across a slit (relax_clips)
   std::size_t crease_gaps = 0;       ///< slit samples at creases left at the end (relax_clips)
+  /// The share of the data the model returned leaves seen through, as the fit counts it: points
+  /// alone, the points with a hole a view sees (seen_point_holes, counted on the model returned
+  /// whatever the rounds did) and crease gaps, per point; with faces, the fan triangles seen
+  /// through (view_holes) plus the area outside every ball (face_holes, each a smallest piece
+  /// of a fan triangle), per fan triangle. Compared with SlimFitOptions::max_hole_share.
+  double hole_share = 0;
+  bool holes_exceeded = false;  ///< hole_share > max_hole_share
   std::size_t subsample_levels = 0;  ///< nested subsamples for large balls' radius queries
   // Wall-clock seconds per stage.
   double time_normals = 0, time_candidates = 0, time_cover = 0, time_verify = 0, time_total = 0;

@@ -213,15 +213,19 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::point_holes(c
     std::uint8_t towards = 0, supported = 0;
     for (int k = 0; k < 6; ++k) {
       const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 3.0) * u + std::sin(std::numbers::pi * k / 3.0) * v;
-      const Eigen::Vector3d x = P_[i] + rho * t;
+      // On the point's disc, bent as the data's surface bends it (tangent_ring).
+      const Eigen::Vector3d x = P_[i] + rho * t + data_->bend_height(i, rho * t) * N_[i];
       for (const auto& [j, d2] : nb) {
         if (j == i || N_[j].dot(N_[i]) < 0.5) continue;
         const Eigen::Vector3d w = P_[j] - P_[i];
         if (w.dot(t) >= 0.5 * (w - w.dot(N_[i]) * N_[i]).norm()) towards |= std::uint8_t(1u << k);
-        // Another point's tangent disc holds the corner (within the band): the plane is the
-        // data there, not a tilted normal's plane across a crease.
+        // Another point's (bent) tangent disc holds the corner (within the band): the plane is
+        // the data there, not a tilted normal's plane across a crease. (Flat, the test failed
+        // on every corner of an exact sphere's points at 1e-6, whose discs sag 1,000E at that
+        // reach: each coverage disc shrank to its point and no hole was found between them.)
         const Eigen::Vector3d y = x - P_[j];
-        if (std::abs(y.dot(N_[j])) <= band && (y - y.dot(N_[j]) * N_[j]).norm() <= data_->disc_radius(j))
+        const Eigen::Vector3d yt = y - y.dot(N_[j]) * N_[j];
+        if (std::abs(y.dot(N_[j]) - data_->bend_height(j, yt)) <= band && yt.norm() <= data_->disc_radius(j))
           supported |= std::uint8_t(1u << k);
       }
     }
@@ -342,11 +346,26 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
 // The view of a spot near point i: along its normal, from outside its disc (its radius and 4E
 // out), or from halfway to the data's next crossing where one faces it nearer (a paw against a
 // body, a slit's far lip): the view starts outside.
+// The spot's own sheet is passed first: its crossings seen from behind (normals along n), which
+// lie farther than the bound above a spot where the data bends between the points more than its
+// discs follow (800 points of an exact sphere at 1e-6: ring spots one spacing out lay 60E below
+// their neighbours' discs, the view started 2E above those, its rays beside it inside the
+// sphere, and no hole counted while 99.9 % of bench fit's pixels were open).
 Ray SlimFitter::spot_ray(std::size_t i, const Eigen::Vector3d& x) const {
   const Eigen::Vector3d& n = N_[i];
-  const double own = 2.0 * opt_.surface_factor * E_;  // past the spot's own sheet
+  double own = 2.0 * opt_.surface_factor * E_;  // past the spot's own sheet
   double L = data_->disc_radius(i) + 4.0 * E_;
-  if (const auto h = data_->first_hit(Ray{x, n}, own, L)) L = 0.5 * (own + h->t);
+  for (int k = 0; k < 8; ++k) {
+    const auto h = data_->first_hit(Ray{x, n}, own, L);
+    if (!h) break;
+    if (h->normal.dot(n) > 0.5) {  // the own sheet, from behind
+      own = h->t + 2.0 * opt_.surface_factor * E_;
+      L = std::max(L, own + 4.0 * E_);
+      continue;
+    }
+    L = 0.5 * (own + h->t);
+    break;
+  }
   return Ray{x + L * n, -n};
 }
 

@@ -315,18 +315,27 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       }
       if (a->peers) {
         log::info("bench fit: {}: CGAL Poisson on {} points", d.name, n);
-        const peers::Poisson p = peers::reconstruct_poisson(d.cloud);
-        const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, p.mesh);
-        poisson = Row{d.name, "poisson", 0, p.mesh.face_count(), "triangles", e.max / d.diagonal,
-                      e.rms / d.diagonal, p.seconds, 0};
-        const DataSurface pm = DataSurface::from_mesh(p.mesh);
-        set_surface(*poisson, measure_surface(mesh_tracer(pm), data, data_box, 0, a->view_resolution), d.diagonal);
-        rows.push_back(*poisson);
-        jm["poisson"] = {{"triangles", p.mesh.face_count()}, {"vertices", p.mesh.vertices.size()},
-                         {"seconds", p.seconds},            {"spacing", p.spacing},
-                         {"max_rel", e.max / d.diagonal},   {"rms_rel", e.rms / d.diagonal},
-                         {"error_measure", "distance of every input point to the triangle mesh (CGAL AABB tree)"},
-                         {"surface", surface_json(*poisson)}};
+        // A reconstruction that fails is recorded as failed; the SLIM rows go on.
+        std::optional<peers::Poisson> p;
+        try {
+          p = peers::reconstruct_poisson(d.cloud);
+        } catch (const SolverError& e) {
+          log::warn("bench fit: {}: {}", d.name, e.what());
+          jm["poisson"] = {{"failed", e.what()}};
+        }
+        if (p) {
+          const peers::MeshDistance e = peers::point_mesh_distance(d.cloud.points, p->mesh);
+          poisson = Row{d.name, "poisson", 0, p->mesh.face_count(), "triangles", e.max / d.diagonal,
+                        e.rms / d.diagonal, p->seconds, 0};
+          const DataSurface pm = DataSurface::from_mesh(p->mesh);
+          set_surface(*poisson, measure_surface(mesh_tracer(pm), data, data_box, 0, a->view_resolution), d.diagonal);
+          rows.push_back(*poisson);
+          jm["poisson"] = {{"triangles", p->mesh.face_count()}, {"vertices", p->mesh.vertices.size()},
+                           {"seconds", p->seconds},            {"spacing", p->spacing},
+                           {"max_rel", e.max / d.diagonal},   {"rms_rel", e.rms / d.diagonal},
+                           {"error_measure", "distance of every input point to the triangle mesh (CGAL AABB tree)"},
+                           {"surface", surface_json(*poisson)}};
+        }
       }
       progress.update(double(++done) / double(total));
       for (double E : a->errors) {

@@ -52,6 +52,12 @@ void add_fit(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 0.9}));
   app->add_flag("--allow-exceed", a->allow_exceed,
                 "Exit 0 even when the fit finishes outside its bound (otherwise exit 7, the model still written)");
+  app->add_option("--max-hole-share", a->options.max_hole_share,
+                  "Share of the data a view may see through the model (holes the fit counts: faces seen through, "
+                  "spots outside every ball, points with a hole a view sees) before the fit counts as outside its "
+                  "bound (exit 7)")
+      ->check(number({.lo = 0, .hi = 1}))
+      ->capture_default_str();
   app->add_flag("--keep-outliers", a->keep_outliers,
                 "Point clouds: fit every point, the stray ones too (by default a point alone off the surface - "
                 "farther than 5 of the nearest surface points' spacings and off their planes, or over 2 spacings "
@@ -240,7 +246,9 @@ void add_fit(CLI::App& root, Commands& commands) {
                                                          {"max_rel", s.surface_max / s.diagonal},
                                                          {"p999_rel", s.surface_p999 / s.diagonal},
                                                          {"samples_beyond_bound", s.surface_failures}}},
-                                            {"within_bound", s.blend_failures == 0 && s.surface_failures == 0},
+                                            {"hole_share", s.hole_share},
+                                            {"max_hole_share", a->options.max_hole_share},
+                                            {"within_bound", s.blend_failures == 0 && s.surface_failures == 0 && !s.holes_exceeded},
                                             {"repair_rounds", s.repair_rounds},
                                             {"round_failures", s.round_failures},
                                             {"round_breaches", s.round_breaches},
@@ -317,12 +325,15 @@ void add_fit(CLI::App& root, Commands& commands) {
                             s.max_blend,
                             s.surface_max, s.surface_p999, s.max_error_abs,
                             holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
-                        if (s.blend_failures == 0 && s.surface_failures == 0) return kOk;
+                        if (s.blend_failures == 0 && s.surface_failures == 0 && !s.holes_exceeded) return kOk;
                         const auto what = fmt::format(
                             "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "
-                            "surface samples beyond {:g}E (max {:.3g}); the model was written to {}",
+                            "surface samples beyond {:g}E (max {:.3g}), {:.3g} of the data seen through (at most {:g}: "
+                            "{}); the model was written to {}",
                             a->points, s.blend_failures, s.points, s.max_error_abs, s.max_blend, s.surface_failures,
-                            s.surface_samples, a->options.surface_factor, s.surface_max, a->out);
+                            s.surface_samples, a->options.surface_factor, s.surface_max, s.hole_share,
+                            a->options.max_hole_share, holes.empty() ? "no holes" : fmt::format("{}", fmt::join(holes, ", ")),
+                            a->out);
                         if (a->allow_exceed) {
                           log::warn("{}", what);
                           return kOk;

@@ -328,11 +328,23 @@ TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
                      r * std::sin(phi), z);
   }
   f.close();
-  const CmdResult fine = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 -o " + q(dir / "fine.qxm"));
-  ASSERT_EQ(fine.code, 0) << fine.out;
+  // The holes left open break the fit's promise (no holes a view sees): exit 7, the model
+  // written, the share seen through in the message and the report (it exited 0).
+  const auto report = dir / "fine.json";
+  const CmdResult fine =
+      quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 -o " + q(dir / "fine.qxm") + " --report " + q(report));
+  ASSERT_EQ(fine.code, 7) << fine.out;
   EXPECT_NE(fine.out.find("is below what the sampling resolves"), std::string::npos) << fine.out;
   EXPECT_NE(fine.out.find("median spacing"), std::string::npos) << fine.out;
   EXPECT_NE(fine.out.find("holes left"), std::string::npos) << fine.out;
+  EXPECT_NE(fine.out.find("of the data seen through"), std::string::npos) << fine.out;
+  EXPECT_TRUE(std::filesystem::exists(dir / "fine.qxm"));
+  const auto j = read_json(report);
+  EXPECT_GT(j["fit"]["hole_share"].get<double>(), j["fit"]["max_hole_share"].get<double>());
+  EXPECT_FALSE(j["fit"]["within_bound"].get<bool>());
+  const CmdResult lenient = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 --max-hole-share 1 -o " +
+                                        q(dir / "fine.qxm"));
+  EXPECT_EQ(lenient.code, 0) << lenient.out;
   const CmdResult coarse = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-2 -o " + q(dir / "coarse.qxm"));
   ASSERT_EQ(coarse.code, 0) << coarse.out;
   EXPECT_EQ(coarse.out.find("below what the sampling resolves"), std::string::npos) << coarse.out;
@@ -364,6 +376,32 @@ TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
   EXPECT_TRUE(slim.at("normals_estimated").get<bool>()) << slim.dump();
   EXPECT_EQ(slim.at("normals_turned").get<int>(), 0);
   EXPECT_EQ(slim.at("points_beyond_bound").get<int>(), 0);
+}
+
+// CGAL's Poisson on a sparse cloud: its surface mesher may find no facet, and CGAL's convenience
+// function then converted the empty complex anyway (bench fit on 800 points of a sphere
+// segfaulted in 5 of 8 runs, before any row). Now the failure is recorded and the SLIM rows go
+// on. The mesher's choice varies from run to run: four runs.
+TEST(Cli, BenchFitRecordsAPoissonThatFindsNoSurface) {
+  ScratchDir dir("cli-bench-fit-poisson");
+  {
+    std::ofstream f(dir / "sparse.xyz");
+    const int n = 800;
+    for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, outward normals
+      const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
+      f << fmt::format("{} {} {} {} {} {}\n", r * std::cos(phi), r * std::sin(phi), z, r * std::cos(phi), r * std::sin(phi), z);
+    }
+  }
+  for (int run = 0; run < 4; ++run) {
+    const CmdResult r = quadrix_run("bench fit --errors 0.01 --view-resolution 32 --models " + q(dir / "sparse.xyz") +
+                                    " --out " + q(dir.path()) + " --quiet");
+    ASSERT_EQ(r.code, 0) << "run " << run << ": " << r.out;
+    std::ifstream in(dir / "bench_fit.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    const nlohmann::json& poisson = j.at("models").at("sparse").at("poisson");
+    EXPECT_TRUE(poisson.contains("failed") || poisson.at("triangles").get<std::size_t>() > 0) << poisson.dump();
+    EXPECT_FALSE(j.at("models").at("sparse").at("runs").empty());
+  }
 }
 
 // bench fit's peers rows: decimation counts its points beyond E (it wrote 0 whatever its maximum:
@@ -452,7 +490,10 @@ TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
   EXPECT_NE(r.out.find("--keep-outliers"), std::string::npos) << r.out;
   for (const auto i : j["fit"]["outliers"]["first"]) EXPECT_GE(i.get<std::size_t>(), 8000u);
   const auto patches = j["fit"]["patches"].get<std::size_t>();
-  r = quadrix_run("fit " + q(xyz) + " -o " + q(dir / "k.qxm") + " --keep-outliers --report " + q(report));
+  // Kept, each stray's tangent disc (as wide as the gap to its nearest neighbours) is data that
+  // its own small patch leaves partly open: 3 holes seen through, 3.7e-4 of the points, above
+  // the hole bound (exit 7). This run is about the strays' patches, not the holes.
+  r = quadrix_run("fit " + q(xyz) + " -o " + q(dir / "k.qxm") + " --keep-outliers --max-hole-share 0.01 --report " + q(report));
   ASSERT_EQ(r.code, 0) << r.out;
   const auto k = read_json(report);
   EXPECT_EQ(k["fit"]["outliers"]["left_out"].get<std::size_t>(), 0u);
