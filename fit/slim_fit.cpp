@@ -49,7 +49,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 void validate(const PointCloud& cloud, const SlimFitOptions& o) {
   const std::size_t n = cloud.points.size();
-  if (n < 10) throw InvalidInput(fmt::format("fit_slim: {} points; at least 10 are needed", n));
+  if (n < 10) throw InvalidInput(fmt::format("fit_slim: {} point{}; at least 10 are needed", n, n == 1 ? "" : "s"));
   if (cloud.has_normals() && cloud.normals.size() != n)
     throw InvalidInput(fmt::format("fit_slim: {} normals for {} points", cloud.normals.size(), n));
   for (std::size_t i = 0; i < n; ++i) {
@@ -81,9 +81,20 @@ void validate(const PointCloud& cloud, const SlimFitOptions& o) {
   mean /= double(n);
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
   for (const auto& p : cloud.points) C += (p - mean) * (p - mean).transpose();
-  const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(0);
-  double off = 0;
-  for (const auto& p : cloud.points) off = std::max(off, std::abs(axis.dot(p - mean)));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+  // Off their line first (the largest axis), then off their plane: points on a line are called
+  // collinear, not coplanar.
+  const Eigen::Vector3d along = eig.eigenvectors().col(2), axis = eig.eigenvectors().col(0);
+  double off_line = 0, off = 0;
+  for (const auto& p : cloud.points) {
+    const Eigen::Vector3d d = p - mean;
+    off_line = std::max(off_line, (d - along.dot(d) * along).norm());
+    off = std::max(off, std::abs(axis.dot(d)));
+  }
+  if (off_line <= 1e-9 * diag)
+    throw InvalidInput(fmt::format("fit_slim: the {} points are collinear (largest distance from their line {:.3g}, "
+                                   "diagonal {:.6g}); a SLIM surface needs a 3-D point set",
+                                   n, off_line, diag));
   if (off <= 1e-9 * diag)
     throw InvalidInput(fmt::format("fit_slim: the {} points are coplanar (largest distance from their plane {:.3g}, "
                                    "diagonal {:.6g}); a SLIM surface needs a 3-D point set",

@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <cstdlib>
 #include <cstdio>
 #include <condition_variable>
@@ -151,6 +153,19 @@ CLI::Validator number(NumberRange r) {
         return {};
       },
       description, "number");
+}
+
+CLI::Validator qxm_output() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::string ext = std::filesystem::path(text).extension().string();
+        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (ext == ".qxm") return {};
+        return fmt::format("'{}' does not end in .qxm: the output is a Quadrix model (a triangle mesh is `quadrix mesh "
+                           "MODEL -o FILE.ply`)",
+                           shown_value(text));
+      },
+      "FILE.qxm", "qxm_output");
 }
 
 std::pair<int, int> parse_size(const std::string& text) {

@@ -111,6 +111,11 @@ inline CLI::Validator finite() { return number(); }
 inline CLI::Validator positive() { return number({.lo = 0, .open_lo = true}); }
 inline CLI::Validator non_negative() { return number({.lo = 0}); }
 
+/// A CLI11 validator for an output model file: its name must end in .qxm (any case), so a typo
+/// such as `-o bunny.ply` (a mesh is `quadrix mesh`'s output) is refused with exit 2 instead of
+/// writing a .qxm under another name.
+CLI::Validator qxm_output();
+
 /// Parses "WxH" (e.g. 1024x768). \throws CLI::ValidationError.
 std::pair<int, int> parse_size(const std::string& text);
 

@@ -30,7 +30,7 @@ void add_convert(CLI::App& root, Commands& commands) {
   };
   auto a = std::make_shared<Args>();
   app->add_option("MESH", a->mesh, "Input polygon mesh")->required();
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm file")->required()->check(qxm_output());
   add_encoding_option(*app, a->write);
   app->add_option("--colour", a->colour, "Constant colour R,G,B (0..255) for every patch");
   app->add_option("--planar-threshold", a->options.planar_threshold,

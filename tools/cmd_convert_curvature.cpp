@@ -18,7 +18,7 @@ void add_convert_curvature(CLI::App& convert, Commands& commands) {
   };
   auto a = std::make_shared<Args>();
   app->add_option("MESH", a->mesh, "Input polygon mesh")->required();
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm file")->required()->check(qxm_output());
   app->add_option("--jet-degree", a->options.jet_degree, "Degree of the fitted jet")
       ->check(number({.lo = 2, .hi = 4}))
       ->capture_default_str();

@@ -27,7 +27,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                                      "Instead of a molecule: CSV rows cx,cy,cz,a1x,a1y,a1z,a2x,a2y,a2z,a3x,a3y,a3z[,r,g,b]");
   molecule->excludes(ellipsoids);
   ellipsoids->excludes(molecule);
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm file")->required()->check(qxm_output());
   add_encoding_option(*app, a->write);
   app->add_option("--style", a->style, "spacefill, balls-sticks (default) or licorice")
       ->check(CLI::IsMember({"spacefill", "balls-sticks", "licorice"}));

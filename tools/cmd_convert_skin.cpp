@@ -27,7 +27,7 @@ void add_convert_skin(CLI::App& convert, Commands& commands) {
   app->add_option("INPUT", a->input, "Balls: a molecule's atoms (PDB .pdb/.ent or mmCIF .cif/.mmcif, optionally .gz), "
                                     "weighted points (.cin: x y z r²) or .xyzr (x y z r)")
       ->required();
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm file")->required()->check(qxm_output());
   add_encoding_option(*app, a->write);
   app->add_option("--shrink", a->shrink, "Skin shrink factor s in (0, 1) (default 0.5)")
       ->check(number({.lo = 0, .hi = 1, .open_lo = true, .open_hi = true}));

@@ -145,7 +145,7 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                                   "as quadrix info suggests)")
       ->check(finite())
       ->default_str("");
-  app->add_option("-o,--out", a->out, "Output .qxm file")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm file")->required()->check(qxm_output());
   add_encoding_option(*app, a->write);
   app->add_option("--dims", a->dims, "Raw volume: samples per axis X,Y,Z (x fastest), each in [1, 2^30]");
   app->add_option("--type", a->type, "Raw volume: uint8|int8|uint16|int16|uint32|int32|float|double");

@@ -40,7 +40,7 @@ void add_fit(CLI::App& root, Commands& commands) {
   };
   auto a = std::make_shared<Args>();
   app->add_option("POINTS", a->points, "Point cloud (PLY, XYZ with 3 or 6 columns) or mesh (PLY, OFF, OBJ, STL: its faces give the normals)")->required();
-  app->add_option("-o,--out", a->out, "Output .qxm")->required();
+  app->add_option("-o,--out", a->out, "Output .qxm")->required()->check(qxm_output());
   add_encoding_option(*app, a->write);
   app->add_option("--max-error", a->max_error, "Error bound relative to the bounding-box diagonal of the points fitted (stray points left out)")
       ->check(number({.lo = 1e-7, .hi = 0.5}));
@@ -189,7 +189,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                             cloud = std::move(kept);
                           }
                         }
-                        {
+                        if (cloud.points.size() >= 10) {  // fewer: fit_slim refuses them, no warning first
                           // The fit holds far from the origin, but `render` cannot place what it makes.
                           Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
                           for (const auto& p : cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -274,10 +274,15 @@ void add_fit(CLI::App& root, Commands& commands) {
                                                          {"total", s.time_total}}}};
                         if (s.normals_estimated && !cloud.has_normals())
                           log::warn("{}: no normals in the file; estimated them (PCA + MST orientation)", a->points);
+                        std::string held_out;  // for the summary: the figure --holdout asks for
                         if (!held.points.empty()) {
-                          const SlimError e = evaluate_slim(r.model, held);
+                          const SlimError e = evaluate_slim(r.model, held, {.keep_per_point = true});
                           j["holdout"] = {{"points", e.points}, {"misses", e.misses}, {"max_abs", e.max},
-                                          {"rms_abs", e.rms}, {"max_rel", e.max / s.diagonal}};
+                                          {"rms_abs", e.rms}, {"max_rel", e.max / s.diagonal},
+                                          {"beyond_bound", e.count_above(s.max_error_abs)}};
+                          held_out = fmt::format("; {} held-out points max {:.3g}, {} beyond E{}", e.points, e.max,
+                                                 e.count_above(s.max_error_abs),
+                                                 e.misses ? fmt::format(", {} met no surface", e.misses) : "");
                         }
                         {
                           // Each patch's measured error (the points side, per patch) for render --colour-by error.
@@ -318,12 +323,12 @@ void add_fit(CLI::App& root, Commands& commands) {
                         if (s.crease_gaps > 0) holes.push_back(fmt::format("{} slit samples at creases", s.crease_gaps));
                         if (s.seen_point_holes > 0) holes.push_back(fmt::format("{} holes between the points seen through", s.seen_point_holes));
                         report.summary = fmt::format(
-                            "wrote {}: {} patches for {} points{}; points max {:.3g}, surface max {:.3g} p99.9 {:.3g} "
+                            "wrote {}: {} patches for {} points{}; points max {:.3g}, surface max {:.3g} p99.9 {:.3g}{} "
                             "(E = {:.3g}{})", a->out, s.patches, s.points,
                             outliers.empty() ? ""
                                               : fmt::format(" ({} outlier{} left out)", outliers.size(), outliers.size() == 1 ? "" : "s"),
                             s.max_blend,
-                            s.surface_max, s.surface_p999, s.max_error_abs,
+                            s.surface_max, s.surface_p999, held_out, s.max_error_abs,
                             holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
                         if (s.blend_failures == 0 && s.surface_failures == 0 && !s.holes_exceeded) return kOk;
                         const auto what = fmt::format(

@@ -457,6 +457,38 @@ TEST(Cli, BenchFitPeersCountWhatTheyHaveABoundFor) {
   EXPECT_TRUE(poisson);
 }
 
+// Small things a new user met: a fit's output named other than .qxm was written anyway (`-o x.txt`:
+// a model under a text name), a line of points was called "coplanar", a single point was warned
+// about its extent before being refused, and --holdout's figure was only in the JSON report.
+TEST(Cli, FitSaysWhatIsWrongAndWhatItMeasured) {
+  ScratchDir dir("cli-fit-small");
+  {
+    std::ofstream line(dir / "line.xyz"), one(dir / "one.xyz");
+    for (int i = 0; i < 50; ++i) line << 0.1 * i << ' ' << 0.2 * i << ' ' << 0.3 * i << '\n';
+    one << "0 0 0\n";
+  }
+  CmdResult r = quadrix_run("fit " + q(dir / "line.xyz") + " -o " + q(dir / "l.qxm"));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("collinear"), std::string::npos) << r.out;
+  r = quadrix_run("fit " + q(dir / "one.xyz") + " -o " + q(dir / "o.qxm"));
+  EXPECT_EQ(r.code, 3) << r.out;
+  EXPECT_NE(r.out.find("1 point;"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
+  const std::string kitten = std::string(QUADRIX_DATASETS) + "/points/kitten.xyz";
+  if (!std::filesystem::exists(kitten)) GTEST_SKIP() << "dataset missing: " << kitten;
+  r = quadrix_run("fit " + q(kitten) + " -o " + q(dir / "k.txt"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("does not end in .qxm"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "k.txt"));
+  EXPECT_EQ(quadrix_run("convert quads " + q(kitten) + " -o " + q(dir / "q.ply")).code, 2);
+  r = quadrix_run("fit " + q(kitten) + " -o " + q(dir / "k.QXM") + " --max-error 1e-2 --holdout 0.1 --report " + q(dir / "r.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = read_json(dir / "r.json");
+  EXPECT_NE(r.out.find(fmt::format("{} held-out points max", j["fit"]["holdout"]["points"].get<std::size_t>())),
+            std::string::npos) << r.out;
+  EXPECT_TRUE(j["fit"]["holdout"].contains("beyond_bound"));
+}
+
 // Stray points of a cloud are left out of the fit, and said so: each got a patch of its own, a
 // speck floating beside the surface. --keep-outliers fits them all.
 TEST(Cli, FitLeavesOutStrayPointsAndSaysSo) {
