@@ -271,7 +271,8 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   const VisibleFn visible = [&](const Camera& c) {
     return visible_points(model, mesh ? &*mesh : nullptr, c, {.cull = !a.no_cull, .slim = blend});
   };
-  const Camera camera = resolve_camera(a.view, box, w, h, a.view.typed("--size"), visible, turntable > 0);
+  std::pair<double, double> angles = view_angles(a.view);
+  const Camera camera = resolve_camera(a.view, box, w, h, a.view.typed("--size"), visible, turntable > 0, &angles);
   std::vector<Camera> cameras{camera};
   if (turntable > 0) {
     cameras = turntable_cameras(camera, turntable_axis(a.view, camera), turntable,
@@ -286,7 +287,7 @@ int run_render(const RenderArgs& a, const CommonOptions& common, Report& report)
   const bool transparent = a.background == "none";
   nlohmann::json& j = report.json["render"];
   j = {{"model", a.model}, {"primitives", model.size()}, {"width", width}, {"height", height}, {"camera", camera_json(cameras.front())},
-       {"framing", framing_json(a.view)},
+       {"framing", framing_json(a.view, angles)},
        {"background", a.background}, {"supersample", ss}, {"input", scene_input_name(scene.kind)}};
   if (scene.kind == SceneInputKind::molecule) j["molecule"] = molecule_json(model);
 

@@ -97,11 +97,13 @@ std::pair<double, double> view_angles(const ViewArgs& a) {
   return {a.azimuth, a.elevation};
 }
 
-nlohmann::json framing_json(const ViewArgs& a) {
+nlohmann::json framing_json(const ViewArgs& a) { return framing_json(a, view_angles(a)); }
+
+nlohmann::json framing_json(const ViewArgs& a, std::pair<double, double> used) {
   const bool file = !a.camera_file.empty();
   // A typed --up re-places the eye about the file's target at the (default or typed) angles.
   const bool angles = !file || a.typed("--up") || a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
-  const auto [azimuth, elevation] = view_angles(a);
+  const auto [azimuth, elevation] = used;
   const auto applied = [&](bool used, const nlohmann::json& value) { return used ? value : nlohmann::json(nullptr); };
   return {{"up", applied(!file || a.typed("--up"), a.up)},
           {"view", applied(angles && !a.view.empty(), a.view)},
@@ -180,16 +182,30 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
 bool wants_fill(const ViewArgs& a) { return a.fill > 0 && (a.camera_file.empty() || a.typed("--fill")); }
 
 Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height, bool size_typed,
-                      const VisibleFn& visible, bool skip_fill) {
-  const auto [azimuth, elevation] = view_angles(a);
+                      const VisibleFn& visible, bool skip_fill, std::pair<double, double>* used) {
+  auto [azimuth, elevation] = view_angles(a);
   const bool angles_typed = a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
   Camera camera;
   if (a.camera_file.empty()) {
     // About the chosen up axis, the distance fitted for a 40° lens.
     constexpr double kFitFov = 40.0;
-    camera = frame_view(box, {.up = parse_axis(a.up), .azimuth_deg = azimuth, .elevation_deg = elevation,
-                              .fov_y_deg = kFitFov, .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05,
-                              .width = width, .height = height});
+    const auto framed = [&](double az, double el) {
+      return frame_view(box, {.up = parse_axis(a.up), .azimuth_deg = az, .elevation_deg = el, .fov_y_deg = kFitFov,
+                              .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05, .width = width, .height = height});
+    };
+    camera = framed(azimuth, elevation);
+    if (!angles_typed && visible(camera).empty()) {
+      const std::pair<double, double> turns[] = {{azimuth + 180.0, elevation}, {azimuth, -elevation}, {azimuth + 180.0, -elevation}};
+      for (const auto& [az, el] : turns)
+        if (const Camera c = framed(az, el); !visible(c).empty()) {
+          log::warn("nothing of the scene is seen from the default view (azimuth {:g}, elevation {:g}: an open surface "
+                    "seen from behind, whose blend draws the side its normals face only); viewed from azimuth {:g}, "
+                    "elevation {:g} instead (--azimuth and --elevation choose)",
+                    azimuth, elevation, std::fmod(az, 360.0), el);
+          camera = c, azimuth = std::fmod(az, 360.0), elevation = el;
+          break;
+        }
+    }
   } else {
     camera = read_camera(a.camera_file);
     if (size_typed) camera.width = width, camera.height = height;
@@ -201,6 +217,7 @@ Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height,
   if (!skip_fill && wants_fill(a)) camera = fit_points(camera, visible(camera), a.fill);
   if (a.camera_file.empty() || a.typed("--fov")) camera.fov_y_deg = a.fov;
   camera.fov_y_deg = zoomed(camera.fov_y_deg, a.zoom);
+  if (used) *used = {azimuth, elevation};
   return camera;
 }
 

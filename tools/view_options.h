@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -41,6 +42,8 @@ std::pair<double, double> view_angles(const ViewArgs& args);
 /// or default); with --camera, the file and only the options typed beside it (the others null:
 /// the file's camera held them), as resolve_camera applies them.
 nlohmann::json framing_json(const ViewArgs& args);
+/// ... with the angles resolve_camera used (turned round where the default view saw nothing).
+nlohmann::json framing_json(const ViewArgs& args, std::pair<double, double> angles);
 
 /// Adds the shared view options to a command, with their defaults shown in --help.
 void add_view_options(CLI::App& app, ViewArgs& args);
@@ -66,8 +69,13 @@ using VisibleFn = std::function<std::vector<Eigen::Vector3d>(const Camera&)>;
 /// change the lens. skip_fill leaves tight framing to the caller (turntables).
 /// \throws IoError (unreadable camera file), FormatError (malformed camera file, naming the key),
 ///         InvalidInput (an empty scene).
+/// Without --camera and with no angle typed, a scene of which nothing is seen from the default
+/// angles (an open surface seen from behind: SLIM's blend draws the side its normals face only, so
+/// a fitted bowl seen into rendered empty, exit 0) is viewed from the first of azimuth + 180°,
+/// −elevation and both that shows some of it (info message); `angles` (when given) gets the
+/// azimuth and elevation used.
 Camera resolve_camera(const ViewArgs& args, const Box3& box, int width, int height, bool size_typed,
-                      const VisibleFn& visible, bool skip_fill = false);
+                      const VisibleFn& visible, bool skip_fill = false, std::pair<double, double>* angles = nullptr);
 
 /// True when the resolved camera gets tight framing (no camera file, or --fill typed) — what
 /// resolve_camera skips with skip_fill.

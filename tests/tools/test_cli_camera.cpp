@@ -349,3 +349,33 @@ TEST_F(CliCamera, TurntableFramesTurnAboutTheUpAxis) {
   }
   EXPECT_EQ(quadrix_run("render --backend cpu " + q(model) + " -o " + q(sheet) + " --contact-sheet").code, 2);
 }
+
+// An open surface fitted from points without normals, seen from behind by the default view: a
+// bowl opening towards +z, whose estimated normals face away from its centroid (down, out of the
+// bowl). SLIM's blend draws the side its normals face only, so the default view into the bowl
+// rendered an empty image with exit 0 (--no-cull too). Now the view turns round to a side that
+// shows it, says so, and the report records the angles used; typed angles are kept.
+TEST_F(CliCamera, AnOpenSurfaceSeenFromBehindTurnsTheDefaultView) {
+  {
+    std::ofstream f(dir_ / "bowl.xyz");
+    for (int i = 0; i < 60; ++i)
+      for (int j = 0; j < 60; ++j) {
+        const double x = -1 + 2 * (i + 0.5 * (j % 2)) / 60.0, y = -1 + 2 * j / 60.0;
+        f << x << ' ' << y << ' ' << 0.5 * (x * x + y * y) << '\n';
+      }
+  }
+  const auto model = dir_ / "bowl.qxm";
+  ASSERT_EQ(quadrix_run("fit " + q(dir_ / "bowl.xyz") + " -o " + q(model) + " --max-error 1e-2 --quiet").code, 0);
+  const CmdResult r = quadrix_run("render --backend cpu " + q(model) + " -o " + q(dir_ / "b.png") +
+                                  " --size 64 --background none --report " + q(dir_ / "b.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("nothing of the scene is seen from the default view"), std::string::npos) << r.out;
+  const Mask m = alpha_mask(read_png(dir_ / "b.png"));
+  EXPECT_GT(m.covered, 64 * 64 / 4);
+  const auto framing = read_json(dir_ / "b.json")["render"]["framing"];
+  EXPECT_FALSE(framing["azimuth_deg"].get<double>() == 30.0 && framing["elevation_deg"].get<double>() == 20.0)
+      << framing.dump();
+  const auto [typed, json] = render(model, "--azimuth 30 --elevation 20", "typed");
+  EXPECT_EQ(typed.covered, 0) << "typed angles are the user's: the bowl from behind";
+  EXPECT_EQ(json["framing"]["azimuth_deg"].get<double>(), 30.0);
+}
