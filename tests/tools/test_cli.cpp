@@ -350,20 +350,25 @@ TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
   EXPECT_EQ(coarse.out.find("below what the sampling resolves"), std::string::npos) << coarse.out;
 }
 
+namespace {
+// n points of a Fibonacci sphere of radius 1 as XYZ rows, with their outward normals or without.
+void write_fibonacci_sphere(const std::filesystem::path& path, int n, bool normals) {
+  std::ofstream f(path);
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
+    const double x = r * std::cos(phi), y = r * std::sin(phi);
+    f << (normals ? fmt::format("{} {} {} {} {} {}\n", x, y, z, x, y, z) : fmt::format("{} {} {}\n", x, y, z));
+  }
+}
+}  // namespace
+
 // bench fit on a cloud without normals fits its points alone, as `quadrix fit` does: the bench's
 // own estimate (for the peers and the points' discs) was handed to the fit as the file's normals,
 // checked as a file's, and CGAL's blobby.xyz warned twice of normals "against their neighbours'"
 // that no user gave.
 TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
   ScratchDir dir("cli-bench-fit-no-normals");
-  {
-    std::ofstream f(dir / "sphere.xyz");
-    const int n = 600;
-    for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, no normals
-      const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
-      f << fmt::format("{} {} {}\n", r * std::cos(phi), r * std::sin(phi), z);
-    }
-  }
+  write_fibonacci_sphere(dir / "sphere.xyz", 600, false);
   const CmdResult run = quadrix_run("bench fit --no-peers --errors 0.01 --view-resolution 64 --models " +
                                     q(dir / "sphere.xyz") + " --out " + q(dir.path()));
   ASSERT_EQ(run.code, 0) << run.out;
@@ -384,14 +389,7 @@ TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
 // on. The mesher's choice varies from run to run: four runs.
 TEST(Cli, BenchFitRecordsAPoissonThatFindsNoSurface) {
   ScratchDir dir("cli-bench-fit-poisson");
-  {
-    std::ofstream f(dir / "sparse.xyz");
-    const int n = 800;
-    for (int i = 0; i < n; ++i) {  // a Fibonacci sphere, outward normals
-      const double z = 1.0 - (2.0 * i + 1.0) / n, r = std::sqrt(1.0 - z * z), phi = i * 2.399963229728653;
-      f << fmt::format("{} {} {} {} {} {}\n", r * std::cos(phi), r * std::sin(phi), z, r * std::cos(phi), r * std::sin(phi), z);
-    }
-  }
+  write_fibonacci_sphere(dir / "sparse.xyz", 800, true);
   for (int run = 0; run < 4; ++run) {
     const CmdResult r = quadrix_run("bench fit --errors 0.01 --view-resolution 32 --models " + q(dir / "sparse.xyz") +
                                     " --out " + q(dir.path()) + " --quiet");
