@@ -38,7 +38,8 @@ constexpr double kStepRoughness = 6.0;
 Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> neighbourhood_pca(const PointIndex& index,
                                                                  std::span<const Eigen::Vector3d> points,
                                                                  const Eigen::Vector3d& p, std::size_t want,
-                                                                 std::size_t ask, std::vector<Neighbour>& nb) {
+                                                                 std::size_t ask, std::vector<Neighbour>& nb,
+                                                                 std::size_t* used = nullptr) {
   const std::size_t n = points.size();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   for (std::size_t scale = 1; scale <= 4; scale *= 2) {
@@ -54,6 +55,7 @@ Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> neighbourhood_pca(const PointInde
       C += d * d.transpose();
     }
     eig.compute(C);
+    if (used) *used = kk;
     if (eig.info() != Eigen::Success || spreads_over_a_plane(eig.eigenvalues()) || w == n) break;
   }
   return eig;
@@ -117,9 +119,10 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
     std::vector<Neighbour> nb;
     for (std::size_t o = range.begin(); o != range.end(); ++o) {
       const std::size_t i = order[o];
-      const auto eig = neighbourhood_pca(index, points, points[i], k, km + 1, nb);
+      std::size_t used = 1;
+      const auto eig = neighbourhood_pca(index, points, points[i], k, km + 1, nb, &used);
       out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
-      rough[i] = std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / double(std::min(nb.size(), k)));
+      rough[i] = std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / double(std::max<std::size_t>(1, used)));
       if (spreads_over_a_plane(eig.eigenvalues()) && nb.size() >= k) on_own_sheet(points, i, nb, k, out.normals[i], rough[i]);
       if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
       if (nb.size() > std::max(k, km + 1)) nb.resize(std::max(k, km + 1));  // the graph: the nearest km
@@ -217,8 +220,11 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   const auto outwardness = [&](const std::vector<std::uint32_t>& m, const Eigen::Vector3d& own) {
     const Facing f = facing(m, own);
     if (f.across > kFlat * f.spread && std::abs(f.along) > kDecisive * f.across) return f.along;
-    const Facing g = facing(m, all);
-    if (g.across > 1e-9 * g.spread && std::abs(g.along) > kDecisive * g.across) return g.along;
+    // The cloud's centroid is another only for a part of it (one part's is its own).
+    if (m.size() < n) {
+      const Facing g = facing(m, all);
+      if (g.across > 1e-9 * g.spread && std::abs(g.along) > kDecisive * g.across) return g.along;
+    }
     if (f.across > kFlat * f.spread) return f.along;
     double z = 0;
     for (auto v : m) z += out.normals[v].z();

@@ -131,8 +131,10 @@ SlimFitResult SlimFitter::run() {
   // points with one: the rounds count only coverage discs, and 800 points of an exact sphere at
   // 1e-6 ended with 99.9 % of bench fit's pixels open and exit 0): the hole share decides the
   // exit code.
-  const bool count_seen = !surface_ && opt_.cover_point_holes && opt_.see_point_holes && !see_point_holes_;
-  if (!surface_ && opt_.cover_point_holes && (!point_holes_fresh_ || count_seen) && !result_.model.slims.empty()) {
+  // Whether or not they were filled (`--no-fill-point-holes` left every hole open and counted
+  // none: hole share 0 and exit 0 for a 400-point sphere at 1e-4 whose fit showed 382 holes).
+  const bool count_seen = !surface_ && opt_.see_point_holes && !see_point_holes_;
+  if (!surface_ && ((opt_.cover_point_holes && !point_holes_fresh_) || count_seen) && !result_.model.slims.empty()) {
     std::vector<Eigen::Vector3d> centres;
     for (const auto& s : result_.model.slims) centres.push_back(s.centre);
     const PointIndex centre_index{std::span<const Eigen::Vector3d>(centres)};

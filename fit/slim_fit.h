@@ -230,7 +230,8 @@ struct SlimFitOptions {
   bool relax_clips = true;
   /// The share of the data a view may see through and the fit still keep its promise (its part
   /// (c), no holes): SlimFitStats::hole_share above it is a fit outside its bound (`fit` exits 7),
-  /// as points beyond E or surface beyond 2E are. 1e-4 is DESIGN's target for holes.
+  /// as points beyond E or surface beyond 2E are. 1e-4 is issue 11's target for holes (there a
+  /// share of bench fit's pixels; here of the points, or of the fan triangles, seen through).
   double max_hole_share = 1e-4;
   /// A face seen through for the first time gets a regular ball at its centroid (the radius
   /// search and surface side as for any candidate) instead of a face patch: one such ball mends

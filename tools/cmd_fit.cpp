@@ -331,13 +331,22 @@ void add_fit(CLI::App& root, Commands& commands) {
                             s.surface_max, s.surface_p999, held_out, s.max_error_abs,
                             holes.empty() ? "" : fmt::format("; holes left: {}", fmt::join(holes, ", ")));
                         if (s.blend_failures == 0 && s.surface_failures == 0 && !s.holes_exceeded) return kOk;
+                        // The holes the share counts (SlimFitStats::hole_share), not the coverage discs.
+                        std::vector<std::string> counted;
+                        if (mesh) {
+                          if (s.view_holes > 0) counted.push_back(fmt::format("{} faces seen through", s.view_holes));
+                          if (s.face_holes > 0) counted.push_back(fmt::format("{} face spots outside every ball", s.face_holes));
+                        } else {
+                          if (s.seen_point_holes > 0) counted.push_back(fmt::format("{} points with a hole seen through", s.seen_point_holes));
+                          if (s.crease_gaps > 0) counted.push_back(fmt::format("{} slit samples at creases", s.crease_gaps));
+                        }
                         const auto what = fmt::format(
                             "{}: finished outside the bound: {} of {} points beyond E = {:.3g} (max {:.3g}), {} of {} "
                             "surface samples beyond {:g}E (max {:.3g}), {:.3g} of the data seen through (at most {:g}: "
                             "{}); the model was written to {}",
                             a->points, s.blend_failures, s.points, s.max_error_abs, s.max_blend, s.surface_failures,
                             s.surface_samples, a->options.surface_factor, s.surface_max, s.hole_share,
-                            a->options.max_hole_share, holes.empty() ? "no holes" : fmt::format("{}", fmt::join(holes, ", ")),
+                            a->options.max_hole_share, counted.empty() ? "no holes" : fmt::format("{}", fmt::join(counted, ", ")),
                             a->out);
                         if (a->allow_exceed) {
                           log::warn("{}", what);

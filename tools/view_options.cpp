@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -145,9 +146,9 @@ void add_view_options(CLI::App& app, ViewArgs& a) {
       ->capture_default_str();
 }
 
-std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMesh* mesh, const Camera& camera,
-                                            const VisibleOptions& o) {
-  std::vector<Eigen::Vector3d> visible;
+VisiblePoints visible_points(const Model& model, const PolygonMesh* mesh, const Camera& camera, const VisibleOptions& o) {
+  VisiblePoints out;
+  std::vector<Eigen::Vector3d>& visible = out.points;
   if (!model.empty()) {
     const ReferenceScene scene(model);
     Camera probe = camera;
@@ -163,6 +164,7 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
     // bounding box framed, or a camera file's).
     constexpr std::ptrdiff_t kFewestPixels = 64;
     const std::ptrdiff_t covered = std::count_if(img.coverage.begin(), img.coverage.end(), [](auto v) { return v != 0; });
+    out.covered = std::size_t(covered);
     if (covered < kFewestPixels) log::debug("framing: the probe covers {} pixels: framing the bounds", covered);
     for (int y = 0; y < img.height && covered >= kFewestPixels; ++y)
       for (int x = 0; x < img.width; ++x)
@@ -173,10 +175,11 @@ std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMes
         }
   }
   if (mesh) {
+    out.mesh = true;
     const std::size_t step = std::max<std::size_t>(1, mesh->vertices.size() / 200000);
     for (std::size_t v = 0; v < mesh->vertices.size(); v += step) visible.push_back(mesh->vertices[v]);
   }
-  return visible;
+  return out;
 }
 
 bool wants_fill(const ViewArgs& a) { return a.fill > 0 && (a.camera_file.empty() || a.typed("--fill")); }
@@ -186,6 +189,7 @@ Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height,
   auto [azimuth, elevation] = view_angles(a);
   const bool angles_typed = a.typed("--view") || a.typed("--azimuth") || a.typed("--elevation");
   Camera camera;
+  std::optional<VisiblePoints> seen;  // what the camera as placed sees, where asked already
   if (a.camera_file.empty()) {
     // About the chosen up axis, the distance fitted for a 40° lens.
     constexpr double kFitFov = 40.0;
@@ -194,10 +198,10 @@ Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height,
                               .fit_fov_y_deg = kFitFov, .zoom = 1.0, .margin = 1.05, .width = width, .height = height});
     };
     camera = framed(azimuth, elevation);
-    if (!angles_typed && visible(camera).empty()) {
+    if (!angles_typed && (seen = visible(camera))->nothing_seen()) {
       const std::pair<double, double> turns[] = {{azimuth + 180.0, elevation}, {azimuth, -elevation}, {azimuth + 180.0, -elevation}};
       for (const auto& [az, el] : turns)
-        if (const Camera c = framed(az, el); !visible(c).empty()) {
+        if (const Camera c = framed(az, el); !(seen = visible(c))->nothing_seen()) {
           log::warn("nothing of the scene is seen from the default view (azimuth {:g}, elevation {:g}: an open surface "
                     "seen from behind, whose blend draws the side its normals face only); viewed from azimuth {:g}, "
                     "elevation {:g} instead (--azimuth and --elevation choose)",
@@ -205,6 +209,7 @@ Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height,
           camera = c, azimuth = std::fmod(az, 360.0), elevation = el;
           break;
         }
+      // None shows anything: the default stays, and what it sees (nothing) is what seen holds.
     }
   } else {
     camera = read_camera(a.camera_file);
@@ -214,7 +219,7 @@ Camera resolve_camera(const ViewArgs& a, const Box3& box, int width, int height,
       camera = place(camera, up, azimuth, elevation);
     }
   }
-  if (!skip_fill && wants_fill(a)) camera = fit_points(camera, visible(camera), a.fill);
+  if (!skip_fill && wants_fill(a)) camera = fit_points(camera, (seen ? *seen : visible(camera)).points, a.fill);
   if (a.camera_file.empty() || a.typed("--fov")) camera.fov_y_deg = a.fov;
   camera.fov_y_deg = zoomed(camera.fov_y_deg, a.zoom);
   if (used) *used = {azimuth, elevation};
@@ -241,7 +246,7 @@ std::vector<Camera> turntable_cameras(const Camera& base, const Eigen::Vector3d&
   // One distance for all frames: bisect the scale of the eye's offset until the widest frame
   // spans `fill` around the centre.
   std::vector<std::vector<Eigen::Vector3d>> points;
-  for (const Camera& c : frames) points.push_back(visible(c));
+  for (const Camera& c : frames) points.push_back(visible(c).points);
   const auto scaled = [&](const Camera& c, double s) {
     Camera d = c;
     d.eye = c.target + s * (c.eye - c.target);

@@ -55,11 +55,19 @@ struct VisibleOptions {
   SlimBlendOptions slim;     ///< SLIM blend (the model's: core/slim.h slim_blend_of)
   int probe_pixels = 160;    ///< longer side of the probe image
 };
-std::vector<Eigen::Vector3d> visible_points(const Model& model, const PolygonMesh* mesh, const Camera& camera,
-                                            const VisibleOptions& options = {});
+struct VisiblePoints {
+  /// The covered pixels' corners (none where the probe covers fewer than 64 pixels: too few to
+  /// tell where the geometry is, so the bounds are framed), then the mesh's vertices.
+  std::vector<Eigen::Vector3d> points;
+  std::size_t covered = 0;  ///< probe pixels the model covers (0: nothing of it seen)
+  bool mesh = false;        ///< a mesh was given (drawn whatever the view)
+  bool nothing_seen() const { return covered == 0 && !mesh; }
+};
+VisiblePoints visible_points(const Model& model, const PolygonMesh* mesh, const Camera& camera,
+                             const VisibleOptions& options = {});
 
 /// Function giving the visible points from a camera (visible_points bound to a scene).
-using VisibleFn = std::function<std::vector<Eigen::Vector3d>(const Camera&)>;
+using VisibleFn = std::function<VisiblePoints(const Camera&)>;
 
 /// The camera the options describe for a scene with bounds `box`, image width × height
 /// (size_typed: --size was given, so it overrides a camera file's). Without --camera: framed
@@ -72,8 +80,8 @@ using VisibleFn = std::function<std::vector<Eigen::Vector3d>(const Camera&)>;
 /// Without --camera and with no angle typed, a scene of which nothing is seen from the default
 /// angles (an open surface seen from behind: SLIM's blend draws the side its normals face only, so
 /// a fitted bowl seen into rendered empty, exit 0) is viewed from the first of azimuth + 180°,
-/// −elevation and both that shows some of it (info message); `angles` (when given) gets the
-/// azimuth and elevation used.
+/// −elevation and both that shows some of it (a warning); `angles` (when given) gets the
+/// azimuth and elevation used. A scene seen only small (a few probe pixels) is not turned.
 Camera resolve_camera(const ViewArgs& args, const Box3& box, int width, int height, bool size_typed,
                       const VisibleFn& visible, bool skip_fill = false, std::pair<double, double>* angles = nullptr);
 

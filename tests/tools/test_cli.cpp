@@ -345,6 +345,11 @@ TEST(Cli, FitWarnsWhenEIsBelowWhatTheSamplingResolves) {
   const CmdResult lenient = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 --max-hole-share 1 -o " +
                                         q(dir / "fine.qxm"));
   EXPECT_EQ(lenient.code, 0) << lenient.out;
+  // Holes left open on purpose are holes still (they went uncounted: hole share 0, exit 0).
+  const CmdResult unfilled = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-4 --no-fill-point-holes -o " +
+                                         q(dir / "fine.qxm"));
+  EXPECT_EQ(unfilled.code, 7) << unfilled.out;
+  EXPECT_NE(unfilled.out.find("points with a hole seen through"), std::string::npos) << unfilled.out;
   const CmdResult coarse = quadrix_run("fit " + q(dir / "sparse.xyz") + " --max-error 1e-2 -o " + q(dir / "coarse.qxm"));
   ASSERT_EQ(coarse.code, 0) << coarse.out;
   EXPECT_EQ(coarse.out.find("below what the sampling resolves"), std::string::npos) << coarse.out;
@@ -386,7 +391,9 @@ TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
 // CGAL's Poisson on a sparse cloud: its surface mesher may find no facet, and CGAL's convenience
 // function then converted the empty complex anyway (bench fit on 800 points of a sphere
 // segfaulted in 5 of 8 runs, before any row). Now the failure is recorded and the SLIM rows go
-// on. The mesher's choice varies from run to run: four runs.
+// on. The mesher's outcome varies from run to run, so the test cannot force the failure path:
+// four runs, each of which must end with exit 0 and a Poisson row or a recorded failure (before,
+// most ended in a segfault).
 TEST(Cli, BenchFitRecordsAPoissonThatFindsNoSurface) {
   ScratchDir dir("cli-bench-fit-poisson");
   write_fibonacci_sphere(dir / "sparse.xyz", 800, true);
