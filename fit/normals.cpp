@@ -31,6 +31,27 @@ constexpr double kOffSheetRoughness = 10.0;
 constexpr double kSameSheetSine = 0.25881904510252074;
 constexpr double kStepRoughness = 6.0;
 
+// The scatter matrix Σ (q − mean)(q − mean)ᵀ of the first `count` neighbours that `take` (by
+// their place in nb) keeps; `kept` gets how many it kept.
+template <class Take>
+Eigen::Matrix3d covariance(std::span<const Eigen::Vector3d> points, const std::vector<Neighbour>& nb, std::size_t count,
+                           const Take& take, std::size_t* kept = nullptr) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::size_t m = 0;
+  for (std::size_t j = 0; j < count; ++j)
+    if (take(j)) mean += points[nb[j].first], ++m;
+  if (kept) *kept = m;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  if (m == 0) return C;
+  mean /= double(m);
+  for (std::size_t j = 0; j < count; ++j)
+    if (take(j)) {
+      const Eigen::Vector3d d = points[nb[j].first] - mean;
+      C += d * d.transpose();
+    }
+  return C;
+}
+
 // The PCA of the `want` points nearest p (p itself among them when it is a point of the cloud),
 // widened to 2 and 4 times as many where they lie along a line (a scanner's lines farther apart
 // than their points: any plane through the line fits them). nb: the last neighbourhood asked, at
@@ -46,15 +67,7 @@ Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> neighbourhood_pca(const PointInde
     const std::size_t w = std::min(scale * want, n);
     index.nearest(p, std::max(w, ask), nb);
     const std::size_t kk = std::min(w, nb.size());
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t j = 0; j < kk; ++j) mean += points[nb[j].first];
-    mean /= double(kk);
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-    for (std::size_t j = 0; j < kk; ++j) {
-      const Eigen::Vector3d d = points[nb[j].first] - mean;
-      C += d * d.transpose();
-    }
-    eig.compute(C);
+    eig.compute(covariance(points, nb, kk, [](std::size_t) { return true; }));
     if (used) *used = kk;
     if (eig.info() != Eigen::Success || spreads_over_a_plane(eig.eigenvalues()) || w == n) break;
   }
@@ -71,15 +84,9 @@ Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> neighbourhood_pca(const PointInde
 void on_own_sheet(std::span<const Eigen::Vector3d> points, std::size_t i, const std::vector<Neighbour>& nb, std::size_t k,
                   Eigen::Vector3d& normal, double& rough) {
   const auto plane_of = [&](const auto& take) -> std::optional<std::pair<Eigen::Vector3d, double>> {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     std::size_t count = 0;
-    for (std::size_t j = 0; j < k; ++j)
-      if (take(j)) mean += points[nb[j].first], ++count;
+    const Eigen::Matrix3d C = covariance(points, nb, k, take, &count);
     if (count < 5) return std::nullopt;
-    mean /= double(count);
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-    for (std::size_t j = 0; j < k; ++j)
-      if (take(j)) C += (points[nb[j].first] - mean) * (points[nb[j].first] - mean).transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
     if (eig.info() != Eigen::Success || !spreads_over_a_plane(eig.eigenvalues())) return std::nullopt;
     return std::pair{Eigen::Vector3d(eig.eigenvectors().col(0).normalized()), std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / double(count))};

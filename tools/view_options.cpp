@@ -98,8 +98,6 @@ std::pair<double, double> view_angles(const ViewArgs& a) {
   return {a.azimuth, a.elevation};
 }
 
-nlohmann::json framing_json(const ViewArgs& a) { return framing_json(a, view_angles(a)); }
-
 nlohmann::json framing_json(const ViewArgs& a, std::pair<double, double> used) {
   const bool file = !a.camera_file.empty();
   // A typed --up re-places the eye about the file's target at the (default or typed) angles.

@@ -40,9 +40,8 @@ std::pair<double, double> view_angles(const ViewArgs& args);
 
 /// What framed the view, for a render report: without --camera, every view option's value (typed
 /// or default); with --camera, the file and only the options typed beside it (the others null:
-/// the file's camera held them), as resolve_camera applies them.
-nlohmann::json framing_json(const ViewArgs& args);
-/// ... with the angles resolve_camera used (turned round where the default view saw nothing).
+/// the file's camera held them), as resolve_camera applies them; `angles` are the azimuth and
+/// elevation it used (turned round where the default view saw nothing).
 nlohmann::json framing_json(const ViewArgs& args, std::pair<double, double> angles);
 
 /// Adds the shared view options to a command, with their defaults shown in --help.
