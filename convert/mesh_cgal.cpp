@@ -4,7 +4,10 @@
 //   wants a face graph; a soup made one (orient_polygon_soup) duplicates vertices at non-manifold
 //   spots, so triangles that only share such a vertex would read as touching: hence this soup
 //   test, with the same case analysis;
-// - the union of closed meshes by corefinement (Polygon_mesh_processing::corefine_and_compute_union).
+// - the union of closed meshes by corefinement (Polygon_mesh_processing::corefine_and_compute_union),
+//   or, with cylinders among them, by autorefining them as one soup
+//   (Polygon_mesh_processing::experimental::autorefine_and_remove_self_intersections) in a child
+//   process.
 #include "convert/mesh_union.h"
 #include "convert/self_intersections.h"
 #include "core/log.h"
@@ -12,14 +15,22 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <map>
 #include <numeric>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
@@ -118,11 +129,10 @@ namespace {
 // self-intersecting, and the next union of it ran on without end (4lfq balls-and-sticks).
 using KE = CGAL::Exact_predicates_exact_constructions_kernel;
 using Surface = CGAL::Surface_mesh<KE::Point_3>;
+using SurfaceD = CGAL::Surface_mesh<K::Point_3>;
 
-Surface to_surface(const PolygonMesh& m) {
-  Surface s;
-  s.reserve(static_cast<Surface::size_type>(m.vertices.size()), static_cast<Surface::size_type>(3 * m.face_count() / 2),
-            static_cast<Surface::size_type>(m.face_count()));
+// Adds m's triangles (faces fanned from their first vertex) to s, with vertices of their own.
+void add_to_surface(const PolygonMesh& m, Surface& s) {
   std::vector<Surface::Vertex_index> v;
   v.reserve(m.vertices.size());
   for (const auto& p : m.vertices) v.push_back(s.add_vertex(KE::Point_3(p.x(), p.y(), p.z())));
@@ -131,7 +141,26 @@ Surface to_surface(const PolygonMesh& m) {
     for (std::size_t k = 1; k + 1 < face.size(); ++k)
       s.add_face(v[std::size_t(face[0])], v[std::size_t(face[k])], v[std::size_t(face[k + 1])]);
   }
+}
+
+Surface to_surface(const PolygonMesh& m) {
+  Surface s;
+  s.reserve(static_cast<Surface::size_type>(m.vertices.size()), static_cast<Surface::size_type>(3 * m.face_count() / 2),
+            static_cast<Surface::size_type>(m.face_count()));
+  add_to_surface(m, s);
   return s;
+}
+
+bool write_all(int fd, const void* data, std::size_t n) {
+  const char* c = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, c, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    c += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return true;
 }
 
 void append(const Surface& s, PolygonMesh& out) {
@@ -206,6 +235,138 @@ MeshUnion union_of_closed_meshes(std::vector<PolygonMesh> parts, const std::func
   out.failed = failed;
   append(level[0].mesh, out.mesh);
   for (const auto& s : level[0].apart) append(s, out.mesh);
+  return out;
+}
+
+}  // namespace quadrix
+
+namespace quadrix {
+
+// The child writes: uint64 vertices, uint64 triangles, uint64 all fixed (1) or not (0), then the
+// vertices (3 doubles each) and the triangles (3 uint32 each). It exits 0 after a complete record,
+// 2 when CGAL threw (the message follows a zero header's place: uint64 length, then its bytes).
+MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
+  MeshUnion out;
+  out.parts = parts.size();
+  const auto as_they_were = [&](std::string why) -> MeshUnion {
+    out.why = std::move(why);
+    out.apart = true;
+    out.failed = parts.size() > 1 ? parts.size() - 1 : 0;
+    for (const auto& p : parts) {
+      const int base = static_cast<int>(out.mesh.vertices.size());
+      out.mesh.vertices.insert(out.mesh.vertices.end(), p.vertices.begin(), p.vertices.end());
+      for (std::size_t f = 0; f < p.face_count(); ++f) {
+        const auto face = p.face(f);
+        for (std::size_t k = 1; k + 1 < face.size(); ++k)
+          out.mesh.add_face(std::array<int, 3>{base + face[0], base + face[k], base + face[k + 1]});
+      }
+    }
+    return out;
+  };
+  if (parts.size() < 2) {
+    MeshUnion one = as_they_were("");
+    one.apart = false;
+    return one;
+  }
+  int fds[2];
+  if (::pipe(fds) != 0) return as_they_were(fmt::format("cannot create a pipe: {}", std::strerror(errno)));
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return as_they_were(fmt::format("cannot fork: {}", std::strerror(errno)));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    try {
+      Surface s;
+      for (const auto& p : parts) add_to_surface(p, s);
+      const bool fixed = CGAL::Polygon_mesh_processing::experimental::autorefine_and_remove_self_intersections(s);
+      // Rounded to doubles, a few of the pieces cut along intersection curves collapse to zero
+      // area (4ins balls-and-sticks: 16): their edges are collapsed and flipped away, on the
+      // rounded positions.
+      s.collect_garbage();
+      SurfaceD d;
+      for (const auto v : s.vertices()) {
+        const KE::Point_3& p = s.point(v);
+        d.add_vertex(K::Point_3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())));
+      }
+      for (const auto f : s.faces()) {
+        std::vector<SurfaceD::Vertex_index> corners;
+        for (const auto v : CGAL::vertices_around_face(s.halfedge(f), s)) corners.emplace_back(v.idx());
+        d.add_face(corners);
+      }
+      CGAL::Polygon_mesh_processing::remove_degenerate_faces(d);
+      d.collect_garbage();
+      std::vector<double> xyz;
+      xyz.reserve(3 * d.number_of_vertices());
+      std::vector<std::uint32_t> id(d.number_of_vertices());
+      for (const auto v : d.vertices()) {
+        id[v.idx()] = static_cast<std::uint32_t>(xyz.size() / 3);
+        const K::Point_3& p = d.point(v);
+        xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+      }
+      std::vector<std::uint32_t> tri;
+      tri.reserve(3 * d.number_of_faces());
+      for (const auto f : d.faces())
+        for (const auto v : CGAL::vertices_around_face(d.halfedge(f), d)) tri.push_back(id[v.idx()]);
+      if (tri.size() != 3 * d.number_of_faces()) ::_exit(3);  // not triangles
+      const std::uint64_t head[3] = {xyz.size() / 3, tri.size() / 3, fixed ? 1u : 0u};
+      if (!write_all(fds[1], head, sizeof head) || !write_all(fds[1], xyz.data(), xyz.size() * sizeof(double)) ||
+          !write_all(fds[1], tri.data(), tri.size() * sizeof(std::uint32_t)))
+        ::_exit(3);
+      ::_exit(0);
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      const std::uint64_t n = what.size();
+      if (write_all(fds[1], &n, sizeof n)) write_all(fds[1], what.data(), what.size());
+      ::_exit(2);
+    } catch (...) {
+      ::_exit(4);
+    }
+  }
+  ::close(fds[1]);
+  std::vector<char> buffer;
+  std::vector<char> chunk(1 << 16);
+  for (;;) {
+    const ssize_t n = ::read(fds[0], chunk.data(), chunk.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    buffer.insert(buffer.end(), chunk.data(), chunk.data() + n);
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(status)) return as_they_were(fmt::format("CGAL's autorefinement crashed (signal {})", WTERMSIG(status)));
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::string why = "CGAL's autorefinement failed";
+    std::uint64_t n = 0;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 2 && buffer.size() >= sizeof n) {
+      std::memcpy(&n, buffer.data(), sizeof n);
+      if (buffer.size() >= sizeof n + n) why += ": " + std::string(buffer.data() + sizeof n, n);
+    }
+    return as_they_were(why);
+  }
+  std::uint64_t head[3];
+  if (buffer.size() < sizeof head) return as_they_were("CGAL's autorefinement returned nothing");
+  std::memcpy(head, buffer.data(), sizeof head);
+  const std::size_t bytes = sizeof head + head[0] * 3 * sizeof(double) + head[1] * 3 * sizeof(std::uint32_t);
+  if (buffer.size() != bytes) return as_they_were("CGAL's autorefinement returned a truncated mesh");
+  out.mesh.vertices.resize(head[0]);
+  const char* at = buffer.data() + sizeof head;
+  for (auto& v : out.mesh.vertices) {
+    std::memcpy(v.data(), at, 3 * sizeof(double));
+    at += 3 * sizeof(double);
+  }
+  for (std::uint64_t f = 0; f < head[1]; ++f) {
+    std::uint32_t t[3];
+    std::memcpy(t, at, sizeof t);
+    at += sizeof t;
+    out.mesh.add_face(std::array<int, 3>{int(t[0]), int(t[1]), int(t[2])});
+  }
+  out.failed = head[2] ? 0 : 1;
+  if (!head[2]) out.why = "CGAL's autorefinement left some self-intersections";
   return out;
 }
 

@@ -359,29 +359,38 @@ int cylinder_segments(double r, double bound, int extra) {
   return std::min(n << extra, 1 << 16);
 }
 
+/// A closed tube of radius r from p to q, capped flat: rings of vertices at fractions t of the way
+/// (the first 0, the last 1), each in its colour; the caps' centres take their ring's colour.
+void mesh_tube(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double r, int n,
+               std::span<const std::pair<double, Rgb>> rings, Builder& out) {
+  const Eigen::Vector3d axis = (q - p).normalized();
+  const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  const int base = static_cast<int>(out.mesh.vertices.size());
+  for (const auto& [t, colour] : rings)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2.0 * std::numbers::pi * i / n;
+      out.add_vertex(p + t * (q - p) + r * (std::cos(a) * e1 + std::sin(a) * e2), colour);
+    }
+  const int bottom = out.add_vertex(p, rings.front().second), top = out.add_vertex(q, rings.back().second);
+  const int last = base + n * static_cast<int>(rings.size() - 1);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    for (int k = base; k < last; k += n) {
+      const int b0 = k + i, b1 = k + j, t0 = k + n + i, t1 = k + n + j;
+      out.add_triangle(b0, b1, t1);
+      out.add_triangle(b0, t1, t0);
+    }
+    out.add_triangle(bottom, base + j, base + i);
+    out.add_triangle(top, last + i, last + j);
+  }
+}
+
 void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   const Rgb colour = g.colour.value_or(Rgb{200, 200, 200});
   if (g.kind == GlyphKind::cylinder) {
     const Eigen::Vector3d half = g.axes.col(0);
-    const Eigen::Vector3d axis = half.normalized();
-    const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
-    const int n = cylinder_segments(g.radius, bound, extra);
-    const int base = static_cast<int>(out.mesh.vertices.size());
-    for (int end = 0; end < 2; ++end)
-      for (int i = 0; i < n; ++i) {
-        const double a = 2.0 * std::numbers::pi * i / n;
-        out.add_vertex(g.centre + (end ? half : Eigen::Vector3d(-half)) + g.radius * (std::cos(a) * e1 + std::sin(a) * e2),
-                       colour);
-      }
-    const int bottom = out.add_vertex(g.centre - half, colour), top = out.add_vertex(g.centre + half, colour);
-    for (int i = 0; i < n; ++i) {
-      const int j = (i + 1) % n;
-      const int b0 = base + i, b1 = base + j, t0 = base + n + i, t1 = base + n + j;
-      out.add_triangle(b0, b1, t1);
-      out.add_triangle(b0, t1, t0);
-      out.add_triangle(bottom, b1, b0);
-      out.add_triangle(top, t0, t1);
-    }
+    const std::pair<double, Rgb> rings[2] = {{0.0, colour}, {1.0, colour}};
+    mesh_tube(g.centre - half, g.centre + half, g.radius, cylinder_segments(g.radius, bound, extra), rings, out);
     return;
   }
   const Eigen::Matrix3d M = g.kind == GlyphKind::sphere ? Eigen::Matrix3d(g.radius * Eigen::Matrix3d::Identity()) : g.axes;
@@ -402,23 +411,102 @@ void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   for (const auto& [a, b, c] : tris) flips ? out.add_triangle(base + a, base + c, base + b) : out.add_triangle(base + a, base + b, base + c);
 }
 
-/// The glyphs (spheres, ellipsoids: unions_glyphs) as their union (convert/mesh_union.h), added to
-/// `out`: each glyph meshed closed on its own, the union's vertices coloured as the glyph vertex at
-/// their place, or, made on an intersection curve, the nearest glyph vertex. Returns how many
-/// unions CGAL refused.
+constexpr std::size_t kNoPartner = std::numeric_limits<std::size_t>::max();
+
+/// For each glyph, the other half of its bond, else kNoPartner: two cylinders of one radius whose
+/// far ends meet (within 1e-9 of their length) and whose axes run opposite ways, each paired once.
+std::vector<std::size_t> bond_halves(const std::vector<Glyph>& glyphs) {
+  std::vector<std::size_t> partner(glyphs.size(), kNoPartner);
+  std::vector<std::size_t> cyl;
+  for (std::size_t i = 0; i < glyphs.size(); ++i)
+    if (glyphs[i].kind == GlyphKind::cylinder && glyphs[i].axes.col(0).norm() > 0) cyl.push_back(i);
+  if (cyl.size() < 2) return partner;
+  std::vector<Eigen::Vector3d> tip;  // each cylinder's end at centre + half axis
+  for (const std::size_t i : cyl) tip.push_back(glyphs[i].centre + glyphs[i].axes.col(0));
+  const PointIndex index{std::span<const Eigen::Vector3d>(tip)};
+  std::vector<Neighbour> nb;
+  for (std::size_t k = 0; k < cyl.size(); ++k) {
+    const Glyph& a = glyphs[cyl[k]];
+    if (partner[cyl[k]] != kNoPartner) continue;
+    const double len = a.axes.col(0).norm();
+    index.radius(tip[k], 1e-9 * len, nb);
+    for (const auto& [j, d2] : nb) {
+      const std::size_t other = cyl[j];
+      if (other == cyl[k] || partner[other] != kNoPartner) continue;
+      const Glyph& b = glyphs[other];
+      const Eigen::Vector3d ua = a.axes.col(0) / len, ub = b.axes.col(0).normalized();
+      if (b.radius != a.radius || ua.dot(ub) > -1.0 + 1e-12) continue;
+      partner[cyl[k]] = other;
+      partner[other] = cyl[k];
+      break;
+    }
+  }
+  return partner;
+}
+
+/// The glyphs as their union (convert/mesh_union.h), added to `out`: each glyph meshed closed on
+/// its own, the union's vertices coloured as the glyph vertex at their place, or, made on an
+/// intersection curve, the nearest glyph vertex. Spheres and ellipsoids alone are joined pairwise
+/// (corefinement, about twice as fast); with cylinders (bonds) the glyphs are autorefined as one
+/// soup, where pairwise corefinement crashed. Returns how many unions CGAL refused.
 std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int extra, Builder& out) {
   std::vector<PolygonMesh> parts;
   std::vector<Eigen::Vector3d> at;
   std::vector<Rgb> colour;
   parts.reserve(glyphs.size());
   // A glyph given twice is meshed once: the union of two equal meshes is all coplanar faces.
-  // Keyed by what is meshed: a sphere's centre and radius, an ellipsoid's centre and axes.
-  std::set<std::array<double, 13>> seen;
+  // Keyed by what is meshed: its kind, centre, radius (spheres, cylinders) and axes (ellipsoids,
+  // a cylinder's half axis).
+  std::set<std::array<double, 14>> seen;
   std::size_t repeated = 0;
-  for (const Glyph& g : glyphs) {
+  bool cylinders = false;
+  const auto add_part = [&](Builder& one) {
+    for (std::size_t v = 0; v < one.mesh.vertices.size(); ++v) {
+      at.push_back(one.mesh.vertices[v]);
+      if (out.colours) colour.push_back(one.mesh.colours[v]);
+    }
+    one.mesh.colours.clear();
+    parts.push_back(std::move(one.mesh));
+  };
+  // A bond's two halves (convert glyphs: capped cylinders of one radius from each atom to the
+  // middle, each in its atom's colour) as one tube: their caps at the middle were two polygons a
+  // rounding apart, whose exact intersection left slivers that crossed once rounded to doubles
+  // (80 pairs on two bonds). The tube's rings just either side of the middle carry the two colours.
+  const std::vector<std::size_t> partner = bond_halves(glyphs);
+  for (std::size_t i = 0; i < glyphs.size(); ++i) {
+    if (partner[i] == kNoPartner) continue;
+    cylinders = true;
+    if (partner[i] < i) continue;
+    const Glyph &a = glyphs[i], &b = glyphs[partner[i]];
+    const Rgb ca = a.colour.value_or(Rgb{200, 200, 200}), cb = b.colour.value_or(Rgb{200, 200, 200});
+    // Each tube ends a little inside its atoms, at its own depth (up to 0.007 of its radius):
+    // every bond of an atom capped at the atom's centre met the others at that one point, and
+    // CGAL's autorefinement crashed there (4lfq and 4ins balls-and-sticks and licorice read from
+    // their PDB files). The caps stay inside the atoms (licorice's atoms, of the tubes' radius,
+    // leave a rim of 2.5e-5 radii).
+    Eigen::Vector3d p = a.centre - a.axes.col(0), q = b.centre - b.axes.col(0);
+    {
+      const Eigen::Vector3d u = (q - p).normalized();
+      const double shift = 1e-3 * a.radius * double(1 + i % 7);
+      p += shift * u;
+      q -= shift * u;
+    }
+    const double split = a.axes.col(0).norm() / (a.axes.col(0).norm() + b.axes.col(0).norm());
+    constexpr double kBand = 1e-3;  // of the tube's length: where the colour turns
+    const std::pair<double, Rgb> rings[4] = {{0.0, ca}, {split - kBand, ca}, {split + kBand, cb}, {1.0, cb}};
+    Builder one;
+    one.colours = out.colours;
+    mesh_tube(p, q, a.radius, cylinder_segments(a.radius, bound, extra), rings, one);
+    add_part(one);
+  }
+  for (std::size_t gi = 0; gi < glyphs.size(); ++gi) {
+    const Glyph& g = glyphs[gi];
+    if (partner[gi] != kNoPartner) continue;
     const bool sphere = g.kind == GlyphKind::sphere;
-    std::array<double, 13> key{double(sphere), g.centre.x(), g.centre.y(), g.centre.z()};
-    for (int k = 0; k < 9; ++k) key[std::size_t(4 + k)] = sphere ? (k == 0 ? g.radius : 0.0) : g.axes(k / 3, k % 3);
+    cylinders = cylinders || g.kind == GlyphKind::cylinder;
+    std::array<double, 14> key{double(static_cast<int>(g.kind)), g.centre.x(), g.centre.y(), g.centre.z(),
+                               g.kind == GlyphKind::ellipsoid ? 0.0 : g.radius};
+    for (int k = 0; k < 9; ++k) key[std::size_t(5 + k)] = sphere ? 0.0 : g.axes(k / 3, k % 3);
     if (!seen.insert(key).second) {
       ++repeated;
       continue;
@@ -426,16 +514,14 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
     Builder one;
     one.colours = out.colours;
     mesh_glyph(g, bound, extra, one);
-    for (std::size_t v = 0; v < one.mesh.vertices.size(); ++v) {
-      at.push_back(one.mesh.vertices[v]);
-      if (out.colours) colour.push_back(one.mesh.colours[v]);
-    }
-    one.mesh.colours.clear();
-    parts.push_back(std::move(one.mesh));
+    add_part(one);
   }
   if (repeated > 0) log::info("mesh: {} glyphs given more than once meshed once", repeated);
-  MeshUnion u = union_of_closed_meshes(std::move(parts));
-  if (u.failed > 0)
+  MeshUnion u = cylinders ? union_by_autorefinement(std::move(parts)) : union_of_closed_meshes(std::move(parts));
+  if (!u.why.empty())
+    log::warn("mesh: the union of {} glyphs failed ({}): {}", u.parts, u.why,
+              u.apart ? "they are meshed whole, overlapping ones crossing" : "its best attempt is kept");
+  else if (u.failed > 0)
     log::warn("mesh: {} of {} unions of overlapping glyphs refused by CGAL (not a closed manifold): those glyphs are "
               "meshed whole and cross", u.failed, u.parts - 1);
   const int base = static_cast<int>(out.mesh.vertices.size());
@@ -1574,10 +1660,7 @@ MeshDistance gap_error(std::span<const Eigen::Vector3d> drawn, const PolygonMesh
   return out;
 }
 
-bool unions_glyphs(const Model& model) {
-  return model.glyphs.size() > 1 && std::none_of(model.glyphs.begin(), model.glyphs.end(),
-                                                 [](const Glyph& g) { return g.kind == GlyphKind::cylinder; });
-}
+bool unions_glyphs(const Model& model) { return model.glyphs.size() > 1; }
 
 ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   if (model.empty()) throw InvalidInput("cannot mesh an empty model (no primitives)");

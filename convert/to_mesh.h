@@ -66,13 +66,13 @@ struct ToMeshOptions {
   /// as the renderer does: a SLIM blend's sheets stand off each other by up to its push, and flat
   /// faces following them show facets the blended normals do not. Else the mesh has none.
   bool normals = true;
-  /// Overlapping sphere and ellipsoid glyphs (a molecule's atoms in spacefill) meshed as their
-  /// union, one closed surface without the parts hidden inside others (CGAL corefinement,
-  /// convert/mesh_union.h), as the renderer draws them; else, and wherever there are cylinders
-  /// (bonds), each glyph is its own closed mesh and overlapping ones cross.
+  /// Overlapping glyphs (a molecule's atoms, and its bonds' tubes) meshed as their union, one
+  /// closed surface without the parts hidden inside others (CGAL, convert/mesh_union.h), as the
+  /// renderer draws them; else each glyph is its own closed mesh and overlapping ones cross.
   bool union_glyphs = true;
   /// ... up to this many glyphs (the union costs about 28 ms a sphere on these machines: 1tii's
-  /// 5,684 atoms 158 s against 34 s glyph by glyph); more are meshed glyph by glyph
+  /// 5,684 atoms 158 s against 34 s glyph by glyph; 4lfq's 1,754 balls and sticks 12 s against
+  /// 2 s); more are meshed glyph by glyph
   std::size_t union_max_glyphs = 10'000;
   std::size_t max_triangles = 8'000'000;  ///< no refinement past this many triangles
   double slim_offset = -1;        ///< SLIM blend band; < 0: the model's own (slim_offset_of)
@@ -113,10 +113,9 @@ struct ToMeshResult {
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }
 };
 
-/// Whether ToMeshOptions::union_glyphs applies to the model's glyphs: more than one, spheres and
-/// ellipsoids only. Molecules' bonds (capped cylinders) are meshed whole: their tubes' unions with
-/// the atoms came out self-intersecting with rounded constructions, and with exact ones CGAL 5.5's
-/// corefinement crashed on them (4lfq balls-and-sticks, round 8).
+/// Whether ToMeshOptions::union_glyphs applies to the model's glyphs: more than one. Spheres and
+/// ellipsoids alone are joined pairwise by corefinement; with cylinders (bonds) the glyphs are
+/// autorefined as one soup, in a child process (pairwise corefinement crashed on the tubes).
 bool unions_glyphs(const Model& model);
 
 /// Meshes every primitive of the model. \throws InvalidInput for an empty model.

@@ -186,10 +186,10 @@ void add_mesh(CLI::App& root, Commands& commands) {
                 "Write no vertex normals (by default each vertex gets the drawn surface's normal, so other programs "
                 "shade the mesh smoothly as the renderer does; .ply, .obj and .off carry them, .stl has none)");
   app->add_option("--union", a->union_mode,
-                  "Overlapping spheres and ellipsoids (a spacefill molecule's atoms) as one closed surface, their "
-                  "union (CGAL corefinement), without the parts hidden inside others, as the renderer draws them: "
-                  "auto (up to 10,000 glyphs: about 28 ms a sphere), on, off (each glyph its own closed mesh; "
-                  "overlapping ones cross). Models with cylinders (bonds) are meshed glyph by glyph")
+                  "Overlapping glyphs (a molecule's atoms and bonds) as one closed surface, their union (CGAL), "
+                  "without the parts hidden inside others, as the renderer draws them: auto (up to 10,000 glyphs: "
+                  "about 28 ms a sphere, 7 ms a glyph of balls and sticks), on, off (each glyph its own closed "
+                  "mesh; overlapping ones cross)")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
   app->add_flag("!--no-open-parts", a->options.open_parts,

@@ -87,6 +87,18 @@ TEST_F(CliMesh, AMoleculeIsMeshedAndAMeshOrACloudRefusedSayingWhatToDo) {
   EXPECT_GT(ja["self_intersecting_pairs"].get<std::size_t>(), 1000u);
   EXPECT_FALSE(ja["self_intersecting_examples"].empty());
   EXPECT_NE(r.out.find("pairs of triangles crossing"), std::string::npos) << r.out;
+  // Balls and sticks (the default style): atoms and bonds' tubes as one closed surface too (they
+  // were meshed glyph by glyph, 63,964 pairs crossing).
+  const auto sticks = dir_ / "bs.json";
+  r = quadrix_run("mesh " + q(pdb) + " -o " + q(dir_ / "bs.ply") + " --report " + q(sticks));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto jb = read_json(sticks)["mesh"];
+  EXPECT_TRUE(jb["glyph_union"].get<bool>());
+  EXPECT_EQ(jb["glyph_unions_failed"].get<std::size_t>(), 0u);
+  EXPECT_EQ(jb["self_intersecting_pairs"].get<std::size_t>(), 0u);
+  EXPECT_EQ(jb["degenerate_triangles"].get<std::size_t>(), 0u);
+  EXPECT_EQ(jb["open_edges"].get<std::size_t>(), 0u);
+  EXPECT_TRUE(jb["within_bound"].get<bool>());
   // A mesh: "a triangle mesh already" (it read "bad magic: not a PLY file"), exit 3, nothing written.
   r = quadrix_run("mesh " + q(dir_ / "m.ply") + " -o " + q(dir_ / "again.ply"));
   EXPECT_EQ(r.code, 3) << r.out;
