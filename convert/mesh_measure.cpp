@@ -38,6 +38,65 @@ std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m, NormalWeight w
   return n;
 }
 
+std::size_t split_pinched_vertices(PolygonMesh& m) {
+  // The corners at each vertex (slots into m.indices), grouped by vertex.
+  const std::size_t nv = m.vertices.size();
+  std::vector<std::size_t> start(nv + 1, 0);
+  for (const int v : m.indices) ++start[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::size_t> slot(m.indices.size()), next_free(start.begin(), start.end() - 1);
+  std::vector<int> prev_of(m.indices.size()), next_of(m.indices.size());
+  for (std::size_t f = 0; f < m.face_count(); ++f) {
+    const std::size_t lo = static_cast<std::size_t>(m.offsets[f]), hi = static_cast<std::size_t>(m.offsets[f + 1]);
+    for (std::size_t k = lo; k < hi; ++k) {
+      prev_of[k] = m.indices[k == lo ? hi - 1 : k - 1];
+      next_of[k] = m.indices[k + 1 == hi ? lo : k + 1];
+      slot[next_free[static_cast<std::size_t>(m.indices[k])]++] = k;
+    }
+  }
+  std::size_t added = 0;
+  std::vector<std::size_t> parent;
+  std::vector<std::pair<int, std::size_t>> seen;  // a neighbour vertex, the first corner that had it
+  std::vector<int> copy_of;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::size_t n = start[v + 1] - start[v];
+    if (n < 2) continue;
+    parent.resize(n);
+    for (std::size_t i = 0; i < n; ++i) parent[i] = i;
+    const auto find = [&](std::size_t i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    seen.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = slot[start[v] + i];
+      for (const int w : {prev_of[k], next_of[k]}) {
+        const auto it = std::find_if(seen.begin(), seen.end(), [&](const auto& s) { return s.first == w; });
+        if (it == seen.end())
+          seen.emplace_back(w, i);
+        else
+          parent[find(i)] = find(it->second);
+      }
+    }
+    // The first fan keeps v; each other fan gets a copy.
+    copy_of.assign(n, -1);
+    const std::size_t first = find(0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t root = find(i);
+      if (root == first) continue;
+      if (copy_of[root] < 0) {
+        copy_of[root] = static_cast<int>(m.vertices.size());
+        m.vertices.push_back(m.vertices[v]);
+        if (!m.colours.empty()) m.colours.push_back(m.colours[v]);
+        if (!m.normals.empty()) m.normals.push_back(m.normals[v]);
+        ++added;
+      }
+      m.indices[slot[start[v] + i]] = copy_of[root];
+    }
+  }
+  return added;
+}
+
 std::size_t SampleMemo::KeyHash::operator()(const Key& k) const {
   std::uint64_t h = 1469598103934665603ull;
   for (const double x : k) h = (h ^ std::bit_cast<std::uint64_t>(x)) * 1099511628211ull;

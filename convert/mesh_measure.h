@@ -26,6 +26,13 @@ enum class NormalWeight {
 /// non-zero area). Angle weights take each face's first three corners.
 std::vector<Eigen::Vector3d> vertex_normals(const PolygonMesh& m, NormalWeight weight = NormalWeight::area);
 
+/// Splits each pinched vertex (one whose faces form more than one fan: two sheets touching at a
+/// point, a "bowtie") into one vertex per fan, with the same position, colour and normal, so the
+/// mesh is a manifold wherever its edges are: programs that walk the mesh's topology (MeshLab's
+/// holes and genus, which it calls undefined otherwise) then can. Faces sharing an edge stay one
+/// fan (an edge of three or more faces is left as it is). Returns how many vertices were added.
+std::size_t split_pinched_vertices(PolygonMesh& m);
+
 /// Where samples lie beyond the bound: per face, its samples' largest distance (its vertices'
 /// included; +inf where one met no surface) and which of its edges' midpoints are beyond (bit i:
 /// the edge from its vertex i to vertex i + 1 mod 3); per vertex, whether it is beyond.

@@ -108,6 +108,7 @@ struct ToMeshResult {
   /// of each tetrahedron's own lattice (a skin's slivers; refinements then counts its halvings)
   bool on_grid = false;
   std::size_t normals_from_faces = 0;  ///< vertices whose normal line met no drawn surface nearby: their faces' normal
+  std::size_t pinched_vertices_split = 0;  ///< vertices where sheets touched, split into one per fan (convert/mesh_measure.h)
   bool glyph_union = false;              ///< the glyphs were meshed as their union (ToMeshOptions::union_glyphs)
   std::size_t glyph_unions_failed = 0;  ///< ToMeshOptions::union_glyphs: unions CGAL refused (those glyphs left whole, crossing)
   double max_error() const { return std::max(mesh_to_surface.max, surface_to_mesh.max); }

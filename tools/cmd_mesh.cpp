@@ -103,6 +103,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"self_intersecting_pairs", crossing.pairs},
                          {"self_intersecting_examples", crossing_examples},
                          {"degenerate_triangles", crossing.degenerate},
+                         {"pinched_vertices_split", r.pinched_vertices_split},
                          {"glyph_union", r.glyph_union},
                          {"glyph_unions_failed", r.glyph_unions_failed},
                          {"refinements", r.refinements},

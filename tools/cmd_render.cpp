@@ -480,7 +480,8 @@ void add_render(CLI::App& root, Commands& commands) {
   auto* app = root.add_subcommand("render", "Ray-cast a model into a PNG (and depth/normal PFM)");
   auto a = std::make_shared<RenderArgs>();
   app->add_option("MODEL", a->model, "Model file (.qxm or .slim2t), a molecule (.pdb/.ent/.cif/.mmcif, optionally .gz) "
-                                    "drawn as glyphs, or a mesh (.ply/.obj/.off/.stl) drawn as flat triangles; optional "
+                                    "drawn as glyphs, or a mesh (.ply/.obj/.off/.stl) drawn as triangles (its vertex normals and colours "
+                                    "where it has them); optional "
                                     "with --implicit/--surface");
   app->add_option("-o,--out", a->out, "Output PNG (required, except for --surface list)");
   app->add_option("--backend", a->backend, "auto (gl), gl, or cpu (the reference)")

@@ -14,15 +14,17 @@ MeshPass::MeshPass() : program_("mesh", shader_source("mesh.vert"), shader_sourc
 
 namespace {
 
-// One vertex as the vertex stage reads it: its offset from the mesh's fixed-point origin, and
-// its normal: the mesh's own per-vertex normal where it has them (`quadrix mesh` writes the drawn
-// surface's), turned to its face's side, else its face's.
+// One vertex as the vertex stage reads it: its offset from the mesh's fixed-point origin, its
+// normal: the mesh's own per-vertex normal where it has them (`quadrix mesh` writes the drawn
+// surface's), turned to its face's side, else its face's; and its colour: the mesh's own per-
+// vertex colour where it has them (a molecule's atoms, a coloured scan's fit), else the pass's.
 struct GpuVertex {
   std::int32_t q[3];
   float rest[3];
   float normal[3];
+  std::uint8_t colour[4];
 };
-static_assert(sizeof(GpuVertex) == 36);
+static_assert(sizeof(GpuVertex) == 40);
 
 }  // namespace
 
@@ -30,8 +32,8 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
   Box3 box;
   for (const auto& v : mesh.vertices) box.extend(v);
   origin_ = box.empty() ? FixedOrigin{} : FixedOrigin::of(box);
-  colour_ = colour;
   const bool smooth = mesh.normals.size() == mesh.vertices.size();
+  const bool coloured = mesh.colours.size() == mesh.vertices.size();
   std::vector<GpuVertex> data;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const auto face = mesh.face(f);
@@ -46,8 +48,9 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
         if (smooth && mesh.normals[v].allFinite() && mesh.normals[v].norm() > 0)
           m = mesh.normals[v].dot(n) < 0 ? Eigen::Vector3d(-mesh.normals[v].normalized()) : mesh.normals[v].normalized();
         const FixedOrigin::Offset o = origin_.offset(mesh.vertices[v] - origin_.origin);
+        const Rgb& c = coloured ? mesh.colours[v] : colour;
         data.push_back({{o.q.x(), o.q.y(), o.q.z()}, {o.rest.x(), o.rest.y(), o.rest.z()},
-                        {float(m.x()), float(m.y()), float(m.z())}});
+                        {float(m.x()), float(m.y()), float(m.z())}, {c[0], c[1], c[2], 255}});
       }
     }
   }
@@ -55,10 +58,12 @@ void MeshPass::upload(const PolygonMesh& mesh, Rgb colour) {
   vbo_ = gl::make_buffer(static_cast<GLsizeiptr>(data.size() * sizeof(GpuVertex)), data.data());
   vao_ = gl::make_vertex_array();
   glVertexArrayVertexBuffer(vao_.id(), 0, vbo_.id(), 0, sizeof(GpuVertex));
-  for (GLuint a = 0; a < 3; ++a) {
+  for (GLuint a = 0; a < 4; ++a) {
     glEnableVertexArrayAttrib(vao_.id(), a);
     if (a == 0)
       glVertexArrayAttribIFormat(vao_.id(), a, 3, GL_INT, offsetof(GpuVertex, q));
+    else if (a == 3)
+      glVertexArrayAttribFormat(vao_.id(), a, 4, GL_UNSIGNED_BYTE, GL_TRUE, offsetof(GpuVertex, colour));
     else
       glVertexArrayAttribFormat(vao_.id(), a, 3, GL_FLOAT, GL_FALSE, a == 1 ? offsetof(GpuVertex, rest) : offsetof(GpuVertex, normal));
     glVertexArrayAttribBinding(vao_.id(), a, 0);
@@ -70,7 +75,6 @@ void MeshPass::run(const Frame& f) {
   begin_gbuffer_draw(f);
   set_camera_uniforms(program_, f.camera);
   set_origin_uniforms(program_, origin_, f.camera);
-  program_.set("u_colour", Eigen::Vector3f(colour_[0] / 255.f, colour_[1] / 255.f, colour_[2] / 255.f));
   program_.set("u_id_base", primitive_id(PrimitiveKind::mesh, 0));  // + the triangle's gl_PrimitiveID
   program_.use();
   glBindVertexArray(vao_.id());

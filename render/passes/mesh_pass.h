@@ -9,6 +9,7 @@ namespace quadrix::render {
 class MeshPass final : public Pass {
 public:
   MeshPass();  ///< compiles the program. \throws GlError.
+  /// The mesh's triangles, each vertex in its own colour where the mesh has colours, else `colour`.
   void upload(const PolygonMesh& mesh, Rgb colour);
   bool needed(const RenderOptions&) const override { return has_mesh_; }
   void run(const Frame& frame) override;
@@ -19,7 +20,6 @@ private:
   gl::Buffer vbo_;
   GLsizei vertices_ = 0;
   FixedOrigin origin_;  // vertices are whole quanta plus a float rest from it
-  Rgb colour_{180, 180, 190};
   bool has_mesh_ = false;
 };
 

@@ -2,6 +2,9 @@
 // figure a trace would give, so a mesh changed in one part is traced only there.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <vector>
+
 #include "convert/mesh_measure.h"
 #include "convert/to_mesh.h"
 #include "core/reference.h"
@@ -52,4 +55,34 @@ TEST(MeshMeasure, MemoGivesTheWholeMeasureWhereOnlyOnePartChanged) {
   // Another reach: nothing measured before holds.
   const MeshDistance c = mesh_to_surface(scene, trace, changed, 2 * reach, bound, nullptr, &memo);
   EXPECT_EQ(memo.traced(), first.samples + traced_again + c.samples);
+}
+
+// Two fans at one vertex (a bowtie: two triangles touching at a corner, and a closed fan of four
+// beside them) split into one vertex per fan, with the same position, colour and normal; faces
+// sharing an edge stay on one vertex.
+TEST(MeshMeasure, PinchedVerticesSplitIntoOneVertexPerFan) {
+  PolygonMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}, {0, 1, 0}};
+  m.colours = {{1, 2, 3}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  m.normals.assign(6, Eigen::Vector3d::UnitZ());
+  m.add_face(std::array<int, 3>{0, 1, 2});
+  m.add_face(std::array<int, 3>{0, 2, 5});  // shares edge 0–2 with the first: the same fan
+  m.add_face(std::array<int, 3>{0, 3, 4});  // touches the others at vertex 0 only
+  PolygonMesh split = m;
+  EXPECT_EQ(split_pinched_vertices(split), 1u);
+  ASSERT_EQ(split.vertices.size(), 7u);
+  EXPECT_EQ(split.vertices[6], m.vertices[0]);
+  EXPECT_EQ(split.colours[6], m.colours[0]);
+  EXPECT_EQ(split.normals[6], m.normals[0]);
+  EXPECT_EQ(split.face(0)[0], split.face(1)[0]);
+  EXPECT_NE(split.face(0)[0], split.face(2)[0]);
+  EXPECT_EQ(split_pinched_vertices(split), 0u) << "nothing pinched is left";
+  // A closed octahedron has nothing to split.
+  PolygonMesh o;
+  o.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (const auto& f : std::vector<std::array<int, 3>>{{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                                        {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}})
+    o.add_face(f);
+  EXPECT_EQ(split_pinched_vertices(o), 0u);
+  EXPECT_EQ(o.vertices.size(), 6u);
 }

@@ -319,6 +319,39 @@ TEST_F(GlGlyphs, AMeshWithVertexNormalsShadesAsTheSurfaceItWasMeshedFrom) {
   EXPECT_LT(q(smooth, 0.5), 0.25 * q(flat, 0.5));
 }
 
+TEST_F(GlGlyphs, AMeshWithVertexColoursDrawsThemAsTheModelItWasMeshedFrom) {
+  // `quadrix mesh` carries a molecule's colours onto its vertices; the mesh pass draws them (it
+  // drew every mesh in one grey). Two overlapping spheres in two colours meshed as their union,
+  // drawn as a mesh, against the CPU reference's albedo of the spheres themselves: the same
+  // colour at every pixel both cover, but for a band along the intersection curve, where the
+  // colour turns between two vertices.
+  Model m;
+  m.glyphs.push_back({GlyphKind::sphere, {0, 0, 0}, 1.0, Eigen::Matrix3d::Identity(), Rgb{220, 30, 30}});
+  m.glyphs.push_back({GlyphKind::sphere, {1.2, 0, 0}, 0.9, Eigen::Matrix3d::Identity(), Rgb{30, 30, 220}});
+  const ToMeshResult r = mesh_model(m, {.max_error = 1e-3 * bounds(m).diagonal(), .progress = {}});
+  ASSERT_EQ(r.mesh.colours.size(), r.mesh.vertices.size());
+  const Camera cam = frame_box(bounds(m), {.azimuth_deg = 30, .elevation_deg = 20, .width = 200, .height = 200});
+  const ReferenceImage truth = reference(m, cam);
+  renderer_->set_model(Model{});
+  renderer_->set_mesh(r.mesh);
+  renderer_->draw(cam, {});
+  const render::GBuffer g = renderer_->read_gbuffer();
+  const Image8 image = renderer_->read_colour();
+  ASSERT_EQ(image.rgba.size(), 4 * g.coverage.size());
+  // Shaded, so judged by which of red and blue dominates, as in the sphere the reference sees.
+  int both = 0, same = 0;
+  for (std::size_t i = 0; i < g.coverage.size(); ++i) {
+    if (!g.coverage[i] || !truth.coverage[i]) continue;
+    ++both;
+    const int red = image.rgba[4 * i], blue = image.rgba[4 * i + 2];
+    const bool want_red = truth.albedo[i][0] > truth.albedo[i][2];
+    same += want_red ? red > blue + 20 : blue > red + 20;
+  }
+  std::printf("mesh colours: %d of %d pixels as the spheres' own\n", same, both);
+  ASSERT_GT(both, 8000);
+  EXPECT_GT(same, 0.97 * both);  // measured: 8,893 of 8,938
+}
+
 TEST_F(GlGlyphs, StressHundredThousandGlyphsTinyAndHugeAcrossTheNearPlane) {
   // 10⁵ glyphs of every kind with radii from 10⁻³ to 10 (log-uniform), the eye inside the cloud
   // so glyphs straddle the near plane, wrap the eye and lie behind it.
