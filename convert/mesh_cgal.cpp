@@ -10,20 +10,17 @@
 //   process.
 #include "convert/mesh_union.h"
 #include "convert/self_intersections.h"
+#include "core/child_process.h"
 #include "core/log.h"
 #include "core/morton.h"
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <exception>
 #include <map>
 #include <numeric>
-
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -151,18 +148,6 @@ Surface to_surface(const PolygonMesh& m) {
   return s;
 }
 
-bool write_all(int fd, const void* data, std::size_t n) {
-  const char* c = static_cast<const char*>(data);
-  while (n > 0) {
-    const ssize_t w = ::write(fd, c, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    c += w;
-    n -= static_cast<std::size_t>(w);
-  }
-  return true;
-}
-
 void append(const Surface& s, PolygonMesh& out) {
   std::map<Surface::Vertex_index, int> id;
   for (const auto v : s.vertices()) {
@@ -268,16 +253,10 @@ MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
     one.apart = false;
     return one;
   }
-  int fds[2];
-  if (::pipe(fds) != 0) return as_they_were(fmt::format("cannot create a pipe: {}", std::strerror(errno)));
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return as_they_were(fmt::format("cannot fork: {}", std::strerror(errno)));
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
+  // A deadline against a child that runs on without end (a union of rounded constructions did):
+  // 4lfq's 1,187 parts take about 10 s.
+  const double deadline = 300.0 + 0.5 * double(parts.size());
+  const ChildRun child = run_in_child([&](int fd) {
     try {
       Surface s;
       for (const auto& p : parts) add_to_surface(p, s);
@@ -294,8 +273,9 @@ MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
       for (const auto f : s.faces()) {
         std::vector<SurfaceD::Vertex_index> corners;
         for (const auto v : CGAL::vertices_around_face(s.halfedge(f), s)) corners.emplace_back(v.idx());
-        d.add_face(corners);
+        if (d.add_face(corners) == SurfaceD::null_face()) return 5;  // a face the copy cannot link: the parts stay
       }
+      // (false where some stay: they are counted in the mesh's report as degenerate triangles)
       CGAL::Polygon_mesh_processing::remove_degenerate_faces(d);
       d.collect_garbage();
       std::vector<double> xyz;
@@ -310,41 +290,27 @@ MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
       tri.reserve(3 * d.number_of_faces());
       for (const auto f : d.faces())
         for (const auto v : CGAL::vertices_around_face(d.halfedge(f), d)) tri.push_back(id[v.idx()]);
-      if (tri.size() != 3 * d.number_of_faces()) ::_exit(3);  // not triangles
+      if (tri.size() != 3 * d.number_of_faces()) return 3;  // not triangles
       const std::uint64_t head[3] = {xyz.size() / 3, tri.size() / 3, fixed ? 1u : 0u};
-      if (!write_all(fds[1], head, sizeof head) || !write_all(fds[1], xyz.data(), xyz.size() * sizeof(double)) ||
-          !write_all(fds[1], tri.data(), tri.size() * sizeof(std::uint32_t)))
-        ::_exit(3);
-      ::_exit(0);
+      if (!write_all(fd, head, sizeof head) || !write_all(fd, xyz.data(), xyz.size() * sizeof(double)) ||
+          !write_all(fd, tri.data(), tri.size() * sizeof(std::uint32_t)))
+        return 3;
+      return 0;
     } catch (const std::exception& e) {
       const std::string what = e.what();
       const std::uint64_t n = what.size();
-      if (write_all(fds[1], &n, sizeof n)) write_all(fds[1], what.data(), what.size());
-      ::_exit(2);
-    } catch (...) {
-      ::_exit(4);
+      if (write_all(fd, &n, sizeof n)) write_all(fd, what.data(), what.size());
+      return 2;
     }
-  }
-  ::close(fds[1]);
-  std::vector<char> buffer;
-  std::vector<char> chunk(1 << 16);
-  for (;;) {
-    const ssize_t n = ::read(fds[0], chunk.data(), chunk.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    buffer.insert(buffer.end(), chunk.data(), chunk.data() + n);
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (WIFSIGNALED(status)) return as_they_were(fmt::format("CGAL's autorefinement crashed (signal {})", WTERMSIG(status)));
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::string why = "CGAL's autorefinement failed";
+  }, deadline);
+  const std::string& buffer = child.output;
+  if (!child.ran()) return as_they_were(child.how());
+  if (!child.succeeded()) {
+    std::string why = "CGAL's autorefinement " + child.how();
     std::uint64_t n = 0;
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 2 && buffer.size() >= sizeof n) {
+    if (child.exit_code() == 2 && buffer.size() >= sizeof n) {
       std::memcpy(&n, buffer.data(), sizeof n);
-      if (buffer.size() >= sizeof n + n) why += ": " + std::string(buffer.data() + sizeof n, n);
+      if (buffer.size() >= sizeof n + n) why += ": " + buffer.substr(sizeof n, n);
     }
     return as_they_were(why);
   }
@@ -363,6 +329,10 @@ MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
     std::uint32_t t[3];
     std::memcpy(t, at, sizeof t);
     at += sizeof t;
+    if (t[0] >= head[0] || t[1] >= head[0] || t[2] >= head[0]) {
+      out.mesh = PolygonMesh{};
+      return as_they_were("CGAL's autorefinement returned a triangle with a vertex it did not send");
+    }
     out.mesh.add_face(std::array<int, 3>{int(t[0]), int(t[1]), int(t[2])});
   }
   out.failed = head[2] ? 0 : 1;

@@ -56,7 +56,7 @@ std::size_t split_pinched_vertices(PolygonMesh& m) {
   }
   std::size_t added = 0;
   std::vector<std::size_t> parent;
-  std::vector<std::pair<int, std::size_t>> seen;  // a neighbour vertex, the first corner that had it
+  std::vector<std::pair<int, std::size_t>> seen;  // (a neighbour vertex, a corner that has it)
   std::vector<int> copy_of;
   for (std::size_t v = 0; v < nv; ++v) {
     const std::size_t n = start[v + 1] - start[v];
@@ -67,17 +67,16 @@ std::size_t split_pinched_vertices(PolygonMesh& m) {
       while (parent[i] != i) i = parent[i] = parent[parent[i]];
       return i;
     };
+    // Corners that share a neighbour vertex share an edge: sorted by that neighbour, runs join.
     seen.clear();
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k = slot[start[v] + i];
-      for (const int w : {prev_of[k], next_of[k]}) {
-        const auto it = std::find_if(seen.begin(), seen.end(), [&](const auto& s) { return s.first == w; });
-        if (it == seen.end())
-          seen.emplace_back(w, i);
-        else
-          parent[find(i)] = find(it->second);
-      }
+      seen.emplace_back(prev_of[k], i);
+      seen.emplace_back(next_of[k], i);
     }
+    std::sort(seen.begin(), seen.end());
+    for (std::size_t e = 1; e < seen.size(); ++e)
+      if (seen[e].first == seen[e - 1].first) parent[find(seen[e].second)] = find(seen[e - 1].second);
     // The first fan keeps v; each other fan gets a copy.
     copy_of.assign(n, -1);
     const std::size_t first = find(0);

@@ -11,10 +11,9 @@
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
-#include <sys/wait.h>
 #include <tetgen.h>
-#include <unistd.h>
 
+#include "core/child_process.h"
 #include "core/error.h"
 
 namespace quadrix {
@@ -64,18 +63,6 @@ bool run_tetgen(const std::vector<Vector3d>& p, const std::vector<int>& keep, st
   return true;
 }
 
-bool write_all(int fd, const void* data, std::size_t n) {
-  const char* c = static_cast<const char*>(data);
-  while (n > 0) {
-    const ssize_t w = ::write(fd, c, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    c += w;
-    n -= static_cast<std::size_t>(w);
-  }
-  return true;
-}
-
 struct Batch {
   std::size_t done = 0;                      // cells [first, done) succeeded
   std::vector<std::vector<TetIndices>> tets;  // their tetrahedra
@@ -85,42 +72,21 @@ struct Batch {
 // Runs TetGen on cells[first..] in a child process until the end or the first failure.
 Batch run_batch(std::span<const std::vector<Vector3d>> cells, const std::vector<std::vector<int>>& keep,
                 std::size_t first, const std::string& source) {
-  int fds[2];
-  if (::pipe(fds) != 0) throw SolverError(fmt::format("{}: cannot create a pipe for TetGen: {}", source, std::strerror(errno)));
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw SolverError(fmt::format("{}: cannot fork the TetGen process: {}", source, std::strerror(errno)));
-  }
-  if (pid == 0) {
-    // Child: one record per cell: int32 cell, int32 count (−1: TetGen error), count × 4 int32.
-    ::close(fds[0]);
+  // The child: one record per cell: int32 cell, int32 count (−1: TetGen error), count × 4 int32.
+  const ChildRun child = run_in_child([&](int fd) {
     std::vector<TetIndices> tets;
     for (std::size_t c = first; c < cells.size(); ++c) {
       tets.clear();
       const bool ok = run_tetgen(cells[c], keep[c], tets) && !tets.empty();
       const std::int32_t head[2] = {static_cast<std::int32_t>(c), ok ? static_cast<std::int32_t>(tets.size()) : -1};
-      if (!write_all(fds[1], head, sizeof head)) ::_exit(3);
-      if (!ok) ::_exit(2);
-      if (!write_all(fds[1], tets.data(), tets.size() * sizeof(TetIndices))) ::_exit(3);
+      if (!write_all(fd, head, sizeof head)) return 3;
+      if (!ok) return 2;
+      if (!write_all(fd, tets.data(), tets.size() * sizeof(TetIndices))) return 3;
     }
-    ::close(fds[1]);
-    ::_exit(0);
-  }
-  ::close(fds[1]);
-  std::vector<char> buffer;
-  std::array<char, 1 << 16> chunk{};
-  for (;;) {
-    const ssize_t n = ::read(fds[0], chunk.data(), chunk.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    buffer.insert(buffer.end(), chunk.data(), chunk.data() + n);
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+    return 0;
+  });
+  if (!child.ran()) throw SolverError(fmt::format("{}: cannot run TetGen in a process of its own: {}", source, child.not_run));
+  const std::string& buffer = child.output;
   Batch b;
   b.done = first;
   std::size_t pos = 0;
@@ -142,10 +108,8 @@ Batch run_batch(std::span<const std::vector<Vector3d>> cells, const std::vector<
     ++b.done;
   }
   if (b.done < cells.size())
-    b.why = tetgen_error             ? "TetGen reported an error or no tetrahedra"
-            : WIFSIGNALED(status)    ? fmt::format("TetGen crashed (signal {})", WTERMSIG(status))
-            : WIFEXITED(status)      ? fmt::format("the TetGen process exited with status {}", WEXITSTATUS(status))
-                                     : std::string("the TetGen process failed");
+    b.why = tetgen_error ? std::string("TetGen reported an error or no tetrahedra")
+                         : child.exit_code() < 0 ? "TetGen " + child.how() : "the TetGen process " + child.how();
   return b;
 }
 
@@ -294,40 +258,15 @@ SurfaceTetrahedralization tetrahedralize_closed_surface(std::span<const Vector3d
     throw InvalidInput(fmt::format("{}: quality {} is not 0 or ≥ 1.1", o.source, o.quality));
   if (!(o.max_volume >= 0 && std::isfinite(o.max_volume)))
     throw InvalidInput(fmt::format("{}: max volume {} is not ≥ 0", o.source, o.max_volume));
-  int fds[2];
-  if (::pipe(fds) != 0)
-    throw SolverError(fmt::format("{}: cannot create a pipe for TetGen: {}", o.source, std::strerror(errno)));
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    throw SolverError(fmt::format("{}: cannot fork the TetGen process: {}", o.source, std::strerror(errno)));
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    const bool ok = run_tetgen_surface(vertices, triangles, o, fds[1]);
-    ::close(fds[1]);
-    ::_exit(ok ? 0 : 2);
-  }
-  ::close(fds[1]);
-  std::string bytes;
-  std::array<char, 1 << 16> chunk{};
-  for (;;) {
-    const ssize_t n = ::read(fds[0], chunk.data(), chunk.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    bytes.append(chunk.data(), static_cast<std::size_t>(n));
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  const ChildRun child = run_in_child([&](int fd) { return run_tetgen_surface(vertices, triangles, o, fd) ? 0 : 2; });
+  if (!child.ran()) throw SolverError(fmt::format("{}: cannot run TetGen in a process of its own: {}", o.source, child.not_run));
+  const std::string& bytes = child.output;
+  if (!child.succeeded())
     throw SolverError(fmt::format(
         "{}: {} (a self-intersecting surface, or one TetGen cannot mesh)", o.source,
-        WIFSIGNALED(status) ? fmt::format("TetGen crashed (signal {})", WTERMSIG(status))
-        : WIFEXITED(status) && WEXITSTATUS(status) == 2 ? std::string("TetGen reported an error or no tetrahedra")
-                                                         : std::string("the TetGen process failed")));
+        child.exit_code() < 0    ? "TetGen " + child.how()
+        : child.exit_code() == 2 ? std::string("TetGen reported an error or no tetrahedra")
+                                 : "the TetGen process " + child.how()));
   // Parse and check what the child sent.
   const auto fail = [&](std::string_view what) -> SolverError {
     return SolverError(fmt::format("{}: bad TetGen output: {}", o.source, what));

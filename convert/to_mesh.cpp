@@ -411,10 +411,8 @@ void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
   for (const auto& [a, b, c] : tris) flips ? out.add_triangle(base + a, base + c, base + b) : out.add_triangle(base + a, base + b, base + c);
 }
 
-constexpr std::size_t kNoPartner = std::numeric_limits<std::size_t>::max();
+}  // namespace
 
-/// For each glyph, the other half of its bond, else kNoPartner: two cylinders of one radius whose
-/// far ends meet (within 1e-9 of their length) and whose axes run opposite ways, each paired once.
 std::vector<std::size_t> bond_halves(const std::vector<Glyph>& glyphs) {
   std::vector<std::size_t> partner(glyphs.size(), kNoPartner);
   std::vector<std::size_t> cyl;
@@ -429,13 +427,13 @@ std::vector<std::size_t> bond_halves(const std::vector<Glyph>& glyphs) {
     const Glyph& a = glyphs[cyl[k]];
     if (partner[cyl[k]] != kNoPartner) continue;
     const double len = a.axes.col(0).norm();
-    index.radius(tip[k], 1e-9 * len, nb);
+    index.radius(tip[k], 1e-5 * len, nb);
     for (const auto& [j, d2] : nb) {
       const std::size_t other = cyl[j];
       if (other == cyl[k] || partner[other] != kNoPartner) continue;
       const Glyph& b = glyphs[other];
       const Eigen::Vector3d ua = a.axes.col(0) / len, ub = b.axes.col(0).normalized();
-      if (b.radius != a.radius || ua.dot(ub) > -1.0 + 1e-12) continue;
+      if (std::abs(b.radius - a.radius) > 1e-6 * a.radius || ua.dot(ub) > -1.0 + 1e-9) continue;
       partner[cyl[k]] = other;
       partner[other] = cyl[k];
       break;
@@ -443,6 +441,8 @@ std::vector<std::size_t> bond_halves(const std::vector<Glyph>& glyphs) {
   }
   return partner;
 }
+
+namespace {
 
 /// The glyphs as their union (convert/mesh_union.h), added to `out`: each glyph meshed closed on
 /// its own, the union's vertices coloured as the glyph vertex at their place, or, made on an
@@ -473,6 +473,21 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
   // rounding apart, whose exact intersection left slivers that crossed once rounded to doubles
   // (80 pairs on two bonds). The tube's rings just either side of the middle carry the two colours.
   const std::vector<std::size_t> partner = bond_halves(glyphs);
+  // The spheres (atoms), to find the one a tube's end lies in.
+  std::vector<Eigen::Vector3d> sphere_centre;
+  std::vector<double> sphere_radius;
+  for (const Glyph& g : glyphs)
+    if (g.kind == GlyphKind::sphere) sphere_centre.push_back(g.centre), sphere_radius.push_back(g.radius);
+  const PointIndex spheres{std::span<const Eigen::Vector3d>(sphere_centre)};
+  std::vector<Neighbour> near;
+  // Whether a sphere holds a tube's end at p, the tube's radius r in from its surface: an atom
+  // the bond starts in.
+  const auto buried = [&](const Eigen::Vector3d& p, double r) {
+    if (sphere_centre.empty()) return false;
+    spheres.nearest(p, std::min<std::size_t>(4, sphere_centre.size()), near);
+    return std::any_of(near.begin(), near.end(),
+                       [&](const Neighbour& s) { return std::sqrt(s.second) + r <= (1 + 1e-5) * sphere_radius[s.first]; });
+  };
   for (std::size_t i = 0; i < glyphs.size(); ++i) {
     if (partner[i] == kNoPartner) continue;
     cylinders = true;
@@ -483,13 +498,13 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
     // every bond of an atom capped at the atom's centre met the others at that one point, and
     // CGAL's autorefinement crashed there (4lfq and 4ins balls-and-sticks and licorice read from
     // their PDB files). The caps stay inside the atoms (licorice's atoms, of the tubes' radius,
-    // leave a rim of 2.5e-5 radii).
+    // leave a rim of 2.5e-5 radii). An end no atom holds stays where it is.
     Eigen::Vector3d p = a.centre - a.axes.col(0), q = b.centre - b.axes.col(0);
     {
       const Eigen::Vector3d u = (q - p).normalized();
       const double shift = 1e-3 * a.radius * double(1 + i % 7);
-      p += shift * u;
-      q -= shift * u;
+      if (buried(p, a.radius)) p += shift * u;
+      if (buried(q, a.radius)) q -= shift * u;
     }
     const double split = a.axes.col(0).norm() / (a.axes.col(0).norm() + b.axes.col(0).norm());
     constexpr double kBand = 1e-3;  // of the tube's length: where the colour turns
@@ -499,6 +514,8 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
     mesh_tube(p, q, a.radius, cylinder_segments(a.radius, bound, extra), rings, one);
     add_part(one);
   }
+  log::debug("mesh: {} bonds' halves meshed as one tube each",
+             std::count_if(partner.begin(), partner.end(), [](std::size_t p) { return p != kNoPartner; }) / 2);
   for (std::size_t gi = 0; gi < glyphs.size(); ++gi) {
     const Glyph& g = glyphs[gi];
     if (partner[gi] != kNoPartner) continue;

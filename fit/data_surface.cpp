@@ -774,14 +774,17 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
       const Eigen::Vector3d x = patch.centre + patch.radius * u;
       const Eigen::Vector3d g = patch.local.gradient(u);
       const bool may_split = std::abs(g[c.axis]) >= kAligned * g.norm() && reach > min_reach && c.depth < max_depth;
-      // Any triangle within the bound settles "within?": d is then an upper bound on the distance
-      // (the nearest of the triangles this thread met last, mostly the nearest of all), and the
-      // cell splits unless that bound vouches for it. Asking for the exact minimum wherever the
-      // cell might vouch cost a BVH walk per sample (the walk was 36 % of a bunny fit at 1e-4,
-      // where the lattice's first cells reach past the bound and split whatever the distance).
+      // Any triangle within the bound settles "within?" (d is then an upper bound on the distance:
+      // the nearest of the triangles this thread met last, mostly the nearest of all). A cell
+      // whose reach is past the bound splits whatever the distance, so it asks no more: asking
+      // every sample for the minimum that would vouch for its cell cost a BVH walk each (36 % of
+      // a bunny fit at 1e-4, whose lattice's first cells all reach past the bound). Elsewhere the
+      // cell splits unless the distance vouches for it, asked as before where the upper bound
+      // does not: the lattice, and so the fit, does not depend on which triangles the thread met.
       const double d = data.distance(x, bound, bound);
       if (!(d <= bound)) return std::isnan(d) ? kInf : data.distance(x);
-      if (may_split && d + reach > bound) split = true;
+      if (may_split && d + reach > bound)
+        split = reach >= bound || data.distance(x, bound, bound - reach) + reach > bound;
     }
     if (!split) continue;
     const double q = 0.25 * c.h;

@@ -252,6 +252,22 @@ TEST(ToMesh, BallsAndSticksMeshedAsTheirUnion) {
   ToMeshOptions apart{.max_error = bound, .progress = {}};
   apart.union_glyphs = false;
   EXPECT_GT(self_intersections(mesh_model(m, apart).mesh).pairs, 100u);
+  // As a compact .qxm stores them: 20 units from the origin, centres and axes rounded to float32,
+  // so the halves' tips no longer meet exactly (they paired only within 1e-9 of their length).
+  Model far = m;
+  for (Glyph& g : far.glyphs) {
+    g.centre = (g.centre + Eigen::Vector3d::Constant(20.0)).cast<float>().cast<double>();
+    g.axes = g.axes.cast<float>().cast<double>();
+    g.radius = double(float(g.radius));
+  }
+  const std::vector<std::size_t> halves = bond_halves(far.glyphs);
+  for (std::size_t g = 0; g < far.glyphs.size(); ++g)
+    EXPECT_EQ(halves[g] != kNoPartner, far.glyphs[g].kind == GlyphKind::cylinder) << "glyph " << g;
+  const ToMeshResult f = mesh_model(far, {.max_error = bound, .progress = {}});
+  EXPECT_EQ(f.glyph_unions_failed, 0u);
+  EXPECT_TRUE(f.within) << f.max_error();
+  EXPECT_EQ(f.open_edges, 0u);
+  EXPECT_EQ(self_intersections(f.mesh).pairs, 0u);
 }
 
 // Overlapping spheres (a spacefill molecule's atoms) meshed as their union: one closed surface
