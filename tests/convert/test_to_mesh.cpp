@@ -46,6 +46,16 @@ std::vector<Eigen::Vector3d> mesh_samples(const PolygonMesh& m) {
   return s;
 }
 
+// A glyph union as a slicer or a boolean operation wants it: made, within the bound, closed, no
+// triangles crossing.
+void expect_clean_union(const ToMeshResult& u) {
+  EXPECT_TRUE(u.glyph_union);
+  EXPECT_EQ(u.glyph_unions_failed, 0u);
+  EXPECT_TRUE(u.within) << u.max_error();
+  EXPECT_EQ(u.open_edges, 0u);
+  EXPECT_EQ(self_intersections(u.mesh).pairs, 0u);
+}
+
 double signed_volume(const PolygonMesh& m) {
   double v = 0;
   for (std::size_t f = 0; f < m.face_count(); ++f) {
@@ -210,13 +220,9 @@ TEST(ToMesh, BallsAndSticksMeshedAsTheirUnion) {
   ASSERT_TRUE(unions_glyphs(m));
   const double bound = 5e-3;
   const ToMeshResult u = mesh_model(m, {.max_error = bound, .progress = {}});
-  EXPECT_TRUE(u.glyph_union);
-  EXPECT_EQ(u.glyph_unions_failed, 0u);
-  EXPECT_TRUE(u.within) << u.max_error();
-  EXPECT_EQ(u.open_edges, 0u);
   // (With each half its own capped cylinder, the two caps at the bond's middle, a rounding apart,
   // left 80 crossing pairs of slivers: the halves are one tube.)
-  EXPECT_EQ(self_intersections(u.mesh).pairs, 0u);
+  expect_clean_union(u);
   EXPECT_GT(signed_volume(u.mesh), 0.0);
   // How deep p lies inside glyph g (negative: outside), exact for spheres and capped cylinders.
   const auto depth = [&](const Glyph& g, const Eigen::Vector3d& p) {
@@ -263,11 +269,7 @@ TEST(ToMesh, BallsAndSticksMeshedAsTheirUnion) {
   const std::vector<std::size_t> halves = bond_halves(far.glyphs);
   for (std::size_t g = 0; g < far.glyphs.size(); ++g)
     EXPECT_EQ(halves[g] != kNoPartner, far.glyphs[g].kind == GlyphKind::cylinder) << "glyph " << g;
-  const ToMeshResult f = mesh_model(far, {.max_error = bound, .progress = {}});
-  EXPECT_EQ(f.glyph_unions_failed, 0u);
-  EXPECT_TRUE(f.within) << f.max_error();
-  EXPECT_EQ(f.open_edges, 0u);
-  EXPECT_EQ(self_intersections(f.mesh).pairs, 0u);
+  expect_clean_union(mesh_model(far, {.max_error = bound, .progress = {}}));
 }
 
 // Overlapping spheres (a spacefill molecule's atoms) meshed as their union: one closed surface
@@ -280,11 +282,7 @@ TEST(ToMesh, OverlappingSpheresMeshedAsTheirUnion) {
   for (const auto& [c, rgb] : atoms) m.glyphs.push_back({GlyphKind::sphere, c, 1.0, Eigen::Matrix3d::Identity(), rgb});
   const double bound = 5e-3;
   const ToMeshResult u = mesh_model(m, {.max_error = bound, .progress = {}});
-  EXPECT_TRUE(u.glyph_union);
-  EXPECT_EQ(u.glyph_unions_failed, 0u);
-  EXPECT_TRUE(u.within) << u.max_error();
-  EXPECT_EQ(u.open_edges, 0u);
-  EXPECT_EQ(self_intersections(u.mesh).pairs, 0u);
+  expect_clean_union(u);
   // Every vertex on the union's boundary: at least one sphere's radius out (within the bound,
   // the faces being inscribed), none deeper than the bound inside any sphere.
   ASSERT_EQ(u.mesh.colours.size(), u.mesh.vertices.size());
