@@ -228,8 +228,10 @@ MeshUnion union_of_closed_meshes(std::vector<PolygonMesh> parts, const std::func
 namespace quadrix {
 
 // The child writes: uint64 vertices, uint64 triangles, uint64 all fixed (1) or not (0), then the
-// vertices (3 doubles each) and the triangles (3 uint32 each). It exits 0 after a complete record,
-// 2 when CGAL threw (the message follows a zero header's place: uint64 length, then its bytes).
+// vertices (3 doubles each) and the triangles (3 uint32 each). It exits 0 after a complete record;
+// 2 when CGAL threw (written instead: uint64 length, then the message's bytes); 3 where a write
+// failed or a face is not a triangle; 5 where the rounded copy cannot link a face; 4 on any other
+// throw (run_in_child).
 MeshUnion union_by_autorefinement(std::vector<PolygonMesh> parts) {
   MeshUnion out;
   out.parts = parts.size();

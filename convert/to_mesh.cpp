@@ -52,6 +52,9 @@ bool has_any_colour(const Model& m) {
 }
 
 /// Triangles being collected, with an optional colour per vertex.
+/// The colour of a primitive that has none.
+constexpr Rgb kDefaultGrey{200, 200, 200};
+
 struct Builder {
   PolygonMesh mesh;
   bool colours = false;
@@ -140,7 +143,7 @@ constexpr int kMaxImplicitCells = 256;
 /// is open where the bounds cut the surface: the renderer draws S = 0 inside them only.
 void mesh_implicit(const ImplicitSurface& surface, int k, Builder& out) {
   const implicit::CompiledImplicit c = implicit::compile(surface);
-  const Rgb colour = surface.colour.value_or(Rgb{200, 200, 200});
+  const Rgb colour = surface.colour.value_or(kDefaultGrey);
   const Eigen::Vector3d lo = c.bounds.min, extent = c.bounds.max - c.bounds.min;
   const int cells = std::min(kImplicitCells << std::min(k, 16), kMaxImplicitCells);
   Eigen::Vector3i n;
@@ -246,7 +249,7 @@ void mesh_tets(const Model& model, int k, Builder& out) {
     const Eigen::Vector3d centroid = tet.centroid();
     std::array<std::uint64_t, 4> g;
     for (int i = 0; i < 4; ++i) g[i] = corner_id(tet.corners[i]);
-    const Rgb colour = tet.colour.value_or(Rgb{200, 200, 200});
+    const Rgb colour = tet.colour.value_or(kDefaultGrey);
     const double thickness = tetrahedron_thickness(tet.corners);
     // The mesh vertex of a crossing (an edge, or a node as {key, key}), made at x the first time.
     const auto vertex_at = [&](const EdgeKey& ek, const Eigen::Vector3d& x) {
@@ -386,7 +389,7 @@ void mesh_tube(const Eigen::Vector3d& p, const Eigen::Vector3d& q, double r, int
 }
 
 void mesh_glyph(const Glyph& g, double bound, int extra, Builder& out) {
-  const Rgb colour = g.colour.value_or(Rgb{200, 200, 200});
+  const Rgb colour = g.colour.value_or(kDefaultGrey);
   if (g.kind == GlyphKind::cylinder) {
     const Eigen::Vector3d half = g.axes.col(0);
     const std::pair<double, Rgb> rings[2] = {{0.0, colour}, {1.0, colour}};
@@ -459,7 +462,8 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
   // a cylinder's half axis).
   std::set<std::array<double, 14>> seen;
   std::size_t repeated = 0;
-  bool cylinders = false;
+  const bool cylinders =
+      std::any_of(glyphs.begin(), glyphs.end(), [](const Glyph& g) { return g.kind == GlyphKind::cylinder; });
   const auto add_part = [&](Builder& one) {
     for (std::size_t v = 0; v < one.mesh.vertices.size(); ++v) {
       at.push_back(one.mesh.vertices[v]);
@@ -489,11 +493,9 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
                        [&](const Neighbour& s) { return std::sqrt(s.second) + r <= (1 + 1e-5) * sphere_radius[s.first]; });
   };
   for (std::size_t i = 0; i < glyphs.size(); ++i) {
-    if (partner[i] == kNoPartner) continue;
-    cylinders = true;
-    if (partner[i] < i) continue;
+    if (partner[i] == kNoPartner || partner[i] < i) continue;
     const Glyph &a = glyphs[i], &b = glyphs[partner[i]];
-    const Rgb ca = a.colour.value_or(Rgb{200, 200, 200}), cb = b.colour.value_or(Rgb{200, 200, 200});
+    const Rgb ca = a.colour.value_or(kDefaultGrey), cb = b.colour.value_or(kDefaultGrey);
     // Each tube ends a little inside its atoms, at its own depth (up to 0.007 of its radius):
     // every bond of an atom capped at the atom's centre met the others at that one point, and
     // CGAL's autorefinement crashed there (4lfq and 4ins balls-and-sticks and licorice read from
@@ -520,7 +522,6 @@ std::size_t mesh_glyph_union(const std::vector<Glyph>& glyphs, double bound, int
     const Glyph& g = glyphs[gi];
     if (partner[gi] != kNoPartner) continue;
     const bool sphere = g.kind == GlyphKind::sphere;
-    cylinders = cylinders || g.kind == GlyphKind::cylinder;
     std::array<double, 14> key{double(static_cast<int>(g.kind)), g.centre.x(), g.centre.y(), g.centre.z(),
                                g.kind == GlyphKind::ellipsoid ? 0.0 : g.radius};
     for (int k = 0; k < 9; ++k) key[std::size_t(5 + k)] = sphere ? 0.0 : g.axes(k / 3, k % 3);
@@ -1223,7 +1224,7 @@ Bisected bisect_marked(Builder& out, std::size_t first_face, const std::vector<s
   std::sort(split_edges.begin(), split_edges.end());
   for (const std::uint64_t key : split_edges) {
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
-    midpoint[key] = out.add_vertex(0.5 * ((*V)[a] + (*V)[b]), out.colours ? out.mesh.colours[a] : Rgb{200, 200, 200});
+    midpoint[key] = out.add_vertex(0.5 * ((*V)[a] + (*V)[b]), out.colours ? out.mesh.colours[a] : kDefaultGrey);
   }
   PolygonMesh next;
   next.vertices = std::move(out.mesh.vertices);
@@ -1538,7 +1539,7 @@ FinSheets fin_sheets(const Model& model, const ReferenceScene& scene, const Trac
       if (vertex[k] < 0) {
         vertex[k] = static_cast<int>(out.vertices.size());
         out.vertices.push_back(nodes[k].x);
-        fins.colours.push_back(s.colour.value_or(Rgb{200, 200, 200}));
+        fins.colours.push_back(s.colour.value_or(kDefaultGrey));
       }
       return vertex[k];
     };
