@@ -1,8 +1,10 @@
 #include "fit/normals.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <optional>
+#include <numbers>
 #include <queue>
 #include <tuple>
 #include <utility>
@@ -12,6 +14,7 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
+#include "fit/data_surface.h"
 #include "fit/point_index.h"
 
 namespace quadrix {
@@ -30,6 +33,23 @@ constexpr double kOffSheetRoughness = 10.0;
 // plane (15°) beyond this many times its neighbourhood's roughness.
 constexpr double kSameSheetSine = 0.25881904510252074;
 constexpr double kStepRoughness = 6.0;
+
+// Knife edges (orient_by_parity): the rays each voter casts (a direction and its opposite, along
+// its normal and tilted this far from it), how many of the kRayPairs must agree for a vote to
+// count; voters at most, their smoothness, and how a vote stands (orient_by_parity).
+constexpr int kRayPairs = 5;
+constexpr double kRayTilt = 0.3490658503988659;  // 20°
+constexpr int kDecidingPairs = 4;
+constexpr std::size_t kMaxVoters = 20000;
+constexpr double kSmooth = 0.25;
+constexpr std::size_t kConfirm = 8, kAlike = 4;
+constexpr double kMinorityShare = 0.02;
+// A voter's rays start this many of its spacings out, past its own sheet's discs.
+constexpr double kOwnSheet = 0.75;
+// A side of a knife edge needs this many of a rim point's neighbours for its plane, and the
+// sides' means must lie this many of their roughnesses apart.
+constexpr std::size_t kMinSide = 5;
+constexpr double kSidesApart = 3.0;
 
 // The scatter matrix Σ (q − mean)(q − mean)ᵀ of the first `count` neighbours that `take` (by
 // their place in nb) keeps; `kept` gets how many it kept.
@@ -105,6 +125,195 @@ void on_own_sheet(std::span<const Eigen::Vector3d> points, std::size_t i, const 
   std::tie(normal, rough) = refined ? *refined : *near;
 }
 
+
+// Crossings of the data's surface (the points' tangent discs) along a ray from a point on it,
+// past its own sheet (tmin). Hits closer along the ray than twice the hit disc's radius over the
+// cosine of the crossing (at most 4) are one crossing: a sheet's overlapping discs. At most 31.
+int crossings(const DataSurface& surface, const Ray& ray, double tmin) {
+  int count = 0;
+  double t = tmin;
+  while (count < 31) {
+    const auto hit = surface.first_hit(ray, t);
+    if (!hit) break;
+    ++count;
+    t = hit->t + 2.0 * hit->reach / std::max(std::abs(hit->normal.dot(ray.dir)), 0.25);
+  }
+  return count;
+}
+
+// A point's vote on its normal n by ray parity: on a closed surface a ray leaving a point on its
+// outward side crosses the surface an even number of times, on its inward side an odd number.
+// Each of kRayPairs directions (n, and n tilted by kRayTilt four ways) is cast both ways; +1: n
+// faces out, −1: in, when at least kDecidingPairs pairs say so; else 0 (an open sheet, where
+// both sides are even, or rays that disagree: near a rim, through a gap between discs).
+int parity_vote(const DataSurface& surface, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double tmin) {
+  const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+  int out = 0, in = 0;
+  for (int k = 0; k < kRayPairs; ++k) {
+    Eigen::Vector3d d = n;
+    if (k > 0) {
+      const double a = (k - 1) * (std::numbers::pi / 2);
+      d = std::cos(kRayTilt) * n + std::sin(kRayTilt) * (std::cos(a) * u + std::sin(a) * v);
+    }
+    const int ahead = crossings(surface, Ray{p, d}, tmin) & 1;
+    const int behind = crossings(surface, Ray{p, -d}, tmin) & 1;
+    out += ahead == 0 && behind == 1;
+    in += ahead == 1 && behind == 0;
+    const int left = kRayPairs - 1 - k;
+    if (out + left < kDecidingPairs && in + left < kDecidingPairs) return 0;
+  }
+  return out >= kDecidingPairs ? 1 : in >= kDecidingPairs ? -1 : 0;
+}
+
+// Knife edges. Across a rim sharper than about 60° (a lens, a blade, a wedge) the PCA normals of
+// the rim's points lie between the two sides' and the propagation carries one side's
+// orientation over the rim onto the other, turning it inside out (a lens whose caps meet at 20°
+// or 39°: one cap, half the normals). So points vote by ray parity (parity_vote) against the
+// tangent discs of the voters: every point of a cloud up to kMaxVoters, else every stride-th in
+// Morton order (spread over the cloud); only smooth ones (rough ≤ kSmooth × gap, gap the
+// distance to the 6th nearest point), as in a noisy shell the rays cross the fuzz at random. A
+// vote stands when at least kAlike of the voter's kConfirm nearest voters vote alike (a lone vote
+// is a ray through a gap). A component where some stand against the propagated normals, and at
+// least kMinorityShare of its standing votes go each way (a knife edge turns one side of a
+// component, not all of it), is propagated again from every standing voter at once, each turned
+// as it voted, the rest from the nearest of them along the minimum spanning forest (weight
+// 1 − |nᵢ·nⱼ|). Other components, open sheets among them (they vote nothing), stay as they
+// were. Returns how many normals turned.
+struct OrientationGraph {
+  const std::vector<std::uint32_t>& offset;  // adjacency of point v: adj[offset[v] .. offset[v + 1])
+  const std::vector<std::uint32_t>& adj;
+  const std::vector<std::vector<std::uint32_t>>& members;  // each component's points
+  const std::vector<std::int32_t>& comp;                   // each point's component
+};
+std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vector<Eigen::Vector3d>& normals,
+                             const PointIndex& index, std::size_t k, const std::vector<double>& rough,
+                             const std::vector<double>& gap, const OrientationGraph& g) {
+  const std::size_t n = points.size();
+  const auto order = index.order();
+  const std::size_t stride = (n + kMaxVoters - 1) / kMaxVoters;
+  std::vector<std::uint32_t> voter;
+  for (std::size_t o = 0; o < n; o += stride) voter.push_back(order[o]);
+  const std::size_t nv = voter.size();
+  if (nv < kConfirm + 1) return 0;
+  std::vector<Eigen::Vector3d> vp(nv), vn(nv);
+  for (std::size_t j = 0; j < nv; ++j) vp[j] = points[voter[j]], vn[j] = normals[voter[j]];
+  const DataSurface surface = DataSurface::from_points(vp, vn);
+  std::vector<std::int8_t> vote(nv, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 64), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t j = range.begin(); j != range.end(); ++j)
+      if (rough[voter[j]] <= kSmooth * gap[voter[j]])
+        vote[j] = std::int8_t(parity_vote(surface, vp[j], vn[j], kOwnSheet * surface.spacing(j)));
+  });
+  const PointIndex voters_index(vp);
+  std::vector<std::int8_t> stands(n, 0);
+  std::vector<std::size_t> ins(g.members.size(), 0), outs(g.members.size(), 0);
+  std::vector<Neighbour> nb;
+  for (std::size_t j = 0; j < nv; ++j) {
+    if (vote[j] == 0) continue;
+    voters_index.nearest(vp[j], kConfirm + 1, nb);
+    std::size_t alike = 0;
+    for (const auto& [k, d2] : nb) alike += k != j && vote[k] == vote[j];
+    if (alike < kAlike) continue;
+    stands[voter[j]] = vote[j];
+    (vote[j] < 0 ? ins : outs)[g.comp[voter[j]]] += 1;
+  }
+  std::size_t turned = 0;
+  std::vector<std::uint8_t> done(n, 0);
+  using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
+  const auto push_edges = [&](std::uint32_t v) {
+    done[v] = 1;
+    for (std::uint32_t e = g.offset[v]; e < g.offset[v + 1]; ++e)
+      if (!done[g.adj[e]]) heap.push({1.0 - std::abs(normals[v].dot(normals[g.adj[e]])), {v, g.adj[e]}});
+  };
+  std::vector<std::uint32_t> rim;  // points of turned components near their rim
+  for (std::size_t c = 0; c < g.members.size(); ++c) {
+    if (ins[c] == 0 || double(std::min(ins[c], outs[c])) < kMinorityShare * double(ins[c] + outs[c])) continue;
+    for (auto v : g.members[c])
+      if (stands[v] < 0) normals[v] = -normals[v], ++turned;
+    for (auto v : g.members[c])
+      if (stands[v] != 0) push_edges(v);
+    while (!heap.empty()) {
+      const auto [w, edge] = heap.top();
+      heap.pop();
+      const auto [parent, child] = edge;
+      if (done[child]) continue;
+      if (normals[child].dot(normals[parent]) < 0) normals[child] = -normals[child], ++turned;
+      push_edges(child);
+    }
+    // The rim: points with a neighbour facing the other way, and their neighbours.
+    for (auto v : g.members[c])
+      for (std::uint32_t e = g.offset[v]; e < g.offset[v + 1]; ++e)
+        if (normals[v].dot(normals[g.adj[e]]) < 0) {
+          rim.push_back(v);
+          break;
+        }
+    const std::size_t edge = rim.size();
+    for (std::size_t r = 0; r < edge; ++r)
+      for (std::uint32_t e = g.offset[rim[r]]; e < g.offset[rim[r] + 1]; ++e) rim.push_back(g.adj[e]);
+  }
+  std::sort(rim.begin(), rim.end());
+  rim.erase(std::unique(rim.begin(), rim.end()), rim.end());
+  // The rim's own normals. A rim point's k nearest straddle the knife edge, so their PCA plane
+  // lies between its two sides (a 20° lens: nearly along its axis on both caps) and the tangent
+  // discs stood out past the edge, half of them facing the other side's way. The neighbours are
+  // split by the side of that middle plane they lie on (each side of the edge), and the point
+  // takes the PCA plane of the side whose plane passes nearer it, facing away from the other.
+  std::vector<Eigen::Vector3d> refined(rim.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rim.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<Neighbour> near;
+    for (std::size_t r = range.begin(); r != range.end(); ++r) {
+      const std::uint32_t v = rim[r];
+      refined[r] = normals[v];
+      index.nearest(points[v], k, near);
+      if (std::all_of(near.begin(), near.end(), [&](const Neighbour& q) { return normals[q.first].dot(normals[v]) >= 0; }))
+        continue;  // not on a rim
+      Eigen::Vector3d middle = Eigen::Vector3d::Zero();
+      for (const auto& [j, d2] : near) middle += points[j];
+      middle /= double(near.size());
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> all(covariance(points, near, near.size(), [](std::size_t) { return true; }));
+      if (all.info() != Eigen::Success) continue;
+      const Eigen::Vector3d across = all.eigenvectors().col(0);
+      struct Side {
+        Eigen::Vector3d normal, mean;
+        double rough = 0;
+        bool ok = false;
+      } side[2];
+      for (int h = 0; h < 2; ++h) {
+        const double sign = h == 0 ? 1.0 : -1.0;
+        const auto take = [&](std::size_t j) { return sign * across.dot(points[near[j].first] - middle) > 0; };
+        std::size_t kept = 0;
+        const Eigen::Matrix3d C = covariance(points, near, near.size(), take, &kept);
+        if (kept < kMinSide) continue;
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+        if (eig.info() != Eigen::Success || !spreads_over_a_plane(eig.eigenvalues())) continue;
+        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+        for (std::size_t j = 0; j < near.size(); ++j)
+          if (take(j)) mean += points[near[j].first];
+        side[h] = {eig.eigenvectors().col(0).normalized(), mean / double(kept),
+                   std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / double(kept)), true};
+      }
+      // Two sides, not the two halves of one noisy sheet: their means lie apart across the
+      // middle plane by kSidesApart times their roughness.
+      if (!side[0].ok || !side[1].ok ||
+          std::abs(across.dot(side[0].mean - side[1].mean)) <= kSidesApart * std::max(side[0].rough, side[1].rough))
+        continue;
+      const int own = std::abs(side[0].normal.dot(points[v] - side[0].mean)) <=
+                              std::abs(side[1].normal.dot(points[v] - side[1].mean))
+                          ? 0
+                          : 1;
+      Eigen::Vector3d normal = side[own].normal;
+      if (normal.dot(side[own].mean - side[1 - own].mean) < 0) normal = -normal;
+      if (normal.allFinite()) refined[r] = normal;
+    }
+  });
+  for (std::size_t r = 0; r < rim.size(); ++r) {
+    turned += refined[r].dot(normals[rim[r]]) < 0;
+    normals[rim[r]] = refined[r];
+  }
+  return turned;
+}
+
 }  // namespace
 
 NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const NormalEstimationOptions& options) {
@@ -121,6 +330,7 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   std::vector<std::uint32_t> graph(n * km);  // the km nearest neighbours of each point (self excluded)
   std::vector<std::uint8_t> degree(n, 0);
   std::vector<double> rough(n, 0.0);  // RMS distance of the PCA's points from its plane
+  std::vector<double> gap(n, 0.0);    // distance to the 6th nearest point
   const auto order = index.order();  // visited in Morton order (PointIndex::order)
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> nb;
@@ -130,6 +340,7 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
       const auto eig = neighbourhood_pca(index, points, points[i], k, km + 1, nb, &used);
       out.normals[i] = eig.eigenvectors().col(0).normalized();  // smallest eigenvalue
       rough[i] = std::sqrt(std::max(0.0, eig.eigenvalues()[0]) / double(std::max<std::size_t>(1, used)));
+      gap[i] = nb.empty() ? 0.0 : std::sqrt(nb[std::min<std::size_t>(6, nb.size() - 1)].second);
       if (spreads_over_a_plane(eig.eigenvalues()) && nb.size() >= k) on_own_sheet(points, i, nb, k, out.normals[i], rough[i]);
       if (!out.normals[i].allFinite()) out.normals[i] = Eigen::Vector3d::UnitZ();
       if (nb.size() > std::max(k, km + 1)) nb.resize(std::max(k, km + 1));  // the graph: the nearest km
@@ -273,6 +484,7 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
       ++out.flipped_components;
     }
   }
+  out.turned_by_parity = orient_by_parity(points, out.normals, index, k, rough, gap, {offset, adj, members, comp});
   return out;
 }
 

@@ -27,6 +27,9 @@ struct NormalEstimation {
   std::size_t components = 0;            ///< connected components of the kNN graph (each seeded separately)
   std::size_t flipped_components = 0;    ///< components turned round by the global outward test
   std::vector<std::uint32_t> component;  ///< each point's component of the kNN graph
+  /// normals turned after the propagation because rays cast from their points cross the
+  /// surface as from inside it (a knife edge's far side: estimate_normals)
+  std::size_t turned_by_parity = 0;
 };
 
 /// Unit outward normals for points (N×3, world units). Each kNN-graph component is seeded at its

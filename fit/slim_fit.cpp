@@ -201,10 +201,12 @@ void SlimFitter::setup() {
       }
     }
   } else {
-    N_ = estimate_normals(P_, {.neighbours = opt_.normal_neighbours}).normals;
+    const NormalEstimation est = estimate_normals(P_, {.neighbours = opt_.normal_neighbours});
+    N_ = est.normals;
     st_.normals_estimated = true;
-    log::info("fit_slim: the cloud has no normals; estimated them (PCA over {} neighbours, MST orientation)",
-              opt_.normal_neighbours);
+    log::info("fit_slim: the cloud has no normals; estimated them (PCA over {} neighbours, MST orientation{})",
+              opt_.normal_neighbours,
+              est.turned_by_parity ? fmt::format("; {} turned by ray parity at knife edges", est.turned_by_parity) : "");
   }
   st_.time_normals = seconds_since(t0);
   // The point indices and the data's surface are independent: built side by side.

@@ -387,6 +387,31 @@ TEST(FitSlimHard, NoNormalsEstimatedAndOriented) {
   expect_two_sided(o);
 }
 
+// A lens (two spherical caps meeting at a knife edge), no normals. The PCA normals of the rim's
+// points lie between the caps', so the orientation propagated over the points crossed the rim and
+// turned one cap inside out: at 39° it fitted with exit 0 and was seen from behind as specks
+// (SLIM draws front-facing hits), because every check placed its views on the side the normals
+// gave. Ray parity (fit/normals.cpp orient_by_parity) turns that cap back.
+Shape lens(double dihedral_deg, std::size_t n, std::uint64_t seed) {
+  const double alpha = dihedral_deg / 2 * std::numbers::pi / 180, rho = 1 / std::sin(alpha);
+  const auto cap = [=](double z_sign) {
+    return [=](double u, double v) {
+      const double th = alpha * u, ph = 2 * std::numbers::pi * v;
+      return Vec(rho * std::sin(th) * std::cos(ph), rho * std::sin(th) * std::sin(ph), z_sign * rho * (std::cos(th) - std::cos(alpha)));
+    };
+  };
+  return make({{cap(1), 1, 120}, {cap(-1), -1, 120}}, n, seed);
+}
+
+TEST(FitSlimHard, AKnifeEdgeLensWithoutNormalsHasBothCapsOutward) {
+  const Shape s = lens(39, 12000, 14);
+  for (std::size_t i = 0; i < s.cloud.points.size(); ++i)  // the truth's normals face away from the lens's middle
+    ASSERT_GT(s.cloud.normals[i].z() * s.cloud.points[i].z(), 0) << i;
+  const Outcome o = fit_and_measure(s, 2 * kE, {}, /*drop_normals=*/true, /*with_faces=*/false);
+  EXPECT_TRUE(o.fit.stats.normals_estimated);
+  expect_two_sided(o);
+}
+
 TEST(FitSlimHard, SparseCloudBelowItsSpacing) {
   // 2,000 points on a torus-like bump surface, fitted at 1e-4: E is far below the spacing.
   const Shape s = make({{[](double u, double v) {
