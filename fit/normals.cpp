@@ -40,7 +40,8 @@ constexpr double kStepRoughness = 6.0;
 constexpr int kRayPairs = 5;
 constexpr double kRayTilt = 0.3490658503988659;  // 20°
 constexpr int kDecidingPairs = 4;
-constexpr std::size_t kMaxVoters = 20000;
+constexpr int kMaxCrossings = 24;
+constexpr std::size_t kMaxVoters = 8000, kMinComponentVoters = 64;
 constexpr double kSmooth = 0.25;
 constexpr std::size_t kConfirm = 8, kAlike = 4;
 constexpr double kMinorityShare = 0.02, kClosedShare = 0.75;
@@ -50,6 +51,9 @@ constexpr double kOwnSheet = 0.75;
 // sides' means must lie this many of their roughnesses apart.
 constexpr std::size_t kMinSide = 5;
 constexpr double kSidesApart = 3.0;
+// ... and its side's normals agree when their signed sum along its plane's normal is this share
+// of their absolute sum.
+constexpr double kSideAgrees = 0.8;
 
 // The scatter matrix Σ (q − mean)(q − mean)ᵀ of the first `count` neighbours that `take` (by
 // their place in nb) keeps; `kept` gets how many it kept.
@@ -128,14 +132,13 @@ void on_own_sheet(std::span<const Eigen::Vector3d> points, std::size_t i, const 
 
 // Crossings of the data's surface (the points' tangent discs) along a ray from a point on it,
 // past its own sheet (tmin). Hits closer along the ray than twice the hit disc's radius over the
-// cosine of the crossing (at most 4) are one crossing: a sheet's overlapping discs. At most 31.
+// cosine of the crossing (at most 4) are one crossing: a sheet's overlapping discs. −1 past
+// kMaxCrossings (a ray along a sheet, or through fuzz: no parity to read).
 int crossings(const DataSurface& surface, const Ray& ray, double tmin) {
   int count = 0;
   double t = tmin;
-  while (count < 31) {
-    const auto hit = surface.first_hit(ray, t);
-    if (!hit) break;
-    ++count;
+  while (const auto hit = surface.first_hit(ray, t)) {
+    if (++count > kMaxCrossings) return -1;
     t = hit->t + 2.0 * hit->reach / std::max(std::abs(hit->normal.dot(ray.dir)), 0.25);
   }
   return count;
@@ -155,30 +158,37 @@ int parity_vote(const DataSurface& surface, const Eigen::Vector3d& p, const Eige
       const double a = (k - 1) * (std::numbers::pi / 2);
       d = std::cos(kRayTilt) * n + std::sin(kRayTilt) * (std::cos(a) * u + std::sin(a) * v);
     }
-    const int ahead = crossings(surface, Ray{p, d}, tmin) & 1;
-    const int behind = crossings(surface, Ray{p, -d}, tmin) & 1;
-    out += ahead == 0 && behind == 1;
-    in += ahead == 1 && behind == 0;
+    const int ahead = crossings(surface, Ray{p, d}, tmin);
+    const int behind = ahead < 0 ? -1 : crossings(surface, Ray{p, -d}, tmin);
+    if (ahead >= 0 && behind >= 0) {
+      out += ahead % 2 == 0 && behind % 2 == 1;
+      in += ahead % 2 == 1 && behind % 2 == 0;
+    }
+    if (out >= kDecidingPairs) return 1;
+    if (in >= kDecidingPairs) return -1;
     const int left = kRayPairs - 1 - k;
     if (out + left < kDecidingPairs && in + left < kDecidingPairs) return 0;
   }
-  return out >= kDecidingPairs ? 1 : in >= kDecidingPairs ? -1 : 0;
+  return 0;
 }
 
 // Knife edges. Across a rim sharper than about 60° (a lens, a blade, a wedge) the PCA normals of
 // the rim's points lie between the two sides' and the propagation carries one side's
 // orientation over the rim onto the other, turning it inside out (a lens whose caps meet at 20°
 // or 39°: one cap, half the normals). So points vote by ray parity (parity_vote) against the
-// tangent discs of the voters: every point of a cloud up to kMaxVoters, else every stride-th in
-// Morton order (spread over the cloud); only smooth ones (rough ≤ kSmooth × gap, gap the
-// distance to the 6th nearest point), as in a noisy shell the rays cross the fuzz at random. A
-// vote stands when at least kAlike of the voter's kConfirm nearest voters vote alike (a lone vote
-// is a ray through a gap). A component where some stand against the propagated normals, and at
-// least kMinorityShare of its standing votes go each way (a knife edge turns one side of a
-// component, not all of it) and that is closed (below), is propagated again from every standing voter at once, each turned
-// as it voted, the rest from the nearest of them along the minimum spanning forest (weight
-// 1 − |nᵢ·nⱼ|). Other components, open sheets among them (they vote nothing), stay as they
-// were. Returns how many normals turned.
+// tangent discs of the voters of their own component (another part of the scene would add its
+// own crossings): every point of a cloud up to kMaxVoters, else every stride-th in Morton order
+// (spread over the cloud); only smooth ones (rough ≤ kSmooth × gap, gap the distance to the 6th
+// nearest point), as in a noisy shell the rays cross the fuzz at random; components with fewer
+// than kMinComponentVoters vote nothing. A vote stands when at least kAlike of the voter's
+// kConfirm nearest voters vote alike (a lone vote is a ray through a gap). A component where
+// some stand against the propagated normals, at least kMinorityShare of its standing votes go
+// each way (a knife edge turns one side of a component, not all of it), and kClosedShare of its
+// smooth voters decided (closed: below) is propagated again from every standing voter at once,
+// each turned as it voted, the rest from the nearest of them along the minimum spanning forest
+// (weight 1 − |nᵢ·nⱼ|), and its rim points then take their own side's plane (below). Other
+// components (open sheets, whose rays escape both ways, noisy shells, parts all of whose votes
+// say one thing) stay as they were. Returns how many normals point the other way than on entry.
 struct OrientationGraph {
   const std::vector<std::uint32_t>& offset;  // adjacency of point v: adj[offset[v] .. offset[v + 1])
   const std::vector<std::uint32_t>& adj;
@@ -197,16 +207,28 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
   if (nv < kConfirm + 1) return 0;
   std::vector<Eigen::Vector3d> vp(nv), vn(nv);
   for (std::size_t j = 0; j < nv; ++j) vp[j] = points[voter[j]], vn[j] = normals[voter[j]];
-  const DataSurface surface = DataSurface::from_points(vp, vn);
+  const std::vector<Eigen::Vector3d> entry = normals;  // for the count of those turned
   std::vector<std::int8_t> vote(nv, 0);
   std::vector<std::uint8_t> smooth(nv, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 64), [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t j = range.begin(); j != range.end(); ++j)
-      if (rough[voter[j]] <= kSmooth * gap[voter[j]]) {
+  // Each component's voters cast their rays against that component's discs alone: another part
+  // of the scene, open or not (a lens in an open bowl, over a ground plane), would add crossings
+  // that have nothing to do with this one's inside.
+  std::vector<std::vector<std::uint32_t>> voters_of(g.members.size());
+  for (std::size_t j = 0; j < nv; ++j) voters_of[g.comp[voter[j]]].push_back(std::uint32_t(j));
+  for (const auto& own : voters_of) {
+    if (own.size() < kMinComponentVoters) continue;
+    std::vector<Eigen::Vector3d> cp(own.size()), cn(own.size());
+    for (std::size_t r = 0; r < own.size(); ++r) cp[r] = vp[own[r]], cn[r] = vn[own[r]];
+    const DataSurface surface = DataSurface::from_points(cp, cn);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, own.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t r = range.begin(); r != range.end(); ++r) {
+        const std::uint32_t j = own[r];
+        if (rough[voter[j]] > kSmooth * gap[voter[j]]) continue;
         smooth[j] = 1;
-        vote[j] = std::int8_t(parity_vote(surface, vp[j], vn[j], kOwnSheet * surface.spacing(j)));
+        vote[j] = std::int8_t(parity_vote(surface, cp[r], cn[r], kOwnSheet * surface.spacing(r)));
       }
-  });
+    });
+  }
   // A closed surface decides most smooth voters' parity (kitten 91 %, lenses 89–96 %); an open
   // scan few, as its rays escape both ways, and those by what it happens to hide (bun000_rawscan
   // 3.5 %, radar.xyz 28 %: body points behind an ear vote "in", and bun000 had 31,833 normals
@@ -221,12 +243,11 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
     if (vote[j] == 0) continue;
     voters_index.nearest(vp[j], kConfirm + 1, nb);
     std::size_t alike = 0;
-    for (const auto& [k, d2] : nb) alike += k != j && vote[k] == vote[j];
+    for (const auto& [other, d2] : nb) alike += other != j && vote[other] == vote[j];
     if (alike < kAlike) continue;
     stands[voter[j]] = vote[j];
     (vote[j] < 0 ? ins : outs)[g.comp[voter[j]]] += 1;
   }
-  std::size_t turned = 0;
   std::vector<std::uint8_t> done(n, 0);
   using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
   std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
@@ -241,7 +262,7 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
         double(decided_in[c]) < kClosedShare * double(smooth_in[c]))
       continue;
     for (auto v : g.members[c])
-      if (stands[v] < 0) normals[v] = -normals[v], ++turned;
+      if (stands[v] < 0) normals[v] = -normals[v];
     for (auto v : g.members[c])
       if (stands[v] != 0) push_edges(v);
     while (!heap.empty()) {
@@ -249,10 +270,11 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
       heap.pop();
       const auto [parent, child] = edge;
       if (done[child]) continue;
-      if (normals[child].dot(normals[parent]) < 0) normals[child] = -normals[child], ++turned;
+      if (normals[child].dot(normals[parent]) < 0) normals[child] = -normals[child];
       push_edges(child);
     }
     // The rim: points with a neighbour facing the other way, and their neighbours.
+    const std::size_t first_of_component = rim.size();
     for (auto v : g.members[c])
       for (std::uint32_t e = g.offset[v]; e < g.offset[v + 1]; ++e)
         if (normals[v].dot(normals[g.adj[e]]) < 0) {
@@ -260,7 +282,7 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
           break;
         }
     const std::size_t edge = rim.size();
-    for (std::size_t r = 0; r < edge; ++r)
+    for (std::size_t r = first_of_component; r < edge; ++r)
       for (std::uint32_t e = g.offset[rim[r]]; e < g.offset[rim[r] + 1]; ++e) rim.push_back(g.adj[e]);
   }
   std::sort(rim.begin(), rim.end());
@@ -313,15 +335,24 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
                               std::abs(side[1].normal.dot(points[v] - side[1].mean))
                           ? 0
                           : 1;
+      // Facing as most of its side's points already do where they clearly agree; else away from
+      // the other side, right at a convex edge (a lens's rim), wrong at a concave one (a notch),
+      // which the side's own normals decide.
       Eigen::Vector3d normal = side[own].normal;
-      if (normal.dot(side[own].mean - side[1 - own].mean) < 0) normal = -normal;
+      double along = 0, across_sum = 0;
+      for (std::size_t j = 0; j < near.size(); ++j)
+        if ((across.dot(points[near[j].first] - middle) > 0) == (own == 0)) {
+          const double a = normals[near[j].first].dot(normal);
+          along += a, across_sum += std::abs(a);
+        }
+      if (std::abs(along) > kSideAgrees * across_sum ? along < 0 : normal.dot(side[own].mean - side[1 - own].mean) < 0)
+        normal = -normal;
       if (normal.allFinite()) refined[r] = normal;
     }
   });
-  for (std::size_t r = 0; r < rim.size(); ++r) {
-    turned += refined[r].dot(normals[rim[r]]) < 0;
-    normals[rim[r]] = refined[r];
-  }
+  for (std::size_t r = 0; r < rim.size(); ++r) normals[rim[r]] = refined[r];
+  std::size_t turned = 0;
+  for (std::size_t i = 0; i < n; ++i) turned += normals[i].dot(entry[i]) < 0;
   return turned;
 }
 

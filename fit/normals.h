@@ -27,14 +27,18 @@ struct NormalEstimation {
   std::size_t components = 0;            ///< connected components of the kNN graph (each seeded separately)
   std::size_t flipped_components = 0;    ///< components turned round by the global outward test
   std::vector<std::uint32_t> component;  ///< each point's component of the kNN graph
-  /// normals turned after the propagation because rays cast from their points cross the
-  /// surface as from inside it (a knife edge's far side: estimate_normals)
+  /// normals pointing the other way after the knife-edge step than after the propagation: a
+  /// closed part whose points' rays (ray parity) say one side of a sharp rim faces in, oriented
+  /// again from those votes (estimate_normals)
   std::size_t turned_by_parity = 0;
 };
 
 /// Unit outward normals for points (N×3, world units). Each kNN-graph component is seeded at its
 /// point farthest from the component's centroid, oriented away from it; after propagation a
-/// component whose normals mostly point to its centroid is flipped.
+/// component whose normals mostly point to its centroid is flipped. A closed component whose
+/// points' ray parity says one side of a knife edge faces in (the propagation crossed its rim)
+/// is oriented again from those votes, and its rim's normals take their own side's plane
+/// (fit/normals.cpp orient_by_parity).
 /// \throws InvalidInput for fewer than 3 points or non-finite coordinates.
 NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points,
                                   const NormalEstimationOptions& options = {});
