@@ -224,7 +224,147 @@ struct Key4Hash {
   }
 };
 
-void mesh_tets(const Model& model, int k, Builder& out) {
+// How far the flat triangles of a lattice k to an edge can leave a tetrahedron patch's surface,
+// estimated: along a lattice edge E/k (parallel to an edge E of the tetrahedron) the quadric
+// departs from the line between its ends by at most |EᵀAE|/(4k²) at the middle, which is a
+// distance of that over |∇f| (∇f = 2(Ay + b), its least at the corners and the centroid). Where
+// the departure is large against the gradient, the lattice can also join or miss pieces of the
+// surface (neghip: two caps at a tetrahedron's corners joined by a sheet through its middle,
+// 0.45 from the drawn surface).
+double lattice_sag(const TetPatch& t, int k) {
+  const Eigen::Vector3d c = t.centroid();
+  double departs = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) {
+      const Eigen::Vector3d e = t.corners[j] - t.corners[i];
+      departs = std::max(departs, std::abs(e.dot(t.quadric.A * e)));
+    }
+  if (departs == 0.0) return 0.0;  // a plane: exact
+  departs /= 4.0 * k * k;
+  double g = t.quadric.gradient(Eigen::Vector3d::Zero()).norm();
+  for (const auto& x : t.corners) g = std::min(g, t.quadric.gradient(x - c).norm());
+  return g > 0.0 ? departs / g : std::numeric_limits<double>::infinity();
+}
+
+// Tetrahedron patches cut where a lattice of k to an edge would leave their surface by more than
+// `sag` (lattice_sag), by conforming longest-edge bisection (Rivara): a tetrahedron is cut at its
+// longest edge together with every tetrahedron around that edge, a neighbour whose own longest
+// edge is another being cut there first, so the pieces share whole faces and the lattices of
+// neighbours still meet node for node. Each piece keeps its patch's quadric (moved to its own
+// centroid) and colour: the surface drawn is unchanged. At most `generations` cuts deep; no cut
+// is begun once there are max_tets pieces.
+std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int k, double sag, int generations,
+                                         std::size_t max_tets) {
+  std::vector<Eigen::Vector3d> vx;
+  std::map<std::array<double, 3>, int> vid;
+  const auto vertex = [&](const Eigen::Vector3d& x) {
+    const auto [it, fresh] = vid.try_emplace(std::array<double, 3>{x.x(), x.y(), x.z()}, int(vx.size()));
+    if (fresh) vx.push_back(x);
+    return it->second;
+  };
+  struct Tet {
+    std::array<int, 4> v;
+    int patch, generation;
+    bool alive = true;
+  };
+  std::vector<Tet> tets;
+  const auto key = [](int a, int b) {
+    return std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b));
+  };
+  std::unordered_map<std::uint64_t, std::vector<int>> around;  // edge → tetrahedra (dead ones too)
+  const auto add = [&](const Tet& t) {
+    tets.push_back(t);
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) around[key(t.v[i], t.v[j])].push_back(int(tets.size() - 1));
+  };
+  // Edges ordered by length, ties by key: every tetrahedron around an edge agrees on it.
+  const auto longer = [&](std::uint64_t e, std::uint64_t f) {
+    const double le = (vx[e >> 32] - vx[e & 0xffffffffu]).squaredNorm(), lf = (vx[f >> 32] - vx[f & 0xffffffffu]).squaredNorm();
+    return le != lf ? le > lf : e > f;
+  };
+  const auto longest = [&](const Tet& t) {
+    std::uint64_t best = key(t.v[0], t.v[1]);
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (const auto e = key(t.v[i], t.v[j]); longer(e, best)) best = e;
+    return best;
+  };
+  for (std::size_t p = 0; p < patches.size(); ++p) {
+    Tet t{{}, int(p), 0};
+    for (int i = 0; i < 4; ++i) t.v[i] = vertex(patches[p].corners[i]);
+    add(t);
+  }
+  const auto piece = [&](const Tet& t) {
+    const TetPatch& parent = patches[t.patch];
+    TetPatch q;
+    for (int i = 0; i < 4; ++i) q.corners[i] = vx[t.v[i]];
+    q.quadric = parent.quadric.translated_to_origin(q.centroid() - parent.centroid());
+    q.colour = parent.colour;
+    return q;
+  };
+  std::size_t alive = tets.size();
+  // Cut edge e (and every tetrahedron around it), cutting longer edges first where they are.
+  const auto bisect = [&](std::uint64_t first) {
+    std::vector<std::uint64_t> stack{first};
+    while (!stack.empty()) {  // a cut's closure is finished whatever the count: no crack is left
+      const std::uint64_t e = stack.back();
+      auto& list = around[e];
+      int t = -1;
+      while (!list.empty() && t < 0) {
+        if (tets[list.back()].alive) t = list.back();
+        else list.pop_back();
+      }
+      if (t < 0) {
+        stack.pop_back();
+        continue;
+      }
+      const std::uint64_t l = longest(tets[t]);
+      if (l != e) {
+        stack.push_back(l);
+        continue;
+      }
+      const int a = int(e >> 32), b = int(e & 0xffffffffu);
+      const int m = vertex(0.5 * (vx[a] + vx[b]));
+      Tet parent = tets[t];
+      tets[t].alive = false;
+      for (const int drop : {a, b}) {
+        Tet child = parent;
+        child.generation = parent.generation + 1;
+        for (auto& v : child.v)
+          if (v == drop) v = m;
+        add(child);
+      }
+      ++alive;
+    }
+  };
+  // Each round cuts the pieces still over `sag`, those farthest over it first, until the count
+  // reaches max_tets.
+  for (int round = 0; round < generations && alive < max_tets; ++round) {
+    std::vector<std::pair<double, int>> over;
+    for (std::size_t t = 0; t < tets.size(); ++t)
+      if (tets[t].alive && tets[t].generation < generations)
+        if (const double q = lattice_sag(piece(tets[t]), k); q > sag) over.emplace_back(q, int(t));
+    if (over.empty()) break;
+    std::sort(over.begin(), over.end(), std::greater<>());
+    for (const auto& [q, t] : over) {
+      if (alive >= max_tets) break;
+      if (tets[t].alive) bisect(longest(tets[t]));
+    }
+  }
+  log::debug("mesh: {} tetrahedra cut into {} pieces for a lattice of {}", patches.size(), alive, k);
+  std::vector<TetPatch> out;
+  out.reserve(alive);
+  for (const Tet& t : tets)
+    if (t.alive) out.push_back(piece(t));
+  return out;
+}
+
+// Tetrahedron patches on lattices of k to an edge, each cut first (refine_for_lattice) where that
+// lattice would leave its surface by more than half the bound.
+void mesh_tets(const Model& model, int k, double bound, Builder& out) {
+  constexpr int kCutGenerations = 6;  // every edge halved twice
+  constexpr std::size_t kMaxPieces = 8;  // times the patches
+  const std::vector<TetPatch> tets = refine_for_lattice(model.tets, k, 0.25 * bound, kCutGenerations, kMaxPieces * model.tets.size());
   // Corners welded by exact position, so neighbours name their shared lattice points alike.
   std::map<std::array<double, 3>, std::uint64_t> corner_ids;
   const auto corner_id = [&](const Eigen::Vector3d& x) {
@@ -245,7 +385,7 @@ void mesh_tets(const Model& model, int k, Builder& out) {
   };
   std::unordered_map<EdgeKey, int, EdgeHash> crossings;
   std::set<std::array<int, 3>> zero_faces;  // triangles of three nodes on the surface, made once
-  for (const TetPatch& tet : model.tets) {
+  for (const TetPatch& tet : tets) {
     const Eigen::Vector3d centroid = tet.centroid();
     std::array<std::uint64_t, 4> g;
     for (int i = 0; i < 4; ++i) g[i] = corner_id(tet.corners[i]);
@@ -1781,7 +1921,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                            bool* undone = nullptr) {
     Builder b;
     b.colours = has_any_colour(model);
-    if (!model.tets.empty()) mesh_tets(model, 1 << level, b);
+    if (!model.tets.empty()) mesh_tets(model, 1 << level, bound, b);
     std::size_t unions_failed = 0;
     const bool glyph_union = o.union_glyphs && unions_glyphs(model) && model.glyphs.size() <= o.union_max_glyphs;
     if (glyph_union)
