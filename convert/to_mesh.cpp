@@ -226,22 +226,33 @@ struct Key4Hash {
 
 // How far the flat triangles of a lattice k to an edge can leave a tetrahedron patch's surface,
 // estimated: along a lattice edge E/k (parallel to an edge E of the tetrahedron) the quadric
-// departs from the line between its ends by at most |EᵀAE|/(4k²) at the middle, which is a
-// distance of that over |∇f| (∇f = 2(Ay + b), its least at the corners and the centroid). Where
-// the departure is large against the gradient, the lattice can also join or miss pieces of the
+// departs from the line between its ends by |EᵀAE|/(4k²) at the middle, which is a distance of
+// that over |∇f| (∇f = 2(Ay + b), here its least at the corners and the centroid). Where the
+// departure is large against the gradient, the lattice can also join or miss pieces of the
 // surface (neghip: two caps at a tetrahedron's corners joined by a sheet through its middle,
-// 0.45 from the drawn surface).
+// 0.45 from the drawn surface). Not a bound: the lattice's inner octahedra have diagonals along
+// none of the edges (a reviewer found |DᵀAD| up to 4.9× the largest edge term in a quarter of
+// Marschner–Lobb's pieces), a departure inside a lattice tetrahedron can reach 3/8 rather than 1/4,
+// and the gradient can be smaller between the points asked; the threshold (a quarter of the
+// bound, mesh_tets) was chosen with this estimate, and the measured error decides. 0 where the
+// quadric has no zero in the ball about the centroid through the farthest corner: |f(y) − f(0)|
+// ≤ ‖A‖r² + |∇f(0)|r there.
 double lattice_sag(const TetPatch& t, int k) {
   const Eigen::Vector3d c = t.centroid();
-  double departs = 0;
-  for (int i = 0; i < 4; ++i)
+  double departs = 0, reach = 0;
+  for (int i = 0; i < 4; ++i) {
+    reach = std::max(reach, (t.corners[i] - c).norm());
     for (int j = i + 1; j < 4; ++j) {
       const Eigen::Vector3d e = t.corners[j] - t.corners[i];
       departs = std::max(departs, std::abs(e.dot(t.quadric.A * e)));
     }
+  }
   if (departs == 0.0) return 0.0;  // a plane: exact
+  const double a = t.quadric.A.cwiseAbs().rowwise().sum().maxCoeff();  // ≥ ‖A‖₂
+  const double g0 = t.quadric.gradient(Eigen::Vector3d::Zero()).norm();
+  if (std::abs(t.quadric.eval(Eigen::Vector3d::Zero())) > (a * reach + g0) * reach) return 0.0;  // no surface inside
   departs /= 4.0 * k * k;
-  double g = t.quadric.gradient(Eigen::Vector3d::Zero()).norm();
+  double g = g0;
   for (const auto& x : t.corners) g = std::min(g, t.quadric.gradient(x - c).norm());
   return g > 0.0 ? departs / g : std::numeric_limits<double>::infinity();
 }
@@ -251,10 +262,13 @@ double lattice_sag(const TetPatch& t, int k) {
 // longest edge together with every tetrahedron around that edge, a neighbour whose own longest
 // edge is another being cut there first, so the pieces share whole faces and the lattices of
 // neighbours still meet node for node. Each piece keeps its patch's quadric (moved to its own
-// centroid) and colour: the surface drawn is unchanged. At most `generations` cuts deep; no cut
-// is begun once there are max_tets pieces.
+// centroid) and colour: the surface drawn is unchanged. Cuts are begun on pieces fewer than
+// `generations` cuts deep (a cut's closure can cut a neighbour a few generations deeper), and
+// none once there are max_tets pieces (the closure of the last may pass it by a few).
 std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int k, double sag, int generations,
                                          std::size_t max_tets) {
+  if (generations <= 0 || std::none_of(patches.begin(), patches.end(), [&](const TetPatch& t) { return lattice_sag(t, k) > sag; }))
+    return {patches.begin(), patches.end()};
   std::vector<Eigen::Vector3d> vx;
   std::map<std::array<double, 3>, int> vid;
   const auto vertex = [&](const Eigen::Vector3d& x) {
@@ -360,9 +374,9 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
 }
 
 // Tetrahedron patches on lattices of k to an edge, each cut first (refine_for_lattice) where that
-// lattice would leave its surface by more than half the bound.
+// lattice would leave its surface by more than a quarter of the bound.
 void mesh_tets(const Model& model, int k, double bound, Builder& out) {
-  constexpr int kCutGenerations = 6;  // every edge halved twice
+  constexpr int kCutGenerations = 6;  // cuts begun; a cut's closure can reach a few deeper
   constexpr std::size_t kMaxPieces = 8;  // times the patches
   const std::vector<TetPatch> tets = refine_for_lattice(model.tets, k, 0.25 * bound, kCutGenerations, kMaxPieces * model.tets.size());
   // Corners welded by exact position, so neighbours name their shared lattice points alike.
@@ -2189,7 +2203,8 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   // The grid goes first, and the tetrahedra's own lattices only where it ends outside the bound,
   // unless most tetrahedra are planes or hold their surface through all four corners (quads):
   // their lattices mesh them exactly or along their edges (cube_quad: 12 triangles, exact;
-  // spot_quadrangulated: within the bound, closed, 20,528 triangles in 0.2 s), where the grid
+  // spot_quadrangulated: within the bound, closed, 24,122 triangles, its curved quads cut by
+  // refine_for_lattice; 20,528 uncut, 1.5e-3 off against 6.4e-4 now), where the grid
   // rounds sharp edges off (cube_quad on the grid: 166,612 triangles, 2,356 open edges).
   std::optional<ToMeshResult> grid_mesh;
   if (closed_tets && 2 * lattice_exact < model.tets.size()) grid_mesh = mesh_on_grid();
