@@ -212,6 +212,13 @@ void mesh_implicit(const ImplicitSurface& surface, int k, Builder& out) {
 
 // ---- tetrahedron patches ----------------------------------------------------------------------
 
+// An edge between vertices a and b, either way round: the smaller index in the high half.
+std::uint64_t edge_key(int a, int b) {
+  const auto [lo, hi] = std::minmax(a, b);
+  return static_cast<std::uint64_t>(lo) << 32 | static_cast<std::uint32_t>(hi);
+}
+
+
 struct Key4 {
   std::array<std::uint64_t, 4> v{};
   bool operator==(const Key4&) const = default;
@@ -282,14 +289,11 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
     bool alive = true;
   };
   std::vector<Tet> tets;
-  const auto key = [](int a, int b) {
-    return std::uint64_t(std::uint32_t(std::min(a, b))) << 32 | std::uint32_t(std::max(a, b));
-  };
   std::unordered_map<std::uint64_t, std::vector<int>> around;  // edge → tetrahedra (dead ones too)
   const auto add = [&](const Tet& t) {
     tets.push_back(t);
     for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) around[key(t.v[i], t.v[j])].push_back(int(tets.size() - 1));
+      for (int j = i + 1; j < 4; ++j) around[edge_key(t.v[i], t.v[j])].push_back(int(tets.size() - 1));
   };
   // Edges ordered by length, ties by key: every tetrahedron around an edge agrees on it.
   const auto longer = [&](std::uint64_t e, std::uint64_t f) {
@@ -297,10 +301,10 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
     return le != lf ? le > lf : e > f;
   };
   const auto longest = [&](const Tet& t) {
-    std::uint64_t best = key(t.v[0], t.v[1]);
+    std::uint64_t best = edge_key(t.v[0], t.v[1]);
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j)
-        if (const auto e = key(t.v[i], t.v[j]); longer(e, best)) best = e;
+        if (const auto e = edge_key(t.v[i], t.v[j]); longer(e, best)) best = e;
     return best;
   };
   for (std::size_t p = 0; p < patches.size(); ++p) {
@@ -1150,11 +1154,6 @@ std::size_t count_open_edges(const PolygonMesh& m) {
 }
 
 // ---- local refinement (SLIM) ------------------------------------------------------------------
-
-std::uint64_t edge_key(int a, int b) {
-  const auto [lo, hi] = std::minmax(a, b);
-  return static_cast<std::uint64_t>(lo) << 32 | static_cast<std::uint32_t>(hi);
-}
 
 /// Closes seams between pieces meshed apart (each tetrahedron, glyph and the SLIM grid make their
 /// own vertices): open edges' vertices within eps of each other become one, and an open edge with

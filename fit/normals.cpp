@@ -36,7 +36,7 @@ constexpr double kStepRoughness = 6.0;
 
 // Knife edges (orient_by_parity): the rays each voter casts (a direction and its opposite, along
 // its normal and tilted this far from it), how many of the kRayPairs must agree for a vote to
-// count; voters at most, their smoothness, and how a vote stands (orient_by_parity).
+// count, and a ray's crossings at most; voters at most, their smoothness, and how a vote stands.
 constexpr int kRayPairs = 5;
 constexpr double kRayTilt = 0.3490658503988659;  // 20°
 constexpr int kDecidingPairs = 4;
@@ -172,6 +172,31 @@ int parity_vote(const DataSurface& surface, const Eigen::Vector3d& p, const Eige
   return 0;
 }
 
+// Prim's minimum spanning forest over the orientation graph (adjacency of point v:
+// adj[offset[v] .. offset[v + 1]), weight 1 − |nᵢ·nⱼ|), grown from all `seeds` at once: each
+// point reached is turned to agree with the one it was reached from. `done` marks the points
+// taken (the seeds too).
+void propagate_orientation(std::span<const std::uint32_t> seeds, const std::vector<std::uint32_t>& offset,
+                           const std::vector<std::uint32_t>& adj, std::vector<Eigen::Vector3d>& normals,
+                           std::vector<std::uint8_t>& done) {
+  using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
+  const auto push_edges = [&](std::uint32_t v) {
+    done[v] = 1;
+    for (std::uint32_t e = offset[v]; e < offset[v + 1]; ++e)
+      if (!done[adj[e]]) heap.push({1.0 - std::abs(normals[v].dot(normals[adj[e]])), {v, adj[e]}});
+  };
+  for (const auto v : seeds) push_edges(v);
+  while (!heap.empty()) {
+    const auto [w, edge] = heap.top();
+    heap.pop();
+    const auto [parent, child] = edge;
+    if (done[child]) continue;
+    if (normals[child].dot(normals[parent]) < 0) normals[child] = -normals[child];
+    push_edges(child);
+  }
+}
+
 // Knife edges. Across a rim sharper than about 60° (a lens, a blade, a wedge) the PCA normals of
 // the rim's points lie between the two sides' and the propagation carries one side's
 // orientation over the rim onto the other, turning it inside out (a lens whose caps meet at 20°
@@ -249,30 +274,19 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
     (vote[j] < 0 ? ins : outs)[g.comp[voter[j]]] += 1;
   }
   std::vector<std::uint8_t> done(n, 0);
-  using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
-  const auto push_edges = [&](std::uint32_t v) {
-    done[v] = 1;
-    for (std::uint32_t e = g.offset[v]; e < g.offset[v + 1]; ++e)
-      if (!done[g.adj[e]]) heap.push({1.0 - std::abs(normals[v].dot(normals[g.adj[e]])), {v, g.adj[e]}});
-  };
+  std::vector<std::uint32_t> seeds;
   std::vector<std::uint32_t> rim;  // points of turned components near their rim
   for (std::size_t c = 0; c < g.members.size(); ++c) {
     if (ins[c] == 0 || double(std::min(ins[c], outs[c])) < kMinorityShare * double(ins[c] + outs[c]) ||
         double(decided_in[c]) < kClosedShare * double(smooth_in[c]))
       continue;
+    seeds.clear();
     for (auto v : g.members[c])
-      if (stands[v] < 0) normals[v] = -normals[v];
-    for (auto v : g.members[c])
-      if (stands[v] != 0) push_edges(v);
-    while (!heap.empty()) {
-      const auto [w, edge] = heap.top();
-      heap.pop();
-      const auto [parent, child] = edge;
-      if (done[child]) continue;
-      if (normals[child].dot(normals[parent]) < 0) normals[child] = -normals[child];
-      push_edges(child);
-    }
+      if (stands[v] != 0) {
+        if (stands[v] < 0) normals[v] = -normals[v];
+        seeds.push_back(v);
+      }
+    propagate_orientation(seeds, g.offset, g.adj, normals, done);
     // The rim: points with a neighbour facing the other way, and their neighbours.
     const std::size_t first_of_component = rim.size();
     for (auto v : g.members[c])
@@ -291,7 +305,7 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
   // lies between its two sides (a 20° lens: nearly along its axis on both caps) and the tangent
   // discs stood out past the edge, half of them facing the other side's way. The neighbours are
   // split by the side of that middle plane they lie on (each side of the edge), and the point
-  // takes the PCA plane of the side whose plane passes nearer it, facing away from the other.
+  // takes the PCA plane of the side whose plane passes nearer it (facing: below).
   std::vector<Eigen::Vector3d> refined(rim.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rim.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<Neighbour> near;
@@ -492,7 +506,6 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
   };
   // Prim's MST per component (weight 1 − |nᵢ·nⱼ|), propagating orientation from parent to child.
   std::vector<std::uint8_t> done(n, 0);
-  using Item = std::pair<double, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, child)
   for (const auto& m : members) {
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (auto v : m) centroid += points[v];
@@ -505,21 +518,7 @@ NormalEstimation estimate_normals(std::span<const Eigen::Vector3d> points, const
         seed = v;
       }
     if (out.normals[seed].dot(points[seed] - centroid) < 0) out.normals[seed] = -out.normals[seed];
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
-    auto push_edges = [&](std::uint32_t v) {
-      done[v] = 1;
-      for (std::uint32_t e = offset[v]; e < offset[v + 1]; ++e)
-        if (!done[adj[e]]) heap.push({1.0 - std::abs(out.normals[v].dot(out.normals[adj[e]])), {v, adj[e]}});
-    };
-    push_edges(seed);
-    while (!heap.empty()) {
-      const auto [w, edge] = heap.top();
-      heap.pop();
-      const auto [parent, child] = edge;
-      if (done[child]) continue;
-      if (out.normals[child].dot(out.normals[parent]) < 0) out.normals[child] = -out.normals[child];
-      push_edges(child);
-    }
+    propagate_orientation(std::span(&seed, 1), offset, adj, out.normals, done);
     // Global outward test (outwardness above).
     if (outwardness(m, centroid) < 0) {
       for (auto v : m) out.normals[v] = -out.normals[v];
