@@ -50,6 +50,13 @@ struct RenderOptions {
   /// SLIM splats bound each patch's surface piece (a prism about the slab of its zero set,
   /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
   bool slim_tight_splats = true;
+  /// Sides of the tight SLIM splat: the polygon of this many support lines around the projected
+  /// slab (4: the oriented rectangle; 8 cuts its corners around a disc seen face-on). A multiple
+  /// of 4, at most 16. Unset: 4 on a software rasterizer, 8 elsewhere. On llvmpipe the octagons'
+  /// extra triangles cost more than the fragments they save (bunny fitted at 1e-3, 1024²: 11 %
+  /// fewer SLIM shader runs but 17 % more fragment-shader invocations, as the blocks along each
+  /// inner edge run once per triangle; `bench render`'s octagon row); unmeasured on a GPU.
+  std::optional<int> slim_splat_sides;
   /// SLIM pass 2 runs the depth test before the ray–quadric code (render/passes/slim_pass.h):
   /// its splats lie in front of their hits and write no depth, each hit is compared with pass 1's
   /// depth in the shader; chunks outside the view frustum are skipped, and clears and the resolve

@@ -60,8 +60,10 @@ double cpu_ms() {
 Row measure(const std::string& name, render::Renderer& r, const Camera& cam, bool cull, int frames,
             const SlimBlendOptions& blend = {}, bool tight_splats = true, bool effects = false,
             bool tet_early_depth = true, bool tet_occlusion = true, int shadow_map_size = 0, double pixel_error = 0,
-            std::optional<bool> glyph_early_depth = std::nullopt) {
+            std::optional<bool> glyph_early_depth = std::nullopt,
+            std::optional<int> slim_splat_sides = std::nullopt) {
   render::RenderOptions o;
+  o.slim_splat_sides = slim_splat_sides;
   o.shadow_map_size = shadow_map_size;
   o.slim_pixel_error = pixel_error;
   o.tet_occlusion = tet_occlusion;
@@ -294,6 +296,11 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                           if (!model.slims.empty()) {  // the baseline splat: the ball's screen rectangle
                             rows.push_back(measure("quadrics, ball splats", r, cam, true, a->frames,
                                                    slim_blend_of(model), false));
+                            // The tight splat as the octagon (RenderOptions::slim_splat_sides: the
+                            // default on a GPU, the rectangle on software rasterizers).
+                            rows.push_back(measure("quadrics, octagon splats", r, cam, true, a->frames,
+                                                   slim_blend_of(model), true, false, true, true, 0, 0,
+                                                   std::nullopt, 8));
                             // Each splat fragment ray-casts and writes its hit's depth (no early depth test).
                             if (model.glyphs.empty() && model.tets.empty())  // else that row is there
                               rows.push_back(measure("quadrics, hit depth", r, cam, true, a->frames,
@@ -398,6 +405,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         const Row* ball = row_named("quadrics, ball splats");
                         if (tri) j["ratio_quadrics_culled_over_triangles"] = rows[0].ms_median / tri->ms_median;
                         if (ball) j["ratio_ball_over_tight_splats"] = ball->ms_median / rows[0].ms_median;
+                        if (const Row* oct = row_named("quadrics, octagon splats"))
+                          j["ratio_octagon_splats_over_default"] = oct->ms_median / rows[0].ms_median;
                         const Row* hit_depth = row_named("quadrics, hit depth");
                         const Row* no_occ = row_named("quadrics, no occlusion");
                         if (hit_depth) {
@@ -429,6 +438,8 @@ void add_bench_render(CLI::App& bench, Commands& commands) {
                         std::printf("culling off/on %.2f", rows[1].ms_median / rows[0].ms_median);
                         if (tri) std::printf(", quadrics (culled)/triangles %.2f", rows[0].ms_median / tri->ms_median);
                         if (ball) std::printf(", ball/tight splats %.2f", ball->ms_median / rows[0].ms_median);
+                        if (const Row* oct = row_named("quadrics, octagon splats"))
+                          std::printf(", octagon splats/default %.2f", oct->ms_median / rows[0].ms_median);
                         if (no_occ) std::printf(", no occlusion/occlusion %.2f", no_occ->ms_median / rows[0].ms_median);
                         // Row 0 draws each kind the default way: early depth and occlusion for tetrahedra
                         // and SLIM; for glyphs the platform's way (one pass with rectangles on llvmpipe).

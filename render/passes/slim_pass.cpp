@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/primitive.h"
 #include "core/slim.h"
+#include "render/context.h"
 #include "render/shaders.h"
 
 namespace quadrix::render {
@@ -91,7 +92,8 @@ SlimPass::SlimPass()
       accumulate_early_("slim pass 2, early depth", shader_source("slim.vert"), shader_source("slim.frag"),
                         "#define SLIM_PASS 2\n#define SLIM_EARLY 1\n"),
       from_depth_("slim pass-1 depth from the depth buffer", shader_source("fullscreen.vert"),
-                  shader_source("slim_depth_copy.frag")) {}
+                  shader_source("slim_depth_copy.frag")),
+      software_(current_context_is_software()) {}
 
 void SlimPass::upload_chunked(std::span<const float> balls, std::span<const Box3> boxes) {
   chunks_ = make_chunks(boxes, {.chunk_size = kChunkSize});
@@ -205,6 +207,13 @@ void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
     throw GlError("SLIM accumulation framebuffer incomplete");
 }
 
+// Vertices per splat (render/shaders/slim.vert): the tight polygon's sides; rectangles (the
+// ball splats) as 4.
+GLsizei SlimPass::splat_sides(const RenderOptions& o) const {
+  if (!o.slim_tight_splats) return 4;
+  return static_cast<GLsizei>(std::clamp(o.slim_splat_sides.value_or(software_ ? 4 : 8) / 4 * 4, 4, 16));
+}
+
 void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stats) const {
   set_camera_uniforms(p, f.camera);
   set_origin_uniforms(p, origin_, f.camera);
@@ -213,6 +222,7 @@ void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stat
   p.set("u_count_stats", count_stats);
   p.set("u_cull", f.slim_cull ? 1 : 0);
   p.set("u_tight", f.options.slim_tight_splats ? 1 : 0);
+  p.set("u_sides", splat_sides(f.options));
   p.set("u_base", 0);
 }
 
@@ -252,7 +262,7 @@ void SlimPass::run_early_depth(const Frame& f) {
     for (const auto& [first, count] : runs) {
       program.set("u_base", first);
       program.use();
-      glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, count);
+      glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, splat_sides(f.options), count);
     }
   };
   const Accumulation& a = *current_;
@@ -306,7 +316,7 @@ void SlimPass::visibility(const Frame& f) {
   glDepthMask(GL_TRUE);
   set_uniforms(visibility_, f, f.options.statistics ? 1 : 0);
   visibility_.use();
-  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, splat_sides(f.options), static_cast<GLsizei>(count_));
   set_gbuffer_colour_writes(f);
 }
 
@@ -324,7 +334,7 @@ void SlimPass::accumulate(const Frame& f) {
   glBlendFunc(GL_ONE, GL_ONE);
   set_uniforms(accumulate_, f, f.options.statistics ? 1 : 0);
   accumulate_.use();
-  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, splat_sides(f.options), static_cast<GLsizei>(count_));
   glDisable(GL_BLEND);
 }
 
@@ -359,6 +369,7 @@ void SlimOutlinePass::run(const Frame& f) {
   program_.set("u_count_stats", 0);
   program_.set("u_cull", f.slim_cull ? 1 : 0);
   program_.set("u_tight", 0);
+  program_.set("u_sides", 4);
   program_.set("u_base", 0);
   program_.use();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, slim_.balls());

@@ -58,6 +58,8 @@ private:
   /// The three passes on the early-depth path, within the visible chunks' screen bound.
   void run_early_depth(const Frame& frame);
   void set_uniforms(const gl::Program& program, const Frame& frame, int count_stats) const;
+  /// Vertices per splat: RenderOptions::slim_splat_sides, or this platform's default.
+  GLsizei splat_sides(const RenderOptions& options) const;
   /// (Re)makes the accumulation targets; they share the G-buffer's depth texture.
   void ensure_accumulation(const FrameTargets& targets, bool half);
   /// Packs `balls` (kBallFloats each, the cut's or the model's) into the GPU buffer in chunk order.
@@ -68,6 +70,7 @@ private:
   gl::Buffer balls_;
   std::size_t count_ = 0;
   Chunks chunks_;  // GPU slots in chunk order
+  bool software_ = false;  // render/context.h current_context_is_software, at construction
   /// Accumulation targets for one FrameTargets (the view's, and the light's for shadows).
   struct Accumulation {
     gl::Texture normal_weight, depth_colour;

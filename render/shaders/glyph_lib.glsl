@@ -47,9 +47,6 @@ GlyphRay glyph_ray(Glyph g, vec2 k, mat3 view_rot, float target_distance) {
   return r;
 }
 
-// Triangle strip order over a convex polygon's vertices: 0, 1, N−1, 2, N−2, …
-int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 : n - i / 2; }
-
 // The nearest hit along a ray u(σ) = o + σ·d in parameter space, s = σ·scale measured from the
 // centre's view plane towards the eye (the eye at s = centre_z), beyond the near plane (eye depth
 // ≥ near: a glyph the near plane cuts shows its far side there, as the CPU reference's rays start

@@ -86,3 +86,6 @@ float hull_support(vec2 c0, mat2 S0, vec2 c1, mat2 S1, vec2 n) { return max(supp
 vec3 unpack_colour(uint c) {
   return vec3(float(c & 0xFFu), float((c >> 8) & 0xFFu), float((c >> 16) & 0xFFu)) / 255.0;
 }
+
+// Triangle strip order over a convex polygon's vertices: 0, 1, N−1, 2, N−2, …
+int strip_vertex(int i, int n) { return i == 0 ? 0 : (i & 1) != 0 ? (i + 1) / 2 : n - i / 2; }

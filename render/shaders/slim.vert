@@ -1,11 +1,14 @@
 // SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced quad per ball
 // that bounds the patch's surface piece, not the ball. The piece lies in the slab
 // s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
-// load); the quad is the screen rectangle oriented along the projected axis that holds the
-// projected cylinder about that slab (the hull of its two cap discs' exact projected ellipses,
-// [Sigg06] eq. 5) — the projected slab's quad: thin where the piece is seen edge-on. Balls
-// without a tight slab get the ball's axis-aligned tight screen rectangle; balls whose proxy holds the eye or straddles the near plane get the whole viewport:
-// never clipped. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
+// load); the proxy is the convex polygon of u_sides support lines (the first along the
+// projected axis, then at equal steps) of the projected cylinder about that slab (the hull of its
+// two cap discs' exact projected ellipses, [Sigg06] eq. 5): thin where the piece is seen edge-on,
+// and with 8 sides it cuts the corners a rectangle leaves around a disc seen face-on (21.5 % of
+// a rectangle around an ellipse lies outside it, 5.2 % of an octagon). Balls without a tight slab
+// get the ball's axis-aligned tight screen rectangle; balls whose proxy holds the eye or
+// straddles the near plane get the whole viewport: never clipped. Rectangles are drawn as the
+// same u_sides-gon with repeated corners. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
 // test for spheres ([Stoll06] eq. 18).
 //
 // The quad lies at one depth, in front of every point of the surface piece: the nearer of the
@@ -48,6 +51,7 @@ uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
 uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
 uniform int u_base;   // the first ball of this draw
+uniform int u_sides;  // vertices of the proxy polygon (a multiple of 4; 4: rectangles)
 
 out vec3 v_dir;      // eye-space ray direction through the pixel (z = −1)
 out vec3 v_offset;   // ray point in the centre's view plane, relative to the centre, units of R
@@ -106,17 +110,21 @@ void main() {
   if (count_balls) {
     if (culled) atomicAdd(stats.culled, 1u); else atomicAdd(stats.drawn, 1u);
   }
+  // k: this vertex's place around the polygon (counter-clockwise from the first quadrant).
 #ifdef SLIM_OUTLINE
   v_culled = culled ? 1 : 0;
-  const int kLoop[5] = int[5](0, 1, 3, 2, 0);
-  int vid = kLoop[gl_VertexID];
+  int k_poly = gl_VertexID % u_sides;  // a line strip of u_sides + 1 vertices
 #else
   if (culled) {
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
     return;
   }
-  int vid = gl_VertexID;
+  int k_poly = strip_vertex(gl_VertexID, u_sides);
 #endif
+  // The rectangles' corner for vertex k: vertex k of the polygon lies near the angle
+  // (k + ½)·360°/u_sides, so its quadrant picks the corner.
+  int quadrant = (4 * k_poly + 2) / u_sides;
+  bvec2 hi_corner = bvec2(quadrant == 0 || quadrant == 3, quadrant < 2);
 
   // The cylinder about the slab: its disc of radius ρ, caps at s0 and s1.
   bool tight = has_slab && u_tight != 0;
@@ -130,7 +138,7 @@ void main() {
   float ndc_z = -1.0;
   float zn = C.z + R;  // nearest depth of the ball: fragments only move away from it
   if (inside_or_near) {
-    corner = vec2((vid & 1) != 0 ? 1.0 : -1.0, (vid & 2) != 0 ? 1.0 : -1.0);
+    corner = vec2(hi_corner.x ? 1.0 : -1.0, hi_corner.y ? 1.0 : -1.0);
   } else {
     if (tight) {
       // Extents in screen slopes k = xy/(−z) along the projected axis a and a⊥.
@@ -149,18 +157,25 @@ void main() {
       mat2 S0, S1;
       project_ellipse((C + R * s0 * axis) / L, S, vec2(1.0), c0, S0);
       project_ellipse((C + R * s1 * axis) / L, S, vec2(1.0), c1, S1);
-      vec2 kc_e = vec2(dot(kc, a), dot(kc, ap));  // the centre's slope in the (a, a⊥) frame
-      vec2 hi = vec2(hull_support(c0, S0, c1, S1, a), hull_support(c0, S0, c1, S1, ap)) - kc_e;
-      vec2 lo = -vec2(hull_support(c0, S0, c1, S1, -a), hull_support(c0, S0, c1, S1, -ap)) - kc_e;
+      // Vertex k joins support lines k and k + 1, nᵢ = cos θᵢ a + sin θᵢ a⊥ at θᵢ = i·360°/u_sides,
+      // each nᵢ·(k − kc) = hᵢ, the hull's support measured from the centre's slope.
+      float step = radians(360.0) / float(u_sides);
+      float t0 = step * float(k_poly), t1 = step * float(k_poly + 1);
+      vec2 n0 = cos(t0) * a + sin(t0) * ap, n1 = cos(t1) * a + sin(t1) * ap;
+      float h0 = hull_support(c0, S0, c1, S1, n0) - dot(kc, n0);
+      float h1 = hull_support(c0, S0, c1, S1, n1) - dot(kc, n1);
+      // Widen by a few float ulps of the slopes so rounding never trims a covered pixel: the
+      // extents along a and a⊥ (the proxy's width and height) bound every support's scale.
+      float width = hull_support(c0, S0, c1, S1, a) + hull_support(c0, S0, c1, S1, -a);
+      float height = hull_support(c0, S0, c1, S1, ap) + hull_support(c0, S0, c1, S1, -ap);
+      float pad = 1e-5 * (length(kc) + width + height);
+      h0 += pad;
+      h1 += pad;
       // The nearest point of the cylinder: a cap centre's z plus its rim's reach in z.
       float z_cylinder = C.z + R * max(s0 * axis.z, s1 * axis.z) + R * rho * sqrt(max(0.0, 1.0 - axis.z * axis.z));
       zn = min(zn, z_cylinder);
-      // Widen by a few float ulps of the slopes so rounding never trims a covered pixel.
-      vec2 pad = vec2(1e-5 * (length(kc) + hi.x - lo.x + hi.y - lo.y));
-      lo -= pad;
-      hi += pad;
-      vec2 e = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
-      corner = (kc + e.x * a + e.y * ap) * scale;
+      float det = n0.x * n1.y - n0.y * n1.x;  // sin(step) · (±1 from a's handedness)
+      corner = (kc + vec2(h0 * n1.y - h1 * n0.y, n0.x * h1 - n1.x * h0) / det) * scale;
     } else {
       // The ball's tight screen rectangle ([Sigg06] eq. 5 for a sphere): the tangent lines from
       // the eye in the xz and yz planes give the slopes k = x/(−z) of the silhouette, ndc = P·k.
@@ -174,7 +189,7 @@ void main() {
         k_hi[i] = max(k0, k1);
       }
       vec2 lo = clamp(k_lo * scale, -1.0, 1.0), hi = clamp(k_hi * scale, -1.0, 1.0);
-      corner = vec2((vid & 1) != 0 ? hi.x : lo.x, (vid & 2) != 0 ? hi.y : lo.y);
+      corner = vec2(hi_corner.x ? hi.x : lo.x, hi_corner.y ? hi.y : lo.y);
     }
   }
   if (!inside_or_near) {

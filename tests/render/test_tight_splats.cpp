@@ -89,9 +89,10 @@ TEST(TightSplats, PlaneGivesAThinSlabAndNoGradientTheBall) {
 
 class TightSplatsGl : public GlTest {
 protected:
-  render::GBuffer draw(const Camera& cam, bool tight, render::FrameStats& st) {
+  render::GBuffer draw(const Camera& cam, bool tight, render::FrameStats& st, int sides = 4) {
     render::RenderOptions o;
     o.slim_tight_splats = tight;
+    o.slim_splat_sides = sides;
     o.statistics = true;
     st = renderer_->draw(cam, o);
     return renderer_->read_gbuffer();
@@ -104,7 +105,7 @@ TEST_F(TightSplatsGl, NoCoveredPixelLiesOutsideItsTightSplat) {
   std::mt19937_64 rng(29);
   std::uniform_real_distribution<double> u(0, 1);
   constexpr int kSize = 128;
-  std::uint64_t splat_tight = 0, splat_ball = 0;
+  std::uint64_t splat_tight = 0, splat_ball = 0, splat_octagon = 0;
   for (int k = 0; k < 10; ++k) {
     SCOPED_TRACE(k);
     Model m;
@@ -121,22 +122,30 @@ TEST_F(TightSplatsGl, NoCoveredPixelLiesOutsideItsTightSplat) {
       cam.fov_y_deg = 90;
       cam.near_plane = 0.02;
     }
-    render::FrameStats tight_st, ball_st;
-    const render::GBuffer tight = draw(cam, true, tight_st), ball = draw(cam, false, ball_st);
+    // The tight rectangles and octagons (12-gons from close by) against the balls' rectangles.
+    render::FrameStats tight_st, ball_st, octagon_st;
+    const render::GBuffer tight = draw(cam, true, tight_st), ball = draw(cam, false, ball_st),
+                          octagon = draw(cam, true, octagon_st, k >= 8 ? 12 : 8);
     int covered = 0, differing = 0;
     for (std::size_t i = 0; i < ball.coverage.size(); ++i) {
       covered += ball.coverage[i];
-      const bool same = ball.coverage[i] == tight.coverage[i] && ball.primitive[i] == tight.primitive[i] &&
-                        (!ball.coverage[i] || std::abs(ball.depth[i] - tight.depth[i]) <= 1e-5f * ball.depth[i]);
-      differing += !same;
+      for (const render::GBuffer* g : {&tight, &octagon}) {
+        const bool same = ball.coverage[i] == g->coverage[i] && ball.primitive[i] == g->primitive[i] &&
+                          (!ball.coverage[i] || std::abs(ball.depth[i] - g->depth[i]) <= 1e-5f * ball.depth[i]);
+        differing += !same;
+      }
     }
     EXPECT_GT(covered, 800);
     EXPECT_EQ(differing, 0);
-    // The same rays met their patches; the tight splats spent fewer fragments on it.
+    // The same rays met their patches; the tight splats spent fewer fragments on it, the
+    // polygons fewer than the rectangles.
     EXPECT_EQ(tight_st.slim_hit_fragments, ball_st.slim_hit_fragments);
+    EXPECT_EQ(octagon_st.slim_hit_fragments, ball_st.slim_hit_fragments);
     EXPECT_LE(tight_st.slim_splat_fragments, ball_st.slim_splat_fragments);
+    EXPECT_LE(octagon_st.slim_splat_fragments, tight_st.slim_splat_fragments);
     splat_tight += tight_st.slim_splat_fragments;
     splat_ball += ball_st.slim_splat_fragments;
+    splat_octagon += octagon_st.slim_splat_fragments;
     // …and the image is the CPU reference's.
     const ReferenceImage ref = render_reference(ReferenceScene(m), cam);
     int agree = 0;
@@ -144,6 +153,7 @@ TEST_F(TightSplatsGl, NoCoveredPixelLiesOutsideItsTightSplat) {
     EXPECT_GE(double(agree) / ref.coverage.size(), 0.995);
   }
   EXPECT_LT(splat_tight, splat_ball * 0.95);
-  std::printf("splat fragments: tight %llu, ball %llu\n", (unsigned long long)splat_tight,
-              (unsigned long long)splat_ball);
+  EXPECT_LT(splat_octagon, splat_tight * 0.97);
+  std::printf("splat fragments: tight %llu, octagons %llu, ball %llu\n", (unsigned long long)splat_tight,
+              (unsigned long long)splat_octagon, (unsigned long long)splat_ball);
 }
