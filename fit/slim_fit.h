@@ -273,6 +273,9 @@ struct SlimFitStats {
   std::size_t surface_failures = 0;  ///< of those, farther than surface_factor·E from the data
   double surface_max = 0, surface_p999 = 0;  ///< their distances to the data, world units
   std::size_t normals_turned = 0;  ///< the cloud's own normals turned to agree with their neighbours'
+  /// Points without faces: how far they scatter about their local surface (fit/outliers.h
+  /// estimate_noise, world units); 0 with faces.
+  double noise = 0;
   int repair_rounds = 0;
   /// Per verification round, how far its model was from the contract: the share of points
   /// beyond E + the share of surface samples beyond surface_factor·E + the share of the data's

@@ -301,28 +301,49 @@ std::size_t SlimFitter::add_point_balls(const std::vector<std::pair<std::uint32_
 std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>& spots, bool on_data) {
   const std::size_t first = balls_.size();
   const double bound = opt_.surface_factor * E_;
-  for (const auto& [i, x] : spots) {
-    // Reaching its spot well inside (a hole between the points lies up to a spacing away).
-    const double R = std::max(disc_patch_radius(i), 1.25 * (x - P_[i]).norm());
-    if (!(R > 0)) continue;
-    // The point's disc as the data's surface bends it (DataSurface::bend_tensor): its tangent
+  std::vector<Neighbour> nb;
+  for (const auto& [hole_point, x] : spots) {
+    // The disc of point i reaching its spot well inside (a hole between the points lies up to a
+    // spacing away), as the data's surface bends it (DataSurface::bend_tensor): its tangent
     // plane where the disc is flat.
-    const Eigen::Matrix3d K = data_->bend_tensor(i);
-    const auto on_disc = [&](const Eigen::Vector3d& t) { return P_[i] + t + 0.5 * t.dot(K * t) * N_[i]; };
-    if (on_data) {
-      // The patch at the spot and on two rings (half and all of the ball) within the bound.
+    const auto disc_radius = [&](std::size_t i) { return std::max(disc_patch_radius(i), 1.25 * (x - P_[i]).norm()); };
+    const auto on_disc = [&](std::size_t i, const Eigen::Matrix3d& K, const Eigen::Vector3d& t) {
+      return Eigen::Vector3d(P_[i] + t + 0.5 * t.dot(K * t) * N_[i]);
+    };
+    // The patch at the spot and on two rings (half and all of the ball) within the bound.
+    const auto stays_on_data = [&](std::size_t i) {
+      const double R = disc_radius(i);
+      const Eigen::Matrix3d K = data_->bend_tensor(i);
       const Eigen::Vector3d u = N_[i].unitOrthogonal(), v = N_[i].cross(u);
       const Eigen::Vector3d xt = x - P_[i] - N_[i].dot(x - P_[i]) * N_[i];
-      bool off = !(data_->distance(on_disc(xt), 2.0 * bound) <= bound);
-      for (int k = 0; k < 12 && !off; ++k) {
+      if (!(data_->distance(on_disc(i, K, xt), 2.0 * bound) <= bound)) return false;
+      for (int k = 0; k < 12; ++k) {
         const Eigen::Vector3d t = std::cos(std::numbers::pi * k / 6.0) * u + std::sin(std::numbers::pi * k / 6.0) * v;
-        off = !(data_->distance(on_disc((k % 2 ? 0.5 : 0.98) * R * t), 2.0 * bound) <= bound);
+        if (!(data_->distance(on_disc(i, K, (k % 2 ? 0.5 : 0.98) * R * t), 2.0 * bound) <= bound)) return false;
       }
-      if (off) {
-        disc_shrunk_[i] = 1;  // as a disc patch that ran off: counted, not tried again
-        continue;
+      return true;
+    };
+    std::size_t i = hole_point;
+    if (on_data && !stays_on_data(i)) {
+      // Where the point's own disc runs off (a sparse, curved stretch of a scan: bun000 at 1e-3
+      // kept 5 holes so), the disc of another of the spot's nearest points on the same sheet
+      // may stay on the data and cover it.
+      constexpr std::size_t kDiscDonors = 8;
+      index_->nearest(x, kDiscDonors + 1, nb);
+      bool found = false;
+      for (const auto& [j, d2] : nb) {
+        if (j == hole_point || N_[j].dot(N_[hole_point]) < 0.5 || !stays_on_data(j)) continue;
+        i = j;
+        found = true;
+        break;
       }
+      // Either way the point is not tried again: counted if its hole stays.
+      disc_shrunk_[hole_point] = 1;  // as a disc patch that ran off
+      if (!found) continue;
     }
+    const double R = disc_radius(i);
+    if (!(R > 0)) continue;
+    const Eigen::Matrix3d K = data_->bend_tensor(i);
     // In the ball's local units u = (x − p)/R: n·u − ½R·uᵀKu = 0 (a plane where K = 0).
     Quadric disc = Quadric::plane(N_[i], 0.0);
     disc.A = -0.5 * R * K;  // g = uᵀAu + 2bᵀu with b = n/2

@@ -71,6 +71,7 @@ private:
   // Set-up and candidates (slim_fit.cpp).
   void setup();
   void warn_below_sampling(const std::string& what) const;
+  void warn_below_noise();  // measures SlimFitStats::noise
   void make_fitter();
   void evaluate(const std::vector<std::uint32_t>& centres, const std::vector<double>* caps);
   void cover_of(std::size_t b, std::vector<Neighbour>& nb);

@@ -229,6 +229,24 @@ TEST(FitSlimScans, UntunedDataEndsWithinItsBound) {
   }
 }
 
+// bun000_rawscan (a raw range scan, normals estimated) at the CLI's default 1e-3: at the sparse
+// stretches where the scanner grazed the ears and the back, 5 points kept a hole a view sees
+// (1.24e-4 of the points, over the 1e-4 the fit promises, so `fit` exited 7): each one's own disc
+// patch, bent to the data, ran off its neighbours' tangent discs and was dropped. The disc of
+// another of the spot's nearest points on the same sheet covers three of them now.
+TEST(FitSlimScans, ARawScanAtTheDefaultBoundKeepsItsHolePromise) {
+  const std::string file = std::string(QUADRIX_DATASETS) + "/points/bun000_rawscan.ply";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "dataset missing: " << file;
+  const SlimFitResult r = fit_slim(read_points(file), {.max_error = 1e-3});
+  const SlimFitStats& s = r.stats;
+  std::cerr << "  " << s.patches << " patches, " << s.seen_point_holes << " points with a hole seen, share "
+            << s.hole_share << ", " << s.disc_patches << " disc patches, " << s.time_total << " s\n";
+  EXPECT_EQ(s.blend_failures, 0u);
+  EXPECT_EQ(s.surface_failures, 0u);
+  EXPECT_FALSE(s.holes_exceeded);
+  EXPECT_LE(s.hole_share, 1e-4);
+}
+
 // radar.xyz at 1e-4 (no normals: estimated; E far below its sampling): the repairs trade surface
 // samples beyond 2E for points' holes (497, 300, 170, 77 … 1 beyond while the holes rose from
 // 659 to 938). The fit used to stop three rounds after the least share of failures (holes
