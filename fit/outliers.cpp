@@ -207,38 +207,49 @@ std::vector<std::vector<std::uint32_t>> outlier_clumps(std::span<const Eigen::Ve
   return groups;
 }
 
-double estimate_noise(std::span<const Eigen::Vector3d> points, const PointIndex& index, std::size_t samples,
-                      std::size_t neighbours) {
+double estimate_noise(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                      const PointIndex& index, std::size_t samples, std::size_t neighbours) {
   const std::size_t n = points.size();
   if (n < neighbours || neighbours < 8) return 0.0;
+  const bool with_normals = normals.size() == n;
   const std::size_t step = std::max<std::size_t>(1, n / std::max<std::size_t>(1, samples));
   const std::size_t count = (n + step - 1) / step;
   std::vector<double> residual(count, -1.0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& r) {
     std::vector<Neighbour> nb;
+    std::vector<std::uint32_t> kept;
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
-      index.nearest(points[s * step], neighbours, nb);
-      if (nb.size() < neighbours) continue;
+      const std::size_t i = s * step;
+      // The nearest on the point's own side: a neighbour whose normal turns more than 60° from
+      // its own lies on the other side of a thin part (a plate 0.04 thick sampled every 0.02:
+      // the quadric through both sides read their half-thickness as noise).
+      index.nearest(points[i], with_normals ? 2 * neighbours : neighbours, nb);
+      kept.clear();
+      for (const auto& [j, d2] : nb) {
+        if (kept.size() == neighbours) break;
+        if (!with_normals || normals[j].dot(normals[i]) >= 0.5) kept.push_back(j);
+      }
+      if (kept.size() < neighbours) continue;
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const auto& [j, d2] : nb) mean += points[j];
-      mean /= double(nb.size());
+      for (const auto j : kept) mean += points[j];
+      mean /= double(kept.size());
       Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      for (const auto& [j, d2] : nb) C += (points[j] - mean) * (points[j] - mean).transpose();
+      for (const auto j : kept) C += (points[j] - mean) * (points[j] - mean).transpose();
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
       if (eig.info() != Eigen::Success) continue;
       const Eigen::Vector3d normal = eig.eigenvectors().col(0), u = eig.eigenvectors().col(2), w = eig.eigenvectors().col(1);
       // h = c₀ + c₁x + c₂y + c₃x² + c₄xy + c₅y² by least squares, in the PCA frame.
-      Eigen::MatrixXd A(nb.size(), 6);
-      Eigen::VectorXd h(nb.size());
-      for (std::size_t k = 0; k < nb.size(); ++k) {
-        const Eigen::Vector3d v = points[nb[k].first] - mean;
+      Eigen::MatrixXd A(kept.size(), 6);
+      Eigen::VectorXd h(kept.size());
+      for (std::size_t k = 0; k < kept.size(); ++k) {
+        const Eigen::Vector3d v = points[kept[k]] - mean;
         const double x = v.dot(u), y = v.dot(w);
         A.row(Eigen::Index(k)) << 1.0, x, y, x * x, x * y, y * y;
         h[Eigen::Index(k)] = v.dot(normal);
       }
       const Eigen::VectorXd c = A.colPivHouseholderQr().solve(h);
       if (!c.allFinite()) continue;
-      residual[s] = std::sqrt((A * c - h).squaredNorm() / double(nb.size() - 6));
+      residual[s] = std::sqrt((A * c - h).squaredNorm() / double(kept.size() - 6));
     }
   });
   std::erase_if(residual, [](double r) { return r < 0.0; });

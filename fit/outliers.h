@@ -44,12 +44,13 @@ class PointIndex;
 
 /// The cloud's noise: how far its points scatter about their local surface, as the median over
 /// up to `samples` points (every n/samples-th) of the RMS residual of a height quadric through
-/// each one's `neighbours` nearest points (in their PCA frame), scaled by √(k/(k − 6)) for the
-/// quadric's six coefficients. A smooth surface sampled densely gives nearly 0 (the quadric
+/// each one's `neighbours` nearest points (in their PCA frame; with normals, the nearest whose
+/// normals lie within 60° of its own, so not the other side of a thin part), scaled by
+/// √(k/(k − 6)) for the quadric's six coefficients. A smooth surface sampled densely gives nearly 0 (the quadric
 /// follows its curvature); Gaussian noise of deviation σ gives about σ; a surface sampled too
 /// sparsely for a quadric over 16 points gives its higher-order bending (so the figure is what
 /// the data resolves either way).
-double estimate_noise(std::span<const Eigen::Vector3d> points, const PointIndex& index, std::size_t samples = 5000,
-                      std::size_t neighbours = 16);
+double estimate_noise(std::span<const Eigen::Vector3d> points, std::span<const Eigen::Vector3d> normals,
+                      const PointIndex& index, std::size_t samples = 5000, std::size_t neighbours = 16);
 
 }  // namespace quadrix

@@ -268,7 +268,7 @@ void SlimFitter::warn_below_sampling(const std::string& what) const {
 // 3e-3 takes 198). Three deviations: uniform noise of ±E/2 (deviation 0.29E) fits within E.
 void SlimFitter::warn_below_noise() {
   const auto t0 = Clock::now();
-  st_.noise = estimate_noise(P_, *index_);
+  st_.noise = estimate_noise(P_, N_, *index_);
   log::debug("fit_slim: the points scatter {:.3g} about their local surface ({:.2f} s)", st_.noise, seconds_since(t0));
   if (!(E_ < kNoiseDeviations * st_.noise)) return;
   log::warn("fit_slim: the points scatter {:.3g} ({:.2g} of the diagonal) about their local surface (the median RMS "
