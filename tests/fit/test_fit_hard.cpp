@@ -229,6 +229,58 @@ TEST(FitSlimHard, AWireThinnerThanTheLatticeIsChecked) {
   }
 }
 
+// A newcomer's capsule (radius 0.05, 3 long) fitted at 1e-2 with 3 patches came out with a nub
+// 2.9E above its end, exit 0, the check saying 0.7E: the body's ball, 50E across, held a prolate
+// ellipsoid whose tip lay just past the ball's sphere. The piece of it left inside, the nub, met
+// the sphere in a loop 0.7E across, which the rim sampling's steps (3.3E) stepped over, and the
+// lattice's lines (1.6E apart) passed beside. The line along the quadric's long axis leaves the
+// ball inside the nub, and the rim beside that exit is now checked.
+TEST(FitSlimHard, AnEllipsoidsTipJustInsideItsBallIsChecked) {
+  const double r = 0.05, half = 1.5;
+  std::vector<Eigen::Vector3d> P, N;
+  for (int i = 0; i < 300; ++i)  // the body
+    for (int j = 0; j < 24; ++j) {
+      const double a = 2 * std::numbers::pi * (j + 0.5 * (i % 2)) / 24, z = -half + 2 * half * (i + 0.5) / 300;
+      P.emplace_back(r * std::cos(a), r * std::sin(a), z);
+      N.emplace_back(std::cos(a), std::sin(a), 0.0);
+    }
+  for (int i = 0; i < 12; ++i)  // the two caps
+    for (int j = 0; j < 24; ++j) {
+      const double t = 0.5 * std::numbers::pi * (i + 0.5) / 12, a = 2 * std::numbers::pi * j / 24;
+      const Eigen::Vector3d n(std::sin(t) * std::cos(a), std::sin(t) * std::sin(a), std::cos(t));
+      P.push_back(Eigen::Vector3d(0, 0, half) + r * n), N.push_back(n);
+      P.push_back(Eigen::Vector3d(0, 0, -half) + r * Eigen::Vector3d(n.x(), n.y(), -n.z())), N.emplace_back(n.x(), n.y(), -n.z());
+    }
+  const DataSurface data = DataSurface::from_points(P, N);
+  // x²/r² + y²/r² + z²/c² = 1, its tip at z = c = 1.66, 0.11 past the capsule's end; the ball's
+  // sphere reaches z = 1.643.
+  const double c = 1.66, R = 1.551;
+  const Eigen::Vector3d centre(0.049, 0.0, 0.092);
+  SlimPatch body;
+  body.centre = centre;
+  body.radius = R;
+  // In the ball's units u = (x − centre)/R: (R u + centre)ᵀ D (R u + centre) − 1.
+  const Eigen::Matrix3d D = Eigen::Vector3d(1 / (r * r), 1 / (r * r), 1 / (c * c)).asDiagonal();
+  body.local.A = R * R * D;
+  body.local.b = R * D * centre;
+  body.local.c = centre.dot(D * centre) - 1.0;
+  const double bound = 0.0465;  // 1.5E at E = 0.031
+  const int grid = 50;          // the verification's lattice for a ball 50E across
+  const double excess = zero_set_excess(body, data, bound, grid, 1);
+  EXPECT_GT(excess, bound) << "the nub past the capsule's end went unseen";
+  std::cerr << "  nub " << excess / 0.031 << "E off the data\n";
+  // A ball reaching past the tip (its vertex on the long axis, inside): seen as well.
+  SlimPatch wide = body;
+  wide.radius = 1.75;
+  wide.local.A = wide.radius * wide.radius * D;
+  wide.local.b = wide.radius * D * centre;
+  EXPECT_GT(zero_set_excess(wide, data, bound, 64, 1), bound);
+  // The same ellipsoid cut below the capsule's end: nothing off.
+  SlimPatch cut = body;
+  cut.clips = ClipPlanes::of(ClipPlane{Eigen::Vector3d(0, 0, -1), (half + 0.01 - centre.z()) / R});
+  EXPECT_EQ(zero_set_excess(cut, data, bound, grid, 1), 0.0);
+}
+
 // Both used to fail (surface p99.9 14E and 3.6E): a clip plane cut slightly askew across an open
 // boundary leaves a wedge of surface past it, thinner than the verification lattice; the curve
 // where the zero set meets its clip plane is now sampled densely (fit/data_surface.h
