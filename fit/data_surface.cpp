@@ -751,58 +751,6 @@ double zero_set_excess(const SlimPatch& patch, const DataSurface& data, double b
       }
     }
   }
-  // Along each principal axis of the quadric, through its centre (over the axes that bend within
-  // the ball): where the line meets the zero set inside the ball (a vertex: an ellipsoid's tip),
-  // and where it leaves the ball, the zero-set point a Newton step away, kept inside: an
-  // ellipsoid's tip just past the sphere leaves a nub inside it whose rim is a loop smaller than
-  // the rim sampling's steps, and which the lattice's lines pass beside (a capsule fitted at
-  // 1e-2: a ball 50E across whose prolate zero set poked 2.9E past the capsule's end, 0.7E across
-  // where it met the sphere, drawn as a nub while the check said 0.7E).
-  if (!patch.local.A.isZero(0.0)) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(patch.local.A);
-    const Eigen::Vector3d lambda = es.eigenvalues();
-    const Eigen::Matrix3d V = es.eigenvectors();
-    const double big = lambda.cwiseAbs().maxCoeff();
-    Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
-    for (int i = 0; i < 3; ++i)
-      if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(patch.local.b) / lambda[i]);
-    const auto off_data = [&](const Eigen::Vector3d& u) -> double {
-      if (!(u.squaredNorm() < 1.0) || !patch.clips.keeps(u)) return 0.0;
-      const Eigen::Vector3d x = patch.centre + patch.radius * u;
-      const double d = data.distance(x, bound, bound);
-      return d <= bound ? 0.0 : std::isnan(d) ? kInf : data.distance(x);
-    };
-    if (c0.allFinite())
-      for (int i = 0; i < 3; ++i) {
-        const Ray axis{c0, V.col(i)};
-        const Roots roots = solve_ray_quadratic(ray_quadratic(patch.local, axis));
-        for (int k = 0; k < roots.count; ++k)
-          if (const double e = off_data(axis.at(roots.t[k])); e > 0) return e;
-        // Where the axis meets the sphere: |c0 + tV|² = 1.
-        const double pb = c0.dot(V.col(i)), disc = pb * pb - (c0.squaredNorm() - 1.0);
-        if (!(disc > 0.0)) continue;
-        for (const double t : {-pb - std::sqrt(disc), -pb + std::sqrt(disc)}) {
-          // Along the great circle the gradient's part on the sphere points along (uphill where g
-          // is negative, downhill where positive), angles doubling until g changes sign, then
-          // bisected: the rim near the exit.
-          const Eigen::Vector3d u0 = axis.at(t).normalized();
-          const double g0 = patch.local.eval(u0);
-          const Eigen::Vector3d grad = patch.local.gradient(u0), gt = grad - grad.dot(u0) * u0;
-          if (!(gt.squaredNorm() > 0.0) || g0 == 0.0) continue;
-          const Eigen::Vector3d dir = (g0 < 0.0 ? 1.0 : -1.0) * gt.normalized();
-          const auto on_circle = [&](double a) { return Eigen::Vector3d(std::cos(a) * u0 + std::sin(a) * dir); };
-          double lo = 0.0, hi = 1e-4;
-          while (hi < 1.0 && (patch.local.eval(on_circle(hi)) < 0.0) == (g0 < 0.0)) lo = hi, hi *= 2.0;
-          if (!(hi < 1.0)) continue;
-          for (int it = 0; it < 40; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            ((patch.local.eval(on_circle(mid)) < 0.0) == (g0 < 0.0) ? lo : hi) = mid;
-          }
-          const Eigen::Vector3d u = (1.0 - 1e-9) * on_circle(hi);
-          if (const double e = off_data(u); e > 0) return e;
-        }
-      }
-  }
   std::size_t met = 0;  // zero-set points the lattice met inside the ball
   while (!stack.empty()) {
     const Cell c = stack.back();

@@ -229,13 +229,16 @@ TEST(FitSlimHard, AWireThinnerThanTheLatticeIsChecked) {
   }
 }
 
-// A newcomer's capsule (radius 0.05, 3 long) fitted at 1e-2 with 3 patches came out with a nub
-// 2.9E above its end, exit 0, the check saying 0.7E: the body's ball, 50E across, held a prolate
-// ellipsoid whose tip lay just past the ball's sphere. The piece of it left inside, the nub, met
-// the sphere in a loop 0.7E across, which the rim sampling's steps (3.3E) stepped over, and the
-// lattice's lines (1.6E apart) passed beside. The line along the quadric's long axis leaves the
-// ball inside the nub, and the rim beside that exit is now checked.
-TEST(FitSlimHard, AnEllipsoidsTipJustInsideItsBallIsChecked) {
+// A newcomer's capsule (radius 0.05, 3 long, 10,000 points without normals) fitted at 1e-2 with
+// 3 patches came out with a nub 2.9E above its end, exit 0, the check saying 0.7E: the body's
+// ball, 50E across, held a prolate ellipsoid whose tip lay just past the ball's sphere. The piece
+// of it left inside, the nub, met the sphere in a loop 0.7E across, which the rim sampling's
+// steps along its meridians (3.3E there) stepped over. The rim is now also sought beside where
+// the quadric's principal axes leave the ball (core/slim.h sample_slim_rim), and verification
+// sees it through the blend: the newcomer's cloud now draws 1.18E at most, none beyond 2E (a
+// capsule sampled here with another seed showed no nub either way, so only the sampling is
+// tested).
+TEST(FitSlimHard, AnEllipsoidsTipJustPastItsBallIsSeen) {
   const double r = 0.05, half = 1.5;
   std::vector<Eigen::Vector3d> P, N;
   for (int i = 0; i < 300; ++i)  // the body
@@ -254,7 +257,7 @@ TEST(FitSlimHard, AnEllipsoidsTipJustInsideItsBallIsChecked) {
   const DataSurface data = DataSurface::from_points(P, N);
   // x²/r² + y²/r² + z²/c² = 1, its tip at z = c = 1.66, 0.11 past the capsule's end; the ball's
   // sphere reaches z = 1.643.
-  const double c = 1.66, R = 1.551;
+  const double c = 1.66, R = 1.551, E = 0.031;
   const Eigen::Vector3d centre(0.049, 0.0, 0.092);
   SlimPatch body;
   body.centre = centre;
@@ -264,21 +267,14 @@ TEST(FitSlimHard, AnEllipsoidsTipJustInsideItsBallIsChecked) {
   body.local.A = R * R * D;
   body.local.b = R * D * centre;
   body.local.c = centre.dot(D * centre) - 1.0;
-  const double bound = 0.0465;  // 1.5E at E = 0.031
-  const int grid = 50;          // the verification's lattice for a ball 50E across
-  const double excess = zero_set_excess(body, data, bound, grid, 1);
-  EXPECT_GT(excess, bound) << "the nub past the capsule's end went unseen";
-  std::cerr << "  nub " << excess / 0.031 << "E off the data\n";
-  // A ball reaching past the tip (its vertex on the long axis, inside): seen as well.
-  SlimPatch wide = body;
-  wide.radius = 1.75;
-  wide.local.A = wide.radius * wide.radius * D;
-  wide.local.b = wide.radius * D * centre;
-  EXPECT_GT(zero_set_excess(wide, data, bound, 64, 1), bound);
-  // The same ellipsoid cut below the capsule's end: nothing off.
-  SlimPatch cut = body;
-  cut.clips = ClipPlanes::of(ClipPlane{Eigen::Vector3d(0, 0, -1), (half + 0.01 - centre.z()) / R});
-  EXPECT_EQ(zero_set_excess(cut, data, bound, grid, 1), 0.0);
+  std::vector<SlimSurfaceSample> rim;
+  sample_slim_rim(body, 0.5 * E, rim);  // as verification samples it
+  double top = -1, farthest = 0;
+  for (const auto& z : rim)
+    if (z.point.z() > half) top = std::max(top, z.point.z()), farthest = std::max(farthest, data.distance(z.point));
+  std::cerr << "  rim past the capsule's end up to z = " << top << ", " << farthest / E << "E off the data\n";
+  EXPECT_GT(top, 1.6) << "the nub's rim went unseen";
+  EXPECT_GT(farthest, 2 * E);
 }
 
 // Both used to fail (surface p99.9 14E and 3.6E): a clip plane cut slightly askew across an open
