@@ -185,8 +185,6 @@ void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<
     }
 }
 
-namespace {
-
 // The rim beside where each principal axis of the quadric, through its centre (over the axes
 // that bend within the ball), leaves the ball: along the great circle the gradient's part on the
 // sphere points along there (uphill where g is negative, downhill where positive), angles
@@ -194,7 +192,8 @@ namespace {
 // nub inside whose rim is a loop smaller than the meridians' steps (a capsule fitted at 1e-2: a
 // ball 50E across whose prolate zero set poked 2.9E past the capsule's end met its sphere in a
 // loop 0.7E across, drawn as a nub while the fit's check said 0.7E).
-void sample_rim_at_axis_exits(const SlimPatch& patch, std::vector<SlimSurfaceSample>& out) {
+void sample_slim_rim_at_axes(const SlimPatch& patch, std::vector<SlimSurfaceSample>& out) {
+  if (patch.local.A.isZero(0.0)) return;
   const Quadric& q = patch.local;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(q.A);
   const Eigen::Vector3d lambda = es.eigenvalues();
@@ -231,8 +230,6 @@ void sample_rim_at_axis_exits(const SlimPatch& patch, std::vector<SlimSurfaceSam
   }
 }
 
-}  // namespace
-
 void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out) {
   const Quadric& q = patch.local;
   const Eigen::Vector3d g0 = q.gradient(Eigen::Vector3d::Zero());
@@ -253,7 +250,6 @@ void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSur
   const double nAn = n.dot(An), e1Ae1 = e1.dot(Ae1), e2Ae2 = e2.dot(Ae2), e1Ae2 = e1.dot(Ae2);
   const double nAe1 = n.dot(Ae1), nAe2 = n.dot(Ae2), bn = q.b.dot(n), be1 = q.b.dot(e1), be2 = q.b.dot(e2);
   const int meridians = std::clamp(static_cast<int>(std::ceil(2.0 * std::numbers::pi * patch.radius / spacing)), 16, 4096);
-  if (!q.A.isZero(0.0)) sample_rim_at_axis_exits(patch, out);
   if (q.A.isZero(0.0)) {
     // A plane (b ∥ n): g = 2ρ|b| cos θ + c₀ on every meridian, one crossing where the ends'
     // signs differ, at cos θ = −c₀ / 2ρ|b|: the same circle for all of them.

@@ -83,6 +83,10 @@ void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<
 /// bisection), appended to out. A sheet that curls away near its rim can pass between the
 /// lattice lines of sample_slim_patch; drawn where no other patch is hit, it is a fin or a speck.
 void sample_slim_rim(const SlimPatch& patch, double spacing, std::vector<SlimSurfaceSample>& out);
+/// The rim beside where each principal axis of the patch's quadric (through its centre) leaves the
+/// ball, found by bisection along the sphere: a loop there smaller than sample_slim_rim's steps
+/// (an ellipsoid's tip just past the sphere) is found. Appended to out, as sample_slim_rim's.
+void sample_slim_rim_at_axes(const SlimPatch& patch, std::vector<SlimSurfaceSample>& out);
 
 /// One patch's contribution to a ray: its hit and its weight.
 struct SlimSample {

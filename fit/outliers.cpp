@@ -212,7 +212,8 @@ double estimate_noise(std::span<const Eigen::Vector3d> points, std::span<const E
   const std::size_t n = points.size();
   if (n < neighbours || neighbours < 8) return 0.0;
   const bool with_normals = normals.size() == n;
-  const std::size_t step = std::max<std::size_t>(1, n / std::max<std::size_t>(1, samples));
+  const std::size_t want = std::max<std::size_t>(1, samples);
+  const std::size_t step = (n + want - 1) / want;  // at most `samples` points
   const std::size_t count = (n + step - 1) / step;
   std::vector<double> residual(count, -1.0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const tbb::blocked_range<std::size_t>& r) {

@@ -43,7 +43,7 @@ std::vector<std::vector<std::uint32_t>> outlier_clumps(std::span<const Eigen::Ve
 class PointIndex;
 
 /// The cloud's noise: how far its points scatter about their local surface, as the median over
-/// up to `samples` points (every n/samples-th) of the RMS residual of a height quadric through
+/// up to `samples` points (every ⌈n/samples⌉-th) of the RMS residual of a height quadric through
 /// each one's `neighbours` nearest points (in their PCA frame; with normals, the nearest whose
 /// normals lie within 60° of its own, so not the other side of a thin part), scaled by
 /// √(k/(k − 6)) for the quadric's six coefficients. A smooth surface sampled densely gives nearly 0 (the quadric

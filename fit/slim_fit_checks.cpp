@@ -302,6 +302,7 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
   const std::size_t first = balls_.size();
   const double bound = opt_.surface_factor * E_;
   std::vector<Neighbour> nb;
+  std::vector<std::uint32_t> donors;  // points whose disc this call already added for another spot
   for (const auto& [hole_point, x] : spots) {
     // The disc of point i reaching its spot well inside (a hole between the points lies up to a
     // spacing away), as the data's surface bends it (DataSurface::bend_tensor): its tangent
@@ -332,9 +333,12 @@ std::size_t SlimFitter::add_disc_patches(const std::vector<std::pair<std::uint32
       index_->nearest(x, kDiscDonors + 1, nb);
       bool found = false;
       for (const auto& [j, d2] : nb) {
-        if (j == hole_point || N_[j].dot(N_[hole_point]) < 0.5 || !stays_on_data(j)) continue;
+        if (j == hole_point || N_[j].dot(N_[hole_point]) < 0.5 || std::find(donors.begin(), donors.end(), j) != donors.end() ||
+            !stays_on_data(j))
+          continue;
         i = j;
         found = true;
+        donors.push_back(j);
         break;
       }
       // Either way the point is not tried again: counted if its hole stays.
@@ -1052,7 +1056,10 @@ std::size_t SlimFitter::verify_surface(const ReferenceScene& scene, const std::v
       // candidate ball.
       if (!rim_known_[chosen_[k]]) {
         rim.clear();
-        if (!ball.on_data) sample_slim_rim(slims[k], 0.5 * E_, rim);
+        if (!ball.on_data) {
+          sample_slim_rim(slims[k], 0.5 * E_, rim);
+          sample_slim_rim_at_axes(slims[k], rim);
+        }
         auto& off = rim_off_[chosen_[k]];
         off.clear();
         for (const auto& z : rim)

@@ -51,8 +51,9 @@ struct RenderOptions {
   /// core/slim.h) instead of its whole ball; false: the ball's screen rectangle (the baseline).
   bool slim_tight_splats = true;
   /// Sides of the tight SLIM splat: the polygon of this many support lines around the projected
-  /// slab (4: the oriented rectangle; 8 cuts its corners around a disc seen face-on). A multiple
-  /// of 4, at most 16. Unset: 4 on a software rasterizer, 8 elsewhere. On llvmpipe the octagons'
+  /// slab: 4 (the oriented rectangle) or 8 (cutting its corners around a disc seen face-on);
+  /// other values are rounded down to a multiple of 4 and clamped to 4–8 (12 and 16 sides left
+  /// single pixels of a blend out in the tight-splat property test). Unset: 4 on a software rasterizer, 8 elsewhere. On llvmpipe the octagons'
   /// extra triangles cost more than the fragments they save (bunny fitted at 1e-3, 1024²: 11 %
   /// fewer SLIM shader runs but 17 % more fragment-shader invocations, as the blocks along each
   /// inner edge run once per triangle; `bench render`'s octagon row); unmeasured on a GPU.

@@ -211,7 +211,7 @@ void SlimPass::ensure_accumulation(const FrameTargets& t, bool half) {
 // ball splats) as 4.
 GLsizei SlimPass::splat_sides(const RenderOptions& o) const {
   if (!o.slim_tight_splats) return 4;
-  return static_cast<GLsizei>(std::clamp(o.slim_splat_sides.value_or(software_ ? 4 : 8) / 4 * 4, 4, 16));
+  return static_cast<GLsizei>(std::clamp(o.slim_splat_sides.value_or(software_ ? 4 : 8) / 4 * 4, 4, 8));
 }
 
 void SlimPass::set_uniforms(const gl::Program& p, const Frame& f, int count_stats) const {

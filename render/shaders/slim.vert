@@ -1,22 +1,22 @@
-// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced quad per ball
+// SLIM splats, vertex stage ([Stoll06] §5.1.1, [Sigg06] eq. 5): one instanced polygon per ball
 // that bounds the patch's surface piece, not the ball. The piece lies in the slab
 // s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
 // load); the proxy is the convex polygon of u_sides support lines (the first along the
 // projected axis, then at equal steps) of the projected cylinder about that slab (the hull of its
 // two cap discs' exact projected ellipses, [Sigg06] eq. 5): thin where the piece is seen edge-on,
 // and with 8 sides it cuts the corners a rectangle leaves around a disc seen face-on (21.5 % of
-// a rectangle around an ellipse lies outside it, 5.2 % of an octagon). Balls without a tight slab
+// a rectangle around a circle lies outside it, 5.2 % of an octagon). Balls without a tight slab
 // get the ball's axis-aligned tight screen rectangle; balls whose proxy holds the eye or
 // straddles the near plane get the whole viewport: never clipped. Rectangles are drawn as the
-// same u_sides-gon with repeated corners. Also the patch quadric rotated into eye axes (flat) and the per-quadric backface
-// test for spheres ([Stoll06] eq. 18).
+// same u_sides-gon with repeated corners. Also the patch quadric rotated into eye axes (flat) and
+// the per-quadric backface test for spheres ([Stoll06] eq. 18).
 //
-// The quad lies at one depth, in front of every point of the surface piece: the nearer of the
+// The polygon lies at one depth, in front of every point of the surface piece: the nearer of the
 // ball's front and the cylinder's nearest point, so a depth test before the fragment stage (pass 2
 // of the early-depth path, render/passes/slim_pass.h) rejects only fragments whose hits would
 // fail it.
 //
-// With w = 1 the quad is affine in screen space, so the eye-space ray direction (x/P00, y/P11, −1)
+// With w = 1 the polygon is affine in screen space, so the eye-space ray direction (x/P00, y/P11, −1)
 // and the ray's point in the plane through the centre (perpendicular to the view axis) are
 // interpolated exactly; the fragment stage re-starts each ray there (local units of R), so
 // nothing large cancels even when the eye is far away.
@@ -49,7 +49,7 @@ uniform float u_target_distance;
 uniform float u_near;
 uniform int u_count_stats;
 uniform int u_cull;  // per-quadric culling (per-fragment culling is inherent: SLIM uses front hits)
-uniform int u_tight;  // 1: quads about the slab of the surface piece; 0: the ball's screen rectangle
+uniform int u_tight;  // 1: polygons about the slab of the surface piece; 0: the ball's screen rectangle
 uniform int u_base;   // the first ball of this draw
 uniform int u_sides;  // vertices of the proxy polygon (a multiple of 4; 4: rectangles)
 
@@ -193,7 +193,7 @@ void main() {
     }
   }
   if (!inside_or_near) {
-    // A margin of 16 float steps of window depth, so rounding never puts the quad behind a hit.
+    // A margin of 16 float steps of window depth, so rounding never puts the polygon behind a hit.
     ndc_z = max((u_proj[2][2] * zn + u_proj[3][2]) / -zn - 4e-6, -1.0);
   }
   gl_Position = vec4(corner, ndc_z, 1.0);

@@ -234,7 +234,7 @@ TEST(FitSlimHard, AWireThinnerThanTheLatticeIsChecked) {
 // ball, 50E across, held a prolate ellipsoid whose tip lay just past the ball's sphere. The piece
 // of it left inside, the nub, met the sphere in a loop 0.7E across, which the rim sampling's
 // steps along its meridians (3.3E there) stepped over. The rim is now also sought beside where
-// the quadric's principal axes leave the ball (core/slim.h sample_slim_rim), and verification
+// the quadric's principal axes leave the ball (core/slim.h sample_slim_rim_at_axes), and verification
 // sees it through the blend: the newcomer's cloud now draws 1.18E at most, none beyond 2E (a
 // capsule sampled here with another seed showed no nub either way, so only the sampling is
 // tested).
@@ -269,6 +269,7 @@ TEST(FitSlimHard, AnEllipsoidsTipJustPastItsBallIsSeen) {
   body.local.c = centre.dot(D * centre) - 1.0;
   std::vector<SlimSurfaceSample> rim;
   sample_slim_rim(body, 0.5 * E, rim);  // as verification samples it
+  sample_slim_rim_at_axes(body, rim);
   double top = -1, farthest = 0;
   for (const auto& z : rim)
     if (z.point.z() > half) top = std::max(top, z.point.z()), farthest = std::max(farthest, data.distance(z.point));

@@ -122,10 +122,10 @@ TEST_F(TightSplatsGl, NoCoveredPixelLiesOutsideItsTightSplat) {
       cam.fov_y_deg = 90;
       cam.near_plane = 0.02;
     }
-    // The tight rectangles and octagons (12-gons from close by) against the balls' rectangles.
+    // The tight rectangles and octagons against the balls' rectangles.
     render::FrameStats tight_st, ball_st, octagon_st;
     const render::GBuffer tight = draw(cam, true, tight_st), ball = draw(cam, false, ball_st),
-                          octagon = draw(cam, true, octagon_st, k >= 8 ? 12 : 8);
+                          octagon = draw(cam, true, octagon_st, 8);
     int covered = 0, differing = 0;
     for (std::size_t i = 0; i < ball.coverage.size(); ++i) {
       covered += ball.coverage[i];

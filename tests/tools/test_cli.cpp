@@ -392,8 +392,8 @@ TEST(Cli, FitWarnsWhenEIsWithinTheCloudsNoise) {
   ASSERT_EQ(clean.code, 0) << clean.out;
   EXPECT_EQ(clean.out.find("follows the noise"), std::string::npos) << clean.out;
   EXPECT_LT(read_json(dir / "r.json")["fit"]["noise_abs"].get<double>(), 0.05 * sigma);
-  // A clean closed plate 0.04 thick with its normals, sampled every 0.02: the 16 nearest reach
-  // its other side, and a quadric through both read 0.0089 of noise (a false warning at 3e-3).
+  // A clean two-sided plate 0.04 thick (two sheets, no rim) with its normals, sampled every 0.02:
+  // the 16 nearest reach its other side, and a quadric through both read 0.0089 of noise (a false warning at 3e-3).
   {
     std::ofstream f(dir / "plate.xyz");
     std::mt19937_64 rng(7);
