@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <numbers>
+#include <optional>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -156,17 +157,36 @@ void sample_slim_patch(const SlimPatch& patch, int grid, std::vector<SlimSurface
     });
 }
 
-void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<bool(const Eigen::Vector3d&)>& f) {
-  if (patch.local.A.isZero(0.0) || !(step > 0.0)) return;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(patch.local.A);
+namespace {
+
+// A quadric's principal axes (the eigenvectors of A, as columns) and its centre A c = −b, over
+// the axes that bend within the ball (|λ| above 1e-3 of the largest); none for a plane or a
+// centre that is not finite.
+struct PrincipalFrame {
+  Eigen::Matrix3d axes;
+  Eigen::Vector3d centre;
+};
+std::optional<PrincipalFrame> principal_frame(const Quadric& q) {
+  if (q.A.isZero(0.0)) return std::nullopt;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(q.A);
   const Eigen::Vector3d lambda = es.eigenvalues();
   const Eigen::Matrix3d V = es.eigenvectors();
   const double big = lambda.cwiseAbs().maxCoeff();
-  // The centre, A c = −b, over the axes that bend within the ball (|λ| above 1e-3 of the largest).
   Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
   for (int i = 0; i < 3; ++i)
-    if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(patch.local.b) / lambda[i]);
-  if (!c0.allFinite() || !(c0.squaredNorm() < 1.0)) return;
+    if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(q.b) / lambda[i]);
+  if (!c0.allFinite()) return std::nullopt;
+  return PrincipalFrame{V, c0};
+}
+
+}  // namespace
+
+void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<bool(const Eigen::Vector3d&)>& f) {
+  if (!(step > 0.0)) return;
+  const auto frame = principal_frame(patch.local);
+  if (!frame || !(frame->centre.squaredNorm() < 1.0)) return;
+  const Eigen::Matrix3d& V = frame->axes;
+  const Eigen::Vector3d& c0 = frame->centre;
   const int lines = static_cast<int>(std::ceil(2.0 / std::max(step, 2.0 / 4096.0)));
   const double h = 2.0 / lines;
   for (int i = 0; i < 3; ++i)
@@ -193,16 +213,11 @@ void for_thin_zero_set(const SlimPatch& patch, double step, const std::function<
 // ball 50E across whose prolate zero set poked 2.9E past the capsule's end met its sphere in a
 // loop 0.7E across, drawn as a nub while the fit's check said 0.7E).
 void sample_slim_rim_at_axes(const SlimPatch& patch, std::vector<SlimSurfaceSample>& out) {
-  if (patch.local.A.isZero(0.0)) return;
   const Quadric& q = patch.local;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(q.A);
-  const Eigen::Vector3d lambda = es.eigenvalues();
-  const Eigen::Matrix3d V = es.eigenvectors();
-  const double big = lambda.cwiseAbs().maxCoeff();
-  Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 3; ++i)
-    if (std::abs(lambda[i]) > 1e-3 * big) c0 -= V.col(i) * (V.col(i).dot(q.b) / lambda[i]);
-  if (!c0.allFinite()) return;
+  const auto frame = principal_frame(q);
+  if (!frame) return;
+  const Eigen::Matrix3d& V = frame->axes;
+  const Eigen::Vector3d& c0 = frame->centre;
   constexpr double kRho = 1.0 - 1e-9;  // on the sphere, still drawn
   for (int i = 0; i < 3; ++i) {
     // Where the axis meets the sphere: |c0 + tV|² = 1.
