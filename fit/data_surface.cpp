@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_invoke.h>
 
 #include "core/bvh.h"
@@ -112,6 +113,12 @@ struct DataSurface::Impl {
   // Points: the farthest neighbour asked in each 60° sector of the tangent plane (tangent_sector);
   // a boundary point's disc reaches no farther than that plus boundary_reach of it there.
   std::vector<std::array<float, 6>> sector_far;
+  // Points: the lines that cut a disc short at a crease (DataSurfaceOptions::crease_cuts), in its
+  // tangent frame (u, w of tangent_sector): point i's disc keeps the p with a·p ≤ c for each
+  // (a_u, a_w, c) of cuts[cut_begin[i] … cut_begin[i + 1]) (c ≥ 0: its own point stays). Empty
+  // cut_begin: no disc is cut.
+  std::vector<std::uint32_t> cut_begin;
+  std::vector<Eigen::Vector3d> cuts;
   // Points: the disc's second-order term, the height ½(a x² + 2b xy + c y²) over the tangent plane
   // (x, y along normal.unitOrthogonal() and normal × it), fitted to the same-sheet neighbours'
   // heights: a tangent disc is flat, so where E is below the sampling's sag (a sphere of 400
@@ -147,15 +154,79 @@ struct DataSurface::Impl {
   // distance itself. (Measured in the sector of the offset alone, and past the boundary in a
   // stretched frame, it jumped by up to 4× near a scan's edge: a raw scan's fit at 1e-2 read 5.3E
   // from the data 0.34E from a point at 1.4E.)
+  //
+  // A disc cut at a crease (cut_begin) is the disc less what lies past its cut lines; its height
+  // is taken over the nearest point of that shape, and a boundary point's excess is the larger of
+  // the two shapes' (as above).
   double disc_excess(std::uint32_t i, const Eigen::Vector3d& x, double& h) const {
     const Eigen::Vector3d v = x - points[i];
     h = normals[i].dot(v);
     const Eigen::Vector3d t = v - h * normals[i];
-    h -= bend_height(i, t);
-    if (inward[i].squaredNorm() == 0) return std::max(0.0, t.norm() - disc[i]);
+    const bool cut = !cut_begin.empty() && cut_begin[i + 1] > cut_begin[i];
+    if (!cut) {
+      h -= bend_height(i, t);
+      if (inward[i].squaredNorm() == 0) return std::max(0.0, t.norm() - disc[i]);
+    }
     const Eigen::Vector3d u = normals[i].unitOrthogonal(), w = normals[i].cross(u);
     const Eigen::Vector2d p(t.dot(u), t.dot(w));
-    return std::max(star_excess(i, p, tangent_sector(t, u, w)), cut_disc_excess(p, Eigen::Vector2d(inward[i].dot(u), inward[i].dot(w)), disc[i]));
+    double out = 0;
+    if (cut) {
+      Eigen::Vector2d nearest;
+      out = cut_excess(i, p, nearest);
+      h -= bend_height(i, nearest.x() * u + nearest.y() * w);
+      if (inward[i].squaredNorm() == 0) return out;
+    }
+    return std::max({out, star_excess(i, p, tangent_sector(t, u, w)),
+                     cut_disc_excess(p, Eigen::Vector2d(inward[i].dot(u), inward[i].dot(w)), disc[i])});
+  }
+  // Distance from p (tangent-plane coordinates) to point i's disc less what lies past its crease
+  // cuts (a convex shape holding the origin), and its nearest point of that shape. The nearest
+  // point lies on the arc (p's radial projection, where the cuts keep it) or on a cut line's
+  // segment inside the disc and the other cuts (p's projection clamped to it).
+  double cut_excess(std::uint32_t i, const Eigen::Vector2d& p, Eigen::Vector2d& nearest) const {
+    const double r = disc[i];
+    const std::uint32_t b = cut_begin[i], e = cut_begin[i + 1];
+    const double slack = 1e-12 * r;
+    const auto kept = [&](const Eigen::Vector2d& q, std::uint32_t skip) {
+      for (std::uint32_t k = b; k < e; ++k)
+        if (k != skip && cuts[k].head<2>().dot(q) > cuts[k].z() + slack) return false;
+      return true;
+    };
+    const double len = p.norm();
+    if (len <= r && kept(p, e)) {
+      nearest = p;
+      return 0.0;
+    }
+    double best = kInf;
+    nearest = Eigen::Vector2d::Zero();
+    const auto consider = [&](const Eigen::Vector2d& q) {
+      if (const double d = (p - q).norm(); d < best) best = d, nearest = q;
+    };
+    if (len > 0) {
+      const Eigen::Vector2d q = p * (r / len);
+      if (kept(q, e)) consider(q);
+    }
+    for (std::uint32_t k = b; k < e; ++k) {
+      const Eigen::Vector2d a = cuts[k].head<2>(), along(-a.y(), a.x());
+      const double c = cuts[k].z();
+      if (c >= r) continue;
+      const Eigen::Vector2d foot = c * a;
+      double lo = -std::sqrt(r * r - c * c), hi = -lo;
+      for (std::uint32_t j = b; j < e && lo <= hi; ++j) {
+        if (j == k) continue;
+        // a_j·(foot + s·along) ≤ c_j
+        const double slope = cuts[j].head<2>().dot(along), room = cuts[j].z() - cuts[j].head<2>().dot(foot);
+        if (std::abs(slope) <= 1e-12) {
+          if (room < -slack) lo = 1, hi = 0;
+        } else if (slope > 0) {
+          hi = std::min(hi, room / slope);
+        } else {
+          lo = std::max(lo, room / slope);
+        }
+      }
+      if (lo <= hi) consider(foot + std::clamp(p.dot(along), lo, hi) * along);
+    }
+    return best;
   }
   // The bent disc's height at the tangential offset t (world frame), t clamped to the disc's
   // radius; 0 for a flat disc.
@@ -401,6 +472,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
     }
   });
   confirm_boundaries(m, reach);
+  if (options.crease_cuts) cut_at_creases(m);
   // A boundary point's disc stays flat: its shape (a star of sectors, cut short past the boundary)
   // measures the tangential excess to its nearest shape point, and the height there is that of the
   // tangent plane (the bent height at the clamped offset would not belong to a point of the disc).
@@ -470,6 +542,92 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
       }
     }
   });
+}
+
+// Crease cuts (DataSurfaceOptions::crease_cuts): each point within a disc's radius whose normal m
+// turns between acos(crease_cos) and its reverse from the disc's n cuts the disc at its tangent
+// plane, keeping the disc's own side: at a convex crease (the other face's point q lies below the
+// disc's plane and the disc's point below q's: (q − p)·(n − m) < 0) the side below q's plane, at
+// a concave one the side above, either way with the disc's own point. A pair too close to the
+// crease to tell which it is (|(q − p)·(n − m)| under a tenth of their distance: both on the
+// edge, apart along it) is left to the others. Of the lines, the nearest to the point first, at
+// most kMaxCuts, none within 20° of a nearer one (the next line in much the same direction cuts
+// little more).
+void DataSurface::cut_at_creases(Impl& m) {
+  constexpr std::size_t kMaxCuts = 4;
+  const double cos_max = m.options.crease_cos;
+  const std::size_t n = m.points.size();
+  // Planar points only (DataSurfaceOptions::crease_planarity). On a smooth
+  // surface sampled sparsely the normals turn as much between neighbours, and a neighbour's plane
+  // cuts the surface itself: 5,000 points drawn from the bunny left 2.5 % of the mesh farther
+  // than 2E from their discs, against 0.13 % uncut, and the kitten at 1e-3 went from 630 patches
+  // to 877 with 1 % of bench fit's pixels open.
+  const double planar_share = m.options.crease_planarity;
+  std::vector<std::uint8_t> planar(n, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+    std::vector<Neighbour> nb;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (!(m.disc[i] > 0)) continue;
+      m.index->radius(m.points[i], m.disc[i], nb);
+      double sum = 0;
+      int count = 0;
+      for (const auto& [j, d2] : nb) {
+        if (j == i || m.normals[j].dot(m.normals[i]) < cos_max) continue;
+        const double h = m.normals[i].dot(m.points[j] - m.points[i]);
+        sum += h * h, ++count;
+      }
+      planar[i] = count >= 2 && std::sqrt(sum / count) <= planar_share * m.spacing[i];
+    }
+  });
+  // Cut lines are rare (creases): each thread keeps (point, line) pairs, gathered below.
+  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+    auto& out = found.local();
+    std::vector<Neighbour> nb;
+    std::vector<Eigen::Vector3d> lines;
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
+      if (!(m.disc[i] > 0) || !planar[i]) continue;
+      const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i];
+      const Eigen::Vector3d u = nrm.unitOrthogonal(), w = nrm.cross(u);
+      m.index->radius(p, m.disc[i] + m.spacing[i], nb);
+      lines.clear();
+      for (const auto& [j, d2] : nb) {
+        const Eigen::Vector3d& mj = m.normals[j];
+        const double cosine = mj.dot(nrm);
+        if (j == i || cosine >= cos_max || cosine <= -cos_max || !planar[j]) continue;
+        const Eigen::Vector3d d = m.points[j] - p;
+        const double side = d.dot(nrm - mj);
+        if (std::abs(side) < 0.1 * std::sqrt(d2)) continue;
+        const double sigma = side < 0 ? 1.0 : -1.0;  // convex: keep below q's plane
+        const Eigen::Vector3d mt = mj - cosine * nrm;
+        const double mt_len = mt.norm();
+        const double c = std::max(sigma * d.dot(mj), 0.0) / mt_len;
+        const Eigen::Vector3d a = sigma * mt / mt_len;
+        lines.emplace_back(a.dot(u), a.dot(w), c);
+      }
+      std::erase_if(lines, [&](const Eigen::Vector3d& l) { return l.z() >= m.disc[i]; });
+      std::sort(lines.begin(), lines.end(), [](const auto& x, const auto& y) { return x.z() < y.z(); });
+      std::size_t kept = 0;
+      const std::size_t first = out.size();
+      for (const Eigen::Vector3d& l : lines) {
+        if (kept == kMaxCuts) break;
+        const Eigen::Vector2d a = l.head<2>().normalized();
+        if (std::any_of(out.begin() + std::ptrdiff_t(first), out.end(), [&](const std::pair<std::uint32_t, Eigen::Vector3d>& o) { return o.second.head<2>().dot(a) > 0.94; }))
+          continue;
+        out.emplace_back(std::uint32_t(i), Eigen::Vector3d(a.x(), a.y(), l.z()));
+        ++kept;
+      }
+    }
+  });
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> all;
+  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+  if (all.empty()) return;
+  std::stable_sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  m.cut_begin.assign(n + 1, 0);
+  for (const auto& [i, l] : all) ++m.cut_begin[i + 1];
+  for (std::size_t i = 0; i < n; ++i) m.cut_begin[i + 1] += m.cut_begin[i];
+  m.cuts.reserve(all.size());
+  for (const auto& [i, l] : all) m.cuts.push_back(l);
 }
 
 DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
