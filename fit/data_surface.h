@@ -45,7 +45,7 @@ struct DataSurfaceOptions {
   /// Creases: a disc is cut short where it crosses the tangent plane of a point within its
   /// radius and a spacing whose normal turns more than acos(crease_cos) from its own (and less
   /// than its reverse), keeping its own side: at a sharp convex edge a face's discs otherwise
-  /// reach a whole radius past the edge (a plate 0.04 thick fitted at 3e-3 drew fins 5.7E past
+  /// reach a whole radius past the edge (a plate 1 × 1 × 0.04 fitted at 3e-3 drew fins 5.7E past
   /// its edges within 2E of the discs), and at a concave one through the other face.
   /// Only between planar points: those whose neighbours on their sheet within the disc (normals
   /// within acos(crease_cos)) lie at most crease_planarity × the spacing off its tangent plane

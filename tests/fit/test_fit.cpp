@@ -914,7 +914,7 @@ TEST(DataSurface, BentDiscsFollowASparseSphere) {
 
 // At a sharp edge a face's tangent discs are cut where they cross the other face's tangent plane
 // (DataSurfaceOptions::crease_cuts): uncut, a cube's top discs reached up to a disc radius past
-// its edges, so a surface standing there read as on the data (a plate fitted at 3e-3 drew fins
+// its edges, so a surface standing there read as on the data (a new user's plate 2 × 2 × 0.04 at 3e-3 drew fins
 // 6.9E past its edges, 1.6E from the discs). Beyond every edge, half a spacing out in a face's
 // plane, the distance is the distance to the cube and a ray straight down there meets nothing;
 // no point of the cube's faces, to their edges and corners, lies farther from the discs than
@@ -968,6 +968,59 @@ TEST(DataSurface, CreasesCutTheFacesDiscsAtTheirEdges) {
   EXPECT_EQ(hits_cut, 0);
   EXPECT_EQ(open, 0);
   EXPECT_LE(worst_rate, cut.lipschitz() * (1 + 1e-9));
+}
+
+// Cuts only at an edge of the disc's own face: beside a slot 0.03 wide cut into a block's top,
+// no point of the faces lies farther from the cut discs than from the whole ones (when a
+// neighbour's plane with the disc's own point on its far side, a wall across the slot, was
+// clamped to a line through the point, it kept the wrong half: here 2 of 5,000 face points within
+// 0.06 of the slot read farther; beside the slot of a closed block, 350 of 5,000, by up to 0.42
+// spacings), and over the slot's middle, where the top's whole discs reach across it, the cut
+// discs stand back at the rims.
+TEST(DataSurface, CreaseCutsKeepEveryFaceBesideASlot) {
+  struct Face {
+    Eigen::Vector3d o, a, b, n;  // o + s·a + t·b, s, t ∈ [0, 1]
+  };
+  const double lo = 0.985, hi = 1.015, top = 0.3, floor = 0.1;
+  const std::vector<Face> faces = {
+      {{0, 0, top}, {lo, 0, 0}, {0, 1, 0}, {0, 0, 1}},              // top, left of the slot
+      {{lo, 0, floor}, {0, 0, top - floor}, {0, 1, 0}, {1, 0, 0}},  // its left wall
+      {{lo, 0, floor}, {hi - lo, 0, 0}, {0, 1, 0}, {0, 0, 1}},      // its floor
+      {{hi, 0, floor}, {0, 0, top - floor}, {0, 1, 0}, {-1, 0, 0}}, // its right wall
+      {{hi, 0, top}, {2 - hi, 0, 0}, {0, 1, 0}, {0, 0, 1}}};        // top, right of it
+  std::vector<double> area;
+  for (const auto& f : faces) area.push_back(f.a.norm() * f.b.norm());
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::discrete_distribution<std::size_t> pick(area.begin(), area.end());
+  const auto sample = [&](std::size_t k) { return faces[k].o + U(rng) * faces[k].a + U(rng) * faces[k].b; };
+  std::vector<Eigen::Vector3d> P, N;
+  for (int k = 0; k < 6000; ++k) {  // a spacing of about 0.02, below the slot's depth and near its width
+    const std::size_t f = pick(rng);
+    P.push_back(sample(f)), N.push_back(faces[f].n);
+  }
+  const DataSurface cut = DataSurface::from_points(P, N, {.crease_cuts = true}), whole = DataSurface::from_points(P, N);
+  int farther = 0, checked = 0, over_cut = 0, over_whole = 0;
+  double worst = 0;
+  while (checked < 5000) {
+    const Eigen::Vector3d x = sample(pick(rng));
+    if (std::abs(x.x() - 1.0) > 0.06 || x.y() < 0.1 || x.y() > 0.9) continue;  // beside the slot, away from the sheet's open ends
+    ++checked;
+    const double dc = cut.distance(x), dw = whole.distance(x);
+    farther += dc > dw + 1e-12;
+    worst = std::max(worst, dc - dw);
+  }
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector3d x(1.0, 0.1 + 0.8 * U(rng), top);  // over the slot's middle, 0.015 from either rim
+    over_cut += cut.distance(x) < 0.99 * 0.015;
+    over_whole += whole.distance(x) < 0.99 * 0.015;
+  }
+  std::printf("beside a slot: %d of %d face points farther from the cut discs (worst by %.3g); over its middle %d of 500 "
+              "read nearer than the rims (%d uncut)\n",
+              farther, checked, worst, over_cut, over_whole);
+  EXPECT_EQ(farther, 0);
+  EXPECT_GT(over_whole, 250);  // the top's whole discs reach across the slot
+  EXPECT_EQ(over_cut, 0);
 }
 
 // A points data surface answers "within good?" from the discs of its last queries' points
