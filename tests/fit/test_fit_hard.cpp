@@ -953,7 +953,7 @@ TEST(FitSlimHard, PointsOnlyPlateHasNoFinsPastItsEdgesWithCreaseCuts) {
     const SurfaceError e = measure_surface_error(fit.model, truth, s.box, {.views = 8, .resolution = 256, .bound = 2 * E});
     std::cerr << "  crease cuts " << cuts << ": patches " << fit.stats.patches << ", surface p99.9/E " << e.p999 / E
               << " max/E " << e.max / E << " beyond 2E " << e.share_beyond << ", holes " << e.holes << "/" << e.data_pixels
-              << ", fit's hole share " << fit.stats.hole_share << "\n";
+              << ", fit's hole share " << fit.stats.hole_share << " (seen " << fit.stats.seen_point_holes << ", crease gaps " << fit.stats.crease_gaps << ")\n";
     if (!cuts) {  // the fins the cuts remove (measured: 5.7E, 0.11 % of the pixels beyond 2E)
       EXPECT_GT(e.max, 4 * E);
       continue;
