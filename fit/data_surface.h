@@ -51,9 +51,7 @@ struct DataSurfaceOptions {
   /// within acos(crease_cos)) lie at most crease_planarity × the spacing off its tangent plane
   /// (RMS): on a smooth surface sampled sparsely the normals turn as much between neighbours,
   /// and a neighbour's plane would cut the surface itself.
-  /// Off by default: the fit's slit check at creases (crease_slits) then finds slits it cannot
-  /// close without a fin (a cube of 20,000 points at 1e-3: 243 slit samples against 5).
-  bool crease_cuts = false;
+  bool crease_cuts = true;
   double crease_cos = 0.75;
   double crease_planarity = 0.005;
 };

@@ -219,10 +219,8 @@ struct SlimFitOptions {
   /// heights (DataSurfaceOptions::bent_discs); false: flat tangent discs
   bool bent_discs = true;
   /// ... cut at sharp creases between planar faces (DataSurfaceOptions::crease_cuts: no fins
-  /// past a plate's or a box's edges; off by default, as the slit check at creases then counts
-  /// slits it cannot close: a cube of 20,000 points at 1e-3, hole share 1.2e-2 against 2.5e-4);
-  /// false: whole discs, reaching up to a radius past a crease
-  bool crease_cuts = false;
+  /// past a plate's or a box's edges); false: whole discs, reaching up to a radius past a crease
+  bool crease_cuts = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;

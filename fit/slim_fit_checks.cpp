@@ -567,6 +567,11 @@ std::vector<std::pair<std::size_t, ClipPlanes>> SlimFitter::crease_slits(const P
         const Eigen::Vector3d x = sp.centre + sp.radius * (u + step * w);
         const double L = 4.0 * E_;
         if (!w.allFinite() || scene.trace(Ray{x + L * g, -g}, 0.0, L + 2.0 * E_, trace)) return;
+        // ... and only where that view meets the data: past a convex crease's edge it passes the
+        // solid by, and the sheet clipped at the crease is whole (with the discs cut at creases,
+        // a plate 1 × 1 × 0.04 at 3e-3 counted 36 such "slits", a hole share of 1.8e-3, where the
+        // views against the true box see 1 hole pixel of 126,352 either way; now none).
+        if (!data_->first_hit(Ray{x + L * g, -g}, 0.0, L + 2.0 * E_)) return;
       }
       // Across the plane along the sheet: −n with the gradient's part taken out.
       Eigen::Vector3d y = u;
