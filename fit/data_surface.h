@@ -130,7 +130,7 @@ private:
   struct Impl;
   static void from_mesh_boundary(const PolygonMesh& mesh, Impl& m);  // open edges, winding
   static void confirm_boundaries(Impl& m, const std::vector<double>& reach);  // points
-  static void cut_at_creases(Impl& m);                                        // points
+  static void cut_at_creases(Impl& m, const std::vector<std::uint8_t>& planar);  // points
   std::unique_ptr<Impl> impl_;
 };
 
