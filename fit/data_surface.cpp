@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <numbers>
+#include <tuple>
 
 #include <Eigen/Eigenvalues>
 #include <tbb/blocked_range.h>
@@ -119,6 +120,9 @@ struct DataSurface::Impl {
   // cut_begin: no disc is cut.
   std::vector<std::uint32_t> cut_begin;
   std::vector<Eigen::Vector3d> cuts;
+  // Points: crease points whose normal is their face's (split_at_creases), and the second discs
+  // appended after the given points for those on an edge (indices from `given` on).
+  std::size_t given = 0, crease_points = 0, crease_copies = 0;
   // Points: the disc's second-order term, the height ½(a x² + 2b xy + c y²) over the tangent plane
   // (x, y along normal.unitOrthogonal() and normal × it), fitted to the same-sheet neighbours'
   // heights: a tangent disc is flat, so where E is below the sampling's sag (a sphere of 400
@@ -357,7 +361,9 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   m.options = options;
   m.points.assign(points.begin(), points.end());
   m.normals.assign(normals.begin(), normals.end());
+  m.given = m.points.size();
   m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
+  if (options.crease_cuts && options.crease_points) split_at_creases(m);
   m.disc.assign(m.points.size(), 0.0);
   m.spacing.assign(m.points.size(), 0.0);
   m.sector_far.assign(m.points.size(), std::array<float, 6>{});
@@ -376,6 +382,9 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   const std::size_t needed = std::max(options.spacing_neighbour, options.boundary_neighbours) + 1;
   std::vector<double> reach(m.points.size(), 0.0);  // the farthest same-sheet neighbour asked
   std::vector<std::uint8_t> planar(m.points.size(), 0);  // crease cuts: cut_at_creases
+  // A point and its second disc on an edge (split_at_creases), or two such, at one place: not
+  // each other's neighbours (within 60° of each other, one would read a spacing of 0).
+  const auto twins = [&](std::size_t i, std::uint32_t j, double d2) { return d2 == 0 && (i >= m.given || j >= m.given); };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.points.size(), 1024), [&](const auto& r) {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> same;  // tangential offsets of same-sheet neighbours
@@ -387,8 +396,8 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
         m.index->nearest(m.points[i], k, nb);
         same.clear();
         dist.clear();
-        for (std::size_t j = 1; j < nb.size(); ++j) {
-          if (m.normals[nb[j].first].dot(n) < 0.5) continue;
+        for (std::size_t j = 0; j < nb.size(); ++j) {
+          if (nb[j].first == i || twins(i, nb[j].first, nb[j].second) || m.normals[nb[j].first].dot(n) < 0.5) continue;
           const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
           same.push_back(v - n.dot(v) * n);
           dist.push_back(std::sqrt(nb[j].second));
@@ -436,8 +445,10 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       if (options.crease_cuts) {
         double sum = 0;
         int count = 0;
-        for (std::size_t j = 1; j < nb.size(); ++j) {
-          if (nb[j].second > m.disc[i] * m.disc[i] || m.normals[nb[j].first].dot(n) < options.crease_cos) continue;
+        for (std::size_t j = 0; j < nb.size(); ++j) {
+          if (nb[j].first == i || twins(i, nb[j].first, nb[j].second) || nb[j].second > m.disc[i] * m.disc[i] ||
+              m.normals[nb[j].first].dot(n) < options.crease_cos)
+            continue;
           const double h = n.dot(m.points[nb[j].first] - m.points[i]);
           sum += h * h, ++count;
         }
@@ -450,8 +461,8 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
         Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
         Eigen::Vector3d Atb = Eigen::Vector3d::Zero();
         double flat = 0;  // Σh²: the flat disc's residual
-        for (std::size_t j = 1; j < nb.size(); ++j) {
-          if (m.normals[nb[j].first].dot(n) < 0.5) continue;
+        for (std::size_t j = 0; j < nb.size(); ++j) {
+          if (nb[j].first == i || twins(i, nb[j].first, nb[j].second) || m.normals[nb[j].first].dot(n) < 0.5) continue;
           const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
           const double x = v.dot(u), y = v.dot(w), hh = v.dot(n);
           const Eigen::Vector3d row(0.5 * x * x, x * y, 0.5 * y * y);
@@ -570,6 +581,7 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
   constexpr std::size_t kMaxCuts = 4;
   const double cos_max = m.options.crease_cos;
   const std::size_t n = m.points.size();
+  const double slack = m.crease_copies > 0 ? 1e-9 : 0.0;
   // Planar points only (DataSurfaceOptions::crease_planarity; `planar`, judged from_points from
   // the neighbours within each disc that it asks anyway: a pass of its own took 1.4 s of
   // from_points' 4.3 s on 1M points drawn from the armadillo). On a smooth surface sampled
@@ -595,7 +607,8 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
         if (j == i || cosine >= cos_max || cosine <= -cos_max || !planar[j]) continue;
         const Eigen::Vector3d d = m.points[j] - p;
         const double side = d.dot(nrm - mj);
-        if (std::abs(side) < 0.1 * std::sqrt(d2)) continue;
+        // (d2 = 0: a point's second disc on an edge, split_at_creases, which tells neither.)
+        if (!(d2 > 0) || std::abs(side) < 0.1 * std::sqrt(d2)) continue;
         const double sigma = side < 0 ? 1.0 : -1.0;  // convex: keep below q's plane
         const Eigen::Vector3d mt = mj - cosine * nrm;
         const double mt_len = mt.norm();
@@ -603,8 +616,10 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
         // face, the far side of a rib or slot): q's plane is no edge of p's face (clamped to a line
         // through p, it kept the wrong half: beside a slot 0.03 wide, 350 of 5,000 face points
         // read up to 0.42 spacings farther from the cut discs than from the whole ones).
-        if (sigma * d.dot(mj) < 0) continue;
-        const double c = sigma * d.dot(mj) / mt_len;
+        // (A point of the other face's plane through an edge point's disc, split_at_creases, lies
+        // on it up to rounding: its line passes through the point.)
+        if (sigma * d.dot(mj) < -slack * std::sqrt(d2)) continue;
+        const double c = std::max(0.0, sigma * d.dot(mj)) / mt_len;
         const Eigen::Vector3d a = sigma * mt / mt_len;
         lines.emplace_back(a.dot(u), a.dot(w), c);
       }
@@ -631,6 +646,256 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
   for (std::size_t i = 0; i < n; ++i) m.cut_begin[i + 1] += m.cut_begin[i];
   m.cuts.reserve(all.size());
   for (const auto& [i, l] : all) m.cuts.push_back(l);
+}
+
+// Crease points (DataSurfaceOptions::crease_points). Where point i's crease_neighbours nearest
+// (not those facing away: the far side of a thin part) hold a normal turned more than half the
+// crease angle from its own, they are explained, all but two, within tol (twice crease_planarity
+// of the 6th nearest's distance) by planes, RANSAC-like:
+// - the first through the point: of the planes through it and two of its ten nearest, the one
+//   that holds most, at least four;
+// - then up to two more, each through one or two of the rest and the point or any neighbour
+//   (an edge's points lie on both faces), holding most of the rest, at least three.
+// Each plane is refitted by least squares (through the point for the first) to the points it
+// holds whose normals lie within 30° of it (where three or more do: another face's points near
+// their common edge, within tol of it, tilted the fit 2° beside a box's inner corner). A plane is
+// refused where its points spread along a line alone (an edge's points hold any plane through
+// it), or where fewer than half of their normals lie within 60° of it (a plane across a corner's
+// three faces). The planes must turn more than acos(crease_cos), and less than its reverse, from
+// each other: a smooth surface sampled exactly (a sphere's cap) is explained only by near-parallel
+// planes, noise by none.
+// The first plane's normal, oriented along the point's own, becomes its disc's; each other plane
+// that holds the point gives a second disc there, oriented along its points' normals. A point is
+// left as it is where its own normal's plane holds, spread across it, as many of them as the best
+// plane through it less the two it was made from, or where one of its planes through it lies
+// within 1° of its normal: a face's exact normal beside an edge (the crease cuts stop its disc; refitted here,
+// a hexagonal prism's exact normals drew fins of 10E at 1e-3 where they had 2E).
+void DataSurface::split_at_creases(Impl& m) {
+  const auto& o = m.options;
+  const std::size_t n = m.points.size(), k = o.crease_neighbours + 1;
+  constexpr std::size_t kStray = 2;  // neighbours left unexplained (a curved face's, a fourth face's)
+  const auto cos_deg = [](double deg) { return std::cos(deg * std::numbers::pi / 180.0); };
+  const double kTurned = std::cos(0.5 * std::acos(o.crease_cos));  // half the crease angle
+  const double kSameNormal = cos_deg(1.0), kClose = cos_deg(30.0), kAgree = cos_deg(60.0);
+  std::vector<Eigen::Vector3d> face(n, Eigen::Vector3d::Zero());  // zero: unchanged
+  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  const std::span<const std::uint32_t> order = m.index->order();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
+    auto& out = found.local();
+    std::vector<Neighbour> nb;
+    std::vector<Eigen::Vector3d> v;  // offsets from the point
+    std::vector<std::uint32_t> id;
+    std::vector<std::uint8_t> left;  // not yet explained by a plane
+    std::vector<std::size_t> rest;   // their indices
+    for (std::size_t oi = r.begin(); oi != r.end(); ++oi) {
+      const std::uint32_t i = order[oi];
+      const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i];
+      m.index->nearest(p, k, nb);
+      v.clear(), id.clear();
+      for (const auto& [j, d2] : nb)
+        if (j != i && m.normals[j].dot(nrm) >= -0.2) v.push_back(m.points[j] - p), id.push_back(j);
+      if (v.size() < 8) continue;
+      // Only where the normals turn: a crease's neighbourhood holds normals of both faces or
+      // between them, a smooth surface's turn slowly (its scan lines, planes through the point
+      // and each line, are no faces: without this, 257 points of a raw range scan changed).
+      if (std::none_of(id.begin(), id.end(), [&](std::uint32_t j) { return m.normals[j].dot(nrm) < kTurned; })) continue;
+      const double tol = 2.0 * o.crease_planarity * v[std::min<std::size_t>(5, v.size() - 1)].norm();
+      if (!(tol > 0)) continue;  // copies of the point among its nearest
+      // Points that spread across a plane (not only along a line: an edge's points hold any plane
+      // through it), by the moments' eigenvalues λ₁ ≤ λ₂ of count of them: across a fifth of
+      // their length, or an RMS width of 10 tol (rows of a face sampled 3× finer one way).
+      const auto spread = [&](const Eigen::Vector3d& lambda, std::size_t count) {
+        return lambda(2) > 0 && (lambda(1) >= 0.04 * lambda(2) || lambda(1) >= double(count) * 100.0 * tol * tol);
+      };
+      // How many its own normal's plane holds, spread across it (0 where only along a line).
+      // And whether its normal is its face's exact one: shared (within 1°) by points on its plane
+      // that spread across it with the point (an edge's averaged normals are shared along the
+      // edge's line alone). Such a point is left as it is: beside an edge, a plane through it
+      // across the edge took exact normals 75° off.
+      std::size_t own_held = 0;
+      {
+        Eigen::Matrix3d T = Eigen::Matrix3d::Zero(), X = Eigen::Matrix3d::Zero();
+        std::size_t shared = 0;
+        for (std::size_t a = 0; a < v.size(); ++a)
+          if (std::abs(v[a].dot(nrm)) <= tol) {
+            T += v[a] * v[a].transpose(), ++own_held;
+            if (m.normals[id[a]].dot(nrm) >= kSameNormal) X += v[a] * v[a].transpose(), ++shared;
+          }
+        if (own_held == v.size()) continue;
+        if (shared >= 2 && spread(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(X, Eigen::EigenvaluesOnly).eigenvalues(), shared)) continue;
+        if (own_held >= 3) {
+          const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(T, Eigen::EigenvaluesOnly).eigenvalues();
+          if (!spread(e, own_held)) own_held = 0;
+        } else {
+          own_held = 0;
+        }
+      }
+      // The best plane c·x = d among candidates, over the offsets still left; its count.
+      left.assign(v.size(), 1);
+      const auto count = [&](const Eigen::Vector3d& c, double d) {
+        std::size_t held = 0;
+        for (std::size_t a = 0; a < v.size(); ++a) held += left[a] && std::abs(c.dot(v[a]) - d) <= tol;
+        return held;
+      };
+      const auto plane = [](const Eigen::Vector3d& x, const Eigen::Vector3d& y, const Eigen::Vector3d& z, Eigen::Vector3d& c) {
+        const Eigen::Vector3d e = y - x, f = z - x;
+        c = e.cross(f);
+        const double len = c.norm();
+        if (!(len > 0.25 * e.norm() * f.norm())) return false;  // within about 15° of a line
+        c /= len;
+        return true;
+      };
+      struct Plane {
+        Eigen::Vector3d c;
+        double d;
+        std::size_t held;
+      };
+      // A candidate refitted to its points, or refused (held 0); held: those left that it holds.
+      const auto refine = [&](const Plane& c, bool through) {
+        // Its points: all it holds, those another plane explained too (an edge's, on both faces;
+        // a face beside an edge, its own points alone, may be a row along it), and the point.
+        const auto holds = [&](std::size_t a) { return std::abs(c.c.dot(v[a]) - c.d) <= tol; };
+        const bool holds_point = through || std::abs(c.d) <= tol;
+        // (A plane across a corner's three faces holds points whose normals all lie 55° off it; a
+        // face's rounded or averaged ones lean only near its edges.)
+        std::size_t held = 0, agree = 0, close = 0;
+        for (std::size_t a = 0; a < v.size(); ++a)
+          if (holds(a)) {
+            const double along = std::abs(c.c.dot(m.normals[id[a]]));
+            ++held, agree += along >= kAgree, close += along >= kClose;
+          }
+        if (2 * agree < held) return Plane{c.c, c.d, 0};
+        // The least-squares plane of its points whose normals lie within acos(within) of it,
+        // unless they lie along a line (at a box's corners such planes turned normals 60-90° off
+        // every face). Through the point: the moments about it.
+        const auto fit_to = [&](double within, Eigen::Vector3d& f, double& d) {
+          const auto used = [&](std::size_t a) { return holds(a) && std::abs(c.c.dot(m.normals[id[a]])) >= within; };
+          Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+          std::size_t count_used = holds_point ? 1 : 0;
+          for (std::size_t a = 0; a < v.size(); ++a)
+            if (used(a)) mean += v[a], ++count_used;
+          if (count_used < 3) return false;
+          mean /= double(count_used);
+          Eigen::Matrix3d S = holds_point ? Eigen::Matrix3d(mean * mean.transpose()) : Eigen::Matrix3d::Zero(), T = Eigen::Matrix3d::Zero();
+          for (std::size_t a = 0; a < v.size(); ++a)
+            if (used(a)) {
+              S += (v[a] - mean) * (v[a] - mean).transpose();
+              T += v[a] * v[a].transpose();
+            }
+          const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> fit(through ? T : S);
+          if (!spread(fit.eigenvalues(), count_used)) return false;
+          if (through && count_used >= 4) {
+            // The point must lie on its points' own plane: a side face's point 1.5 tol below a
+            // prism's top took the top's points, a plane through it tilted 0.8° to reach them.
+            const std::size_t own = count_used - 1;
+            const Eigen::Vector3d centre = mean * (double(count_used) / double(own));
+            Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+            for (std::size_t a = 0; a < v.size(); ++a)
+              if (used(a)) C += (v[a] - centre) * (v[a] - centre).transpose();
+            const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> apart(C);
+            if (spread(apart.eigenvalues(), own) && std::abs(apart.eigenvectors().col(0).dot(centre)) > tol) return false;
+          }
+          f = fit.eigenvectors().col(0);
+          if (f.dot(c.c) < 0) f = -f;
+          d = through ? 0.0 : f.dot(mean);
+          return true;
+        };
+        // Those within 30° first where three or more are (another face's points near their common
+        // edge, within tol of it, tilted the fit 2° beside a box's inner corner); those within 60°
+        // where they lie along a line (a row of a face's points beside an edge, with the edge's
+        // averaged or rounded normals; not the other face's).
+        Eigen::Vector3d f;
+        double d = 0;
+        if (!(close >= 3 && fit_to(kClose, f, d)) && !fit_to(kAgree, f, d)) return Plane{c.c, c.d, 0};
+        const Plane r{f, d, count(c.c, c.d)};
+        // The candidate itself where the fit holds fewer of those left (the candidate's are within
+        // tol, the fit's may not be).
+        return count(r.c, r.d) >= r.held ? r : Plane{c.c, c.d, r.held};
+      };
+      std::array<Plane, 3> planes;
+      std::size_t found_planes = 0;
+      {
+        Plane best{Eigen::Vector3d::Zero(), 0.0, 0};
+        const std::size_t near = std::min<std::size_t>(10, v.size());
+        Eigen::Vector3d c;
+        for (std::size_t a = 0; a < near; ++a)
+          for (std::size_t b = a + 1; b < near; ++b)
+            if (plane(Eigen::Vector3d::Zero(), v[a], v[b], c))
+              if (const std::size_t held = count(c, 0.0); held > best.held) best = {c, 0.0, held};
+        // (A candidate holds the two it was made from whatever it is.)
+        if (best.held < 4 || own_held + 2 >= best.held) continue;
+        planes[found_planes++] = refine(best, true);
+        if (planes[0].held == 0) continue;
+      }
+      bool explained = false;
+      while (true) {
+        const Plane& last = planes[found_planes - 1];
+        for (std::size_t a = 0; a < v.size(); ++a)
+          if (left[a] && std::abs(last.c.dot(v[a]) - last.d) <= tol) left[a] = 0;
+        rest.clear();
+        for (std::size_t a = 0; a < v.size(); ++a)
+          if (left[a]) rest.push_back(a);
+        if (rest.size() <= kStray) {
+          explained = true;
+          break;
+        }
+        if (found_planes == planes.size()) break;
+        Plane best{Eigen::Vector3d::Zero(), 0.0, 0};
+        const std::size_t first = std::min<std::size_t>(6, rest.size());
+        Eigen::Vector3d c;
+        for (std::size_t a = 0; a < first; ++a)
+          for (std::size_t b = a + 1; b <= first && b <= rest.size(); ++b) {
+            // the second of the rest, or the point itself (b == first)
+            const Eigen::Vector3d y = b < first ? v[rest[b]] : Eigen::Vector3d::Zero();
+            for (std::size_t z = 0; z <= v.size(); ++z) {
+              const Eigen::Vector3d x3 = z < v.size() ? v[z] : Eigen::Vector3d::Zero();
+              if (!plane(v[rest[a]], y, x3, c)) continue;
+              const double d = c.dot(v[rest[a]]);
+              if (const std::size_t held = count(c, d); held > best.held) best = {c, d, held};
+            }
+          }
+        if (best.held < 3) break;
+        planes[found_planes] = refine(best, false);
+        if (planes[found_planes++].held == 0) break;
+      }
+      // One plane with strays beside it: the strays' face is no plane here (a curved face's
+      // rim), so no crease cut would stop this point's disc at it; left as it is (fandisk's
+      // vertices at 3e-3: 2.6 % of the pixels beyond 2E where 0.15 % were).
+      if (!explained || (found_planes == 1 && !rest.empty())) continue;
+      bool apart = true;
+      for (std::size_t a = 0; a < found_planes; ++a)
+        for (std::size_t b = a + 1; b < found_planes; ++b)
+          apart = apart && std::abs(planes[a].c.dot(planes[b].c)) < o.crease_cos;
+      if (!apart) continue;
+      if (std::any_of(planes.begin(), planes.begin() + std::ptrdiff_t(found_planes),
+                      [&](const Plane& q) { return std::abs(q.d) <= tol && std::abs(q.c.dot(nrm)) >= kSameNormal; }))
+        continue;
+      // Orientation: the first along the point's normal, the others along their points'.
+      std::array<double, 3> sign{};
+      sign[0] = planes[0].c.dot(nrm);
+      for (std::size_t a = 0; a < v.size(); ++a)
+        for (std::size_t q = 1; q < found_planes; ++q)
+          if (std::abs(planes[q].c.dot(v[a]) - planes[q].d) <= tol && std::abs(planes[0].c.dot(v[a])) > tol)
+            sign[q] += planes[q].c.dot(m.normals[id[a]]);
+      if (std::any_of(sign.begin(), sign.begin() + std::ptrdiff_t(found_planes), [](double x) { return std::abs(x) < 0.1; }))
+        continue;
+      face[i] = sign[0] > 0 ? planes[0].c : Eigen::Vector3d(-planes[0].c);
+      for (std::size_t q = 1; q < found_planes; ++q)
+        if (std::abs(planes[q].d) <= tol) out.emplace_back(i, sign[q] > 0 ? planes[q].c : Eigen::Vector3d(-planes[q].c));
+    }
+  });
+  for (std::size_t i = 0; i < n; ++i)
+    if (face[i].squaredNorm() > 0) m.normals[i] = face[i], ++m.crease_points;
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> copies;
+  for (auto& f : found) copies.insert(copies.end(), f.begin(), f.end());
+  if (copies.empty()) return;
+  std::sort(copies.begin(), copies.end(), [](const auto& x, const auto& y) {  // the threads' order aside
+    return std::tie(x.first, x.second.x(), x.second.y(), x.second.z()) < std::tie(y.first, y.second.x(), y.second.y(), y.second.z());
+  });
+  m.index.reset();  // its span is the points, about to grow
+  for (const auto& [i, c] : copies) m.points.push_back(m.points[i]), m.normals.push_back(c);
+  m.crease_copies = copies.size();
+  m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
 }
 
 DataSurface DataSurface::from_mesh(const PolygonMesh& mesh) {
@@ -700,6 +965,9 @@ void DataSurface::from_mesh_boundary(const PolygonMesh& mesh, Impl& m) {
 
 bool DataSurface::has_faces() const { return !impl_->triangles.empty(); }
 double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i); }
+const Eigen::Vector3d& DataSurface::normal(std::size_t i) const { return impl_->normals.at(i); }
+std::size_t DataSurface::crease_points() const { return impl_->crease_points; }
+std::size_t DataSurface::crease_copies() const { return impl_->crease_copies; }
 double DataSurface::spacing(std::size_t i) const { return impl_->spacing.at(i); }
 void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const {
   out.clear();

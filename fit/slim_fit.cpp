@@ -220,10 +220,19 @@ void SlimFitter::setup() {
         subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
       },
       [&] {
-        data_ = std::make_shared<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_, {.bent_discs = opt_.bent_discs, .crease_cuts = opt_.crease_cuts}));
+        data_ = std::make_shared<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_, {.bent_discs = opt_.bent_discs, .crease_cuts = opt_.crease_cuts, .crease_points = opt_.crease_points && st_.normals_estimated}));
       });
   log::debug("fit_slim: point indices and the data's surface ({}) in {:.2f} s", surface_ ? "mesh" : "tangent discs",
              seconds_since(t1));
+  // Crease points (DataSurfaceOptions::crease_points, estimated normals): the fit takes their
+  // faces' normals too, so its checks build each point's disc as the data does.
+  if (!surface_ && data_->crease_points() > 0) {
+    for (std::size_t i = 0; i < n; ++i) N_[i] = data_->normal(i);
+    st_.crease_points = data_->crease_points();
+    log::info("fit_slim: {} points lie where two or three planes meet (a sharp edge or corner) with a normal off "
+              "them; each takes the plane of its face ({} on an edge also give the other face a disc there)",
+              data_->crease_points(), data_->crease_copies());
+  }
   if (!surface_) warn_below_noise();
   t1 = Clock::now();
   probe_height_ = probe_heights(P_, N_, opt_.probe_factor * E_, surface_ ? data_.get() : nullptr);

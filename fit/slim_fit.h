@@ -221,6 +221,11 @@ struct SlimFitOptions {
   /// ... cut at sharp creases between planar faces (DataSurfaceOptions::crease_cuts: no fins
   /// past a plate's or a box's edges); false: whole discs, reaching up to a radius past a crease
   bool crease_cuts = true;
+  /// ... and where the fit estimated the normals (none given, or given ones it set aside), a point
+  /// whose neighbours lie on two or three planes meeting at a sharp edge while its rounded normal
+  /// is off them takes its face's plane, and an edge point gives each face a disc
+  /// (DataSurfaceOptions::crease_points)
+  bool crease_points = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;
@@ -305,6 +310,7 @@ struct SlimFitStats {
   std::size_t disc_patches = 0;      ///< disc patches added on points with a hole
   std::size_t clips_relaxed = 0;     ///< patches of the model returned whose crease plane moved across a slit (relax_clips)
   std::size_t crease_gaps = 0;       ///< slit samples at creases left at the end (relax_clips)
+  std::size_t crease_points = 0;     ///< points that took their face's normal (SlimFitOptions::crease_points)
   /// The share of the data the model returned leaves seen through, as the fit counts it: points
   /// alone, the points with a hole a view sees (seen_point_holes, counted on the model returned
   /// whatever the rounds did) and crease gaps, per point; with faces, the fan triangles seen

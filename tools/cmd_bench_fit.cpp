@@ -378,6 +378,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                                 {"fitted_points", fit_cloud.points.size()},
                                 {"normals_estimated", fit.stats.normals_estimated},
                                 {"normals_turned", fit.stats.normals_turned},
+                                {"crease_points", fit.stats.crease_points},
                                 {"fitter_surface_samples_beyond_2e", fit.stats.surface_failures},
                                 {"point_holes", fit.stats.point_holes},
                                 {"point_hole_balls", fit.stats.point_hole_balls},

@@ -230,6 +230,7 @@ void add_fit(CLI::App& root, Commands& commands) {
                                             {"patches", s.patches},
                                             {"normals", s.normals_estimated ? "estimated" : "given"},
                                             {"normals_turned", s.normals_turned},
+                                            {"crease_points", s.crease_points},
                                             {"noise_abs", s.noise},
                                             {"noise_rel", s.noise / s.diagonal},
                                             {"max_error_abs", s.max_error_abs},

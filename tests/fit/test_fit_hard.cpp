@@ -13,6 +13,7 @@
 
 #include "fit/data_surface.h"
 #include "fit/evaluate.h"
+#include "fit/normals.h"
 #include "fit/slim_fit.h"
 #include "fit/surface_error.h"
 #include "core/camera.h"
@@ -965,6 +966,103 @@ TEST(FitSlimHard, PointsOnlyPlateHasNoFinsPastItsEdgesWithCreaseCuts) {
     EXPECT_EQ(fit.stats.blend_failures, 0u);
     EXPECT_EQ(fit.stats.surface_failures, 0u);
   }
+}
+
+// A cloud's data surface (its discs) as a viewer would see it, measured against the truth.
+SurfaceError discs_against(const DataSurface& discs, const DataSurface& truth, const Box3& box, double bound) {
+  const TraceFn trace = [&](const Ray& r) -> std::optional<double> {
+    if (const auto h = discs.first_hit(r)) return h->t;
+    return std::nullopt;
+  };
+  return measure_surface_error(trace, truth, box, {.views = 8, .resolution = 128, .bound = bound, .holes = false});
+}
+
+// Crease points (DataSurfaceOptions::crease_points). A box's points without normals get PCA
+// normals rounded over its edges, and a mesh's vertex normals average the faces' there: those
+// discs, tilted, stood off both faces. Each such point takes its face's plane, an edge's vertex
+// gives both faces a disc, and exact normals are left alone.
+TEST(DataSurface, CreasePointsTakeTheirFacesPlanes) {
+  const Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 20000, 21);
+  const DataSurface truth = DataSurface::from_mesh(s.mesh);
+  const double E = 1e-3 * s.box.diagonal();
+  const auto on_a_face = [](const Vec& n) { return n.cwiseAbs().maxCoeff() >= std::cos(std::numbers::pi / 180.0); };
+  {
+    const DataSurface exact = DataSurface::from_points(s.cloud.points, s.cloud.normals, {.crease_points = true});
+    EXPECT_EQ(exact.crease_points(), 0u);
+    EXPECT_EQ(exact.crease_copies(), 0u);
+  }
+  const std::vector<Vec> pca = estimate_normals(s.cloud.points, {}).normals;
+  const DataSurface with = DataSurface::from_points(s.cloud.points, pca, {.crease_points = true});
+  const DataSurface without = DataSurface::from_points(s.cloud.points, pca);
+  std::size_t rounded = 0, turned = 0, onto_face = 0;
+  for (std::size_t i = 0; i < pca.size(); ++i) {
+    rounded += !on_a_face(pca[i]);
+    if (with.normal(i) == pca[i]) continue;
+    ++turned;
+    onto_face += on_a_face(with.normal(i));
+  }
+  const SurfaceError a = discs_against(with, truth, s.box, 2 * E), b = discs_against(without, truth, s.box, 2 * E);
+  std::cerr << "  PCA normals more than 1° off every face: " << rounded << "; turned " << turned << ", " << onto_face
+            << " onto a face's; discs beyond 2E of the box " << a.share_beyond << " (without " << b.share_beyond
+            << "), p99/E " << a.p99 / E << " (" << b.p99 / E << ")\n";
+  EXPECT_EQ(with.crease_points(), turned);
+  EXPECT_GE(double(turned), 0.6 * double(rounded));
+  EXPECT_GE(double(onto_face), 0.99 * double(turned));
+  EXPECT_LE(a.share_beyond, 0.3 * b.share_beyond);
+  EXPECT_LT(a.p99, 0.7 * b.p99);
+
+  // A tessellated box's vertices with the faces' normals averaged at its edges and corners.
+  std::map<std::tuple<long, long, long>, std::size_t> at;
+  PointCloud v;
+  for (std::size_t f = 0; f < s.mesh.face_count(); ++f) {
+    const auto c = s.mesh.face(f);
+    const Vec n = (s.mesh.vertices[c[1]] - s.mesh.vertices[c[0]]).cross(s.mesh.vertices[c[2]] - s.mesh.vertices[c[0]]).normalized();
+    for (const int k : c) {
+      const Vec& p = s.mesh.vertices[k];
+      const auto [it, fresh] = at.try_emplace({std::lround(p.x() * 1e6), std::lround(p.y() * 1e6), std::lround(p.z() * 1e6)}, v.points.size());
+      if (fresh) v.points.push_back(p), v.normals.push_back(Vec::Zero());
+      // once per face: the faces of one sheet agree, so a sum over sheets averages the faces'
+      if (v.normals[it->second].dot(n) < 0.5 || v.normals[it->second].squaredNorm() == 0) v.normals[it->second] += n;
+    }
+  }
+  std::size_t edges = 0;
+  for (auto& n : v.normals) edges += !on_a_face(n.normalized()), n.normalize();
+  const DataSurface averaged = DataSurface::from_points(v.points, v.normals, {.crease_points = true});
+  std::size_t faced = 0;
+  for (std::size_t i = 0; i < v.points.size(); ++i) faced += !on_a_face(v.normals[i]) && on_a_face(averaged.normal(i));
+  std::cerr << "  vertices " << v.points.size() << ", on edges and corners " << edges << "; taken onto a face " << faced
+            << ", second discs " << averaged.crease_copies() << "\n";
+  EXPECT_GE(double(faced), 0.55 * double(edges));
+  EXPECT_GE(double(averaged.crease_copies()), 0.55 * double(edges));
+}
+
+// The same box's points without normals, fitted at 1e-3: its crease points' discs bring the fit's
+// surface onto the true box past its edges, with fewer patches.
+TEST(FitSlimHard, BoxWithoutNormalsFitsNearItsEdgesWithCreasePoints) {
+  const Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 20000, 52);
+  const DataSurface truth = DataSurface::from_mesh(s.mesh);
+  PointCloud cloud = s.cloud;
+  cloud.normals.clear();
+  std::array<SurfaceError, 2> e;
+  std::array<std::size_t, 2> patches{};
+  double E = 0;
+  for (const bool cp : {true, false}) {
+    SlimFitOptions opt;
+    opt.max_error = 1e-3;
+    opt.crease_points = cp;
+    const SlimFitResult fit = fit_slim(cloud, opt);
+    E = fit.stats.max_error_abs;
+    e[cp] = measure_surface_error(fit.model, truth, s.box, {.views = 8, .resolution = 256, .bound = 2 * E});
+    patches[cp] = fit.stats.patches;
+    std::cerr << "  crease points " << cp << " (" << fit.stats.crease_points << "): patches " << fit.stats.patches
+              << ", surface p99.9/E " << e[cp].p999 / E << " max/E " << e[cp].max / E << " beyond 2E "
+              << e[cp].share_beyond << ", holes " << e[cp].hole_share << "\n";
+  }
+  EXPECT_LE(e[1].share_beyond, 0.5 * e[0].share_beyond);
+  EXPECT_LE(e[1].p999, 2 * E);
+  EXPECT_GT(e[0].p999, 3 * E) << "the case no longer needs crease points";
+  EXPECT_LT(double(patches[1]), 0.85 * double(patches[0]));
+  EXPECT_LE(e[1].hole_share, std::max(1e-4, 1.25 * e[0].hole_share));  // no more holes
 }
 
 TEST(PolygonMesh, FannedSplitsEachFaceFromItsFirstCorner) {
