@@ -123,6 +123,10 @@ struct DataSurface::Impl {
   // Points: crease points whose normal is their face's (split_at_creases), and the second discs
   // appended after the given points for those on an edge (indices from `given` on).
   std::size_t given = 0, crease_points = 0, crease_copies = 0;
+  // 1 where split_at_creases gave the point its face's plane, or made it (a second disc): planar
+  // by construction (the crease cuts' gate; its neighbours within a disc may be another face's
+  // rounded ones, as a plate's edge rows are).
+  std::vector<std::uint8_t> faced;
   // Points: the disc's second-order term, the height ½(a x² + 2b xy + c y²) over the tangent plane
   // (x, y along normal.unitOrthogonal() and normal × it), fitted to the same-sheet neighbours'
   // heights: a tangent disc is flat, so where E is below the sampling's sag (a sphere of 400
@@ -452,7 +456,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
           const double h = n.dot(m.points[nb[j].first] - m.points[i]);
           sum += h * h, ++count;
         }
-        planar[i] = count >= 2 && std::sqrt(sum / count) <= options.crease_planarity * m.spacing[i];
+        planar[i] = (i < m.faced.size() && m.faced[i]) || (count >= 2 && std::sqrt(sum / count) <= options.crease_planarity * m.spacing[i]);
       }
       if (options.bent_discs && same.size() >= 5) {
         // Least squares of h = ½(a x² + 2b xy + c y²) over the same-sheet neighbours; the bend
@@ -677,7 +681,13 @@ void DataSurface::split_at_creases(Impl& m) {
   const auto cos_deg = [](double deg) { return std::cos(deg * std::numbers::pi / 180.0); };
   const double kTurned = std::cos(0.5 * std::acos(o.crease_cos));  // half the crease angle
   const double kSameNormal = cos_deg(1.0), kClose = cos_deg(30.0), kAgree = cos_deg(60.0);
+  struct Plane {
+    Eigen::Vector3d c;
+    double d;
+    std::size_t held;
+  };
   std::vector<Eigen::Vector3d> face(n, Eigen::Vector3d::Zero());  // zero: unchanged
+  std::vector<Eigen::Vector3d> lone(n, Eigen::Vector3d::Zero());  // its own face's plane alone found
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   const std::span<const std::uint32_t> order = m.index->order();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
@@ -687,6 +697,7 @@ void DataSurface::split_at_creases(Impl& m) {
     std::vector<std::uint32_t> id;
     std::vector<std::uint8_t> left;  // not yet explained by a plane
     std::vector<std::size_t> rest;   // their indices
+    std::vector<Plane> tried;        // candidates for the first plane
     for (std::size_t oi = r.begin(); oi != r.end(); ++oi) {
       const std::uint32_t i = order[oi];
       const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i];
@@ -745,11 +756,6 @@ void DataSurface::split_at_creases(Impl& m) {
         c /= len;
         return true;
       };
-      struct Plane {
-        Eigen::Vector3d c;
-        double d;
-        std::size_t held;
-      };
       // A candidate refitted to its points, or refused (held 0); held: those left that it holds.
       const auto refine = [&](const Plane& c, bool through) {
         // Its points: all it holds, those another plane explained too (an edge's, on both faces;
@@ -793,7 +799,9 @@ void DataSurface::split_at_creases(Impl& m) {
             for (std::size_t a = 0; a < v.size(); ++a)
               if (used(a)) C += (v[a] - centre) * (v[a] - centre).transpose();
             const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> apart(C);
-            if (spread(apart.eigenvalues(), own) && std::abs(apart.eigenvectors().col(0).dot(centre)) > tol) return false;
+            // (Its points along a line, the point beside it: a plane through the point and a row
+            // of another face's points, turned 17° off it beside a plate's edge.)
+            if (!spread(apart.eigenvalues(), own) || std::abs(apart.eigenvectors().col(0).dot(centre)) > tol) return false;
           }
           f = fit.eigenvectors().col(0);
           if (f.dot(c.c) < 0) f = -f;
@@ -812,20 +820,33 @@ void DataSurface::split_at_creases(Impl& m) {
         // tol, the fit's may not be).
         return count(r.c, r.d) >= r.held ? r : Plane{c.c, c.d, r.held};
       };
-      std::array<Plane, 3> planes;
+      std::array<Plane, 3> planes{};
       std::size_t found_planes = 0;
       {
-        Plane best{Eigen::Vector3d::Zero(), 0.0, 0};
+        // Candidates by how many they hold; the first that refine keeps, of the first
+        // kFirstTries apart by a degree (a plane through the point and a row of another face's
+        // points can hold as many as its own face's beside a plate's edge).
+        constexpr std::size_t kFirstTries = 3;
         const std::size_t near = std::min<std::size_t>(10, v.size());
+        tried.clear();
         Eigen::Vector3d c;
         for (std::size_t a = 0; a < near; ++a)
           for (std::size_t b = a + 1; b < near; ++b)
             if (plane(Eigen::Vector3d::Zero(), v[a], v[b], c))
-              if (const std::size_t held = count(c, 0.0); held > best.held) best = {c, 0.0, held};
+              if (const std::size_t held = count(c, 0.0); held >= 4) tried.push_back({c, 0.0, held});
+        std::stable_sort(tried.begin(), tried.end(), [](const Plane& x, const Plane& y) { return x.held > y.held; });
         // (A candidate holds the two it was made from whatever it is.)
-        if (best.held < 4 || own_held + 2 >= best.held) continue;
-        planes[found_planes++] = refine(best, true);
+        if (tried.empty() || own_held + 2 >= tried.front().held) continue;
+        std::size_t tries = 0;
+        for (std::size_t t = 0; t < tried.size() && tries < kFirstTries; ++t) {
+          if (std::any_of(tried.begin(), tried.begin() + std::ptrdiff_t(t), [&](const Plane& q) { return std::abs(q.c.dot(tried[t].c)) >= kSameNormal; }))
+            continue;
+          ++tries;
+          planes[0] = refine(tried[t], true);
+          if (planes[0].held > 0) break;
+        }
         if (planes[0].held == 0) continue;
+        found_planes = 1;
       }
       bool explained = false;
       while (true) {
@@ -861,7 +882,18 @@ void DataSurface::split_at_creases(Impl& m) {
       // One plane with strays beside it: the strays' face is no plane here (a curved face's
       // rim), so no crease cut would stop this point's disc at it; left as it is (fandisk's
       // vertices at 3e-3: 2.6 % of the pixels beyond 2E where 0.15 % were).
-      if (!explained || (found_planes == 1 && !rest.empty())) continue;
+      if (!explained || (found_planes == 1 && !rest.empty())) {
+        // Its own face's plane alone, beside another face seen only as strays or a row along
+        // the edge (a point a spacing or two from an edge): taken below where that other face's
+        // own points have planes (so the crease cuts stop this disc at it).
+        if ((found_planes == 1 || (found_planes == 2 && planes[1].held == 0)) && !(std::abs(planes[0].c.dot(nrm)) >= kSameNormal)) {
+          double sign0 = planes[0].c.dot(nrm);
+          for (std::size_t a = 0; a < v.size(); ++a)
+            if (std::abs(planes[0].c.dot(v[a])) <= tol) sign0 += planes[0].c.dot(m.normals[id[a]]);
+          if (std::abs(sign0) >= 0.1) lone[i] = sign0 > 0 ? planes[0].c : Eigen::Vector3d(-planes[0].c);
+        }
+        continue;
+      }
       bool apart = true;
       for (std::size_t a = 0; a < found_planes; ++a)
         for (std::size_t b = a + 1; b < found_planes; ++b)
@@ -889,8 +921,94 @@ void DataSurface::split_at_creases(Impl& m) {
         if (std::abs(planes[q].d) <= tol) out.emplace_back(i, sign[q] > 0 ? planes[q].c : Eigen::Vector3d(-planes[q].c));
     }
   });
+  // Then the faces' planes spread to the points beside the edges that the above left: PCA's
+  // normals lean there a degree or two (a plate 1 x 1 x 0.05 without normals kept 740 points
+  // beside its edges rounded, their discs uncut past the edges: the crease cuts take planar points
+  // only). In each of kSpread rounds, a point not yet faced takes, among its nearest:
+  // - (its own plane found alone, beside another face seen only as strays or a row along the
+  //   edge) its own plane, where a point of another face (turned more than acos(crease_cos), off
+  //   its plane) has its face's plane: the other face is a plane there too (a curved face's rim
+  //   is not, and no cut would stop a flat disc at it);
+  // - or the plane of a faced point of its own face (normals within 30°) that it lies on
+  //   (within tol), whichever of them is nearer.
+  // The plane of normal f through x holds three quarters of the nearest nb whose normals lie
+  // within 30° of it, spread across it (across a fifth of their length): a cylinder's tangent
+  // plane holds a band along its axis, and without this the planes spread along such bands to a
+  // third of a cylinder's points (radius 40 spacings), 3° off at most.
+  const auto holds_around = [&](const std::vector<Neighbour>& nb, const Eigen::Vector3d& x, const Eigen::Vector3d& f,
+                                double tol) {
+    std::size_t close = 0, held = 0;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    for (const auto& [j, d2] : nb)
+      if (m.normals[j].dot(f) >= kClose) {
+        ++close;
+        const Eigen::Vector3d v = m.points[j] - x;  // (offsets: a model far from the origin)
+        if (std::abs(f.dot(v)) <= tol) ++held, mean += v, S += v * v.transpose();
+      }
+    if (held < 4 || 4 * held < 3 * close) return false;
+    mean /= double(held);
+    const Eigen::Vector3d lambda =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S / double(held) - mean * mean.transpose(), Eigen::EigenvaluesOnly).eigenvalues();
+    return lambda(2) > 0 && lambda(1) >= 0.04 * lambda(2);
+  };
+  // Only the points near those faced in the round before are asked (twice as many nearest as
+  // they ask: neighbourhoods are not symmetric).
+  constexpr int kSpread = 3;
+  std::vector<std::uint32_t> fresh, asked;
   for (std::size_t i = 0; i < n; ++i)
-    if (face[i].squaredNorm() > 0) m.normals[i] = face[i], ++m.crease_points;
+    if (face[i].squaredNorm() > 0) fresh.push_back(std::uint32_t(i));
+  std::vector<std::uint8_t> is_asked(n, 0);
+  for (int round = 0; round < kSpread && !fresh.empty(); ++round) {
+    asked.clear();
+    {
+      std::vector<Neighbour> nb;
+      for (const std::uint32_t j : fresh) {
+        m.index->nearest(m.points[j], 2 * k, nb);
+        for (const auto& [i, d2] : nb)
+          if (face[i].squaredNorm() == 0 && !is_asked[i]) is_asked[i] = 1, asked.push_back(std::uint32_t(i));
+      }
+      for (const std::uint32_t i : asked) is_asked[i] = 0;
+    }
+    std::vector<Eigen::Vector3d> taken(asked.size(), Eigen::Vector3d::Zero());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, asked.size(), 256), [&](const auto& r) {
+      std::vector<Neighbour> nb;
+      for (std::size_t a = r.begin(); a != r.end(); ++a) {
+        const std::uint32_t i = asked[a];
+        const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i], &c = lone[i];
+        m.index->nearest(p, k, nb);
+        std::size_t seen = 0;
+        double d6 = 0;
+        for (const auto& [j, d2] : nb)
+          if (j != i && m.normals[j].dot(nrm) >= -0.2 && ++seen == 6) d6 = std::sqrt(d2);
+        const double tol = 2.0 * o.crease_planarity * d6;
+        if (!(tol > 0)) continue;
+        for (const auto& [j, d2] : nb) {
+          const Eigen::Vector3d& f = face[j];
+          if (j == i || f.squaredNorm() == 0 || m.normals[j].dot(nrm) < -0.2) continue;
+          if (c.squaredNorm() > 0 && std::abs(f.dot(c)) < o.crease_cos && std::abs(c.dot(m.points[j] - p)) > tol &&
+              holds_around(nb, p, c, tol)) {
+            taken[a] = c;
+            break;
+          }
+          if (f.dot(nrm) >= kClose && std::abs(f.dot(m.points[j] - p)) <= tol && holds_around(nb, m.points[j], f, tol)) {
+            taken[a] = f;
+            break;
+          }
+        }
+      }
+    });
+    fresh.clear();
+    for (std::size_t a = 0; a < asked.size(); ++a)
+      if (taken[a].squaredNorm() > 0) face[asked[a]] = taken[a], fresh.push_back(asked[a]);
+  }
+  m.faced.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    if (face[i].squaredNorm() > 0) {
+      m.crease_points += face[i] != m.normals[i];  // (a face's exact PCA normal, spread to)
+      m.normals[i] = face[i];
+      m.faced[i] = 1;
+    }
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> copies;
   for (auto& f : found) copies.insert(copies.end(), f.begin(), f.end());
   if (copies.empty()) return;
@@ -898,7 +1016,7 @@ void DataSurface::split_at_creases(Impl& m) {
     return std::tie(x.first, x.second.x(), x.second.y(), x.second.z()) < std::tie(y.first, y.second.x(), y.second.y(), y.second.z());
   });
   m.index.reset();  // its span is the points, about to grow
-  for (const auto& [i, c] : copies) m.points.push_back(m.points[i]), m.normals.push_back(c);
+  for (const auto& [i, c] : copies) m.points.push_back(m.points[i]), m.normals.push_back(c), m.faced.push_back(1);
   m.crease_copies = copies.size();
   m.index = std::make_unique<PointIndex>(std::span<const Eigen::Vector3d>(m.points));
 }
