@@ -929,10 +929,12 @@ void DataSurface::split_at_creases(Impl& m) {
   //   edge) its own plane, where a point of another face (turned more than acos(crease_cos), off
   //   its plane) has its face's plane: the other face is a plane there too (a curved face's rim
   //   is not, and no cut would stop a flat disc at it);
-  // - or the plane of a faced point of its own face (normals within 30°) that it lies on
-  //   (within tol), whichever of them is nearer.
-  // The plane of normal f through x holds three quarters of the nearest nb whose normals lie
-  // within 30° of it, spread across it (across a fifth of their length): a cylinder's tangent
+  // - or the plane of a faced point that it lies on (within tol), facing its own side (a point
+  //   a spacing from an edge can lean 75° towards the other face: a box 1 x 0.6 x 0.3 of
+  //   20,000 points kept 45 such points rounded more than 2° where only normals within 30°
+  //   took the plane, now 14), whichever of them is nearer.
+  // The plane of normal f through x holds three quarters of the nearest nb whose normals (their
+  // faces' where they have one) lie within 30° of it, spread across it (across a fifth of their length): a cylinder's tangent
   // plane holds a band along its axis, and without this the planes spread along such bands to a
   // third of a cylinder's points (radius 40 spacings), 3° off at most.
   const auto holds_around = [&](const std::vector<Neighbour>& nb, const Eigen::Vector3d& x, const Eigen::Vector3d& f,
@@ -941,7 +943,7 @@ void DataSurface::split_at_creases(Impl& m) {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
     for (const auto& [j, d2] : nb)
-      if (m.normals[j].dot(f) >= kClose) {
+      if ((face[j].squaredNorm() > 0 ? face[j] : m.normals[j]).dot(f) >= kClose) {
         ++close;
         const Eigen::Vector3d v = m.points[j] - x;  // (offsets: a model far from the origin)
         if (std::abs(f.dot(v)) <= tol) ++held, mean += v, S += v * v.transpose();
@@ -991,7 +993,7 @@ void DataSurface::split_at_creases(Impl& m) {
             taken[a] = c;
             break;
           }
-          if (f.dot(nrm) >= kClose && std::abs(f.dot(m.points[j] - p)) <= tol && holds_around(nb, m.points[j], f, tol)) {
+          if (f.dot(nrm) > 0 && std::abs(f.dot(m.points[j] - p)) <= tol && holds_around(nb, m.points[j], f, tol)) {
             taken[a] = f;
             break;
           }
