@@ -656,8 +656,8 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
 // (not those facing away: the far side of a thin part) hold a normal turned more than half the
 // crease angle from its own, they are explained, all but two, within tol (twice crease_planarity
 // of the 6th nearest's distance) by planes, RANSAC-like:
-// - the first through the point: of the planes through it and two of its ten nearest, the one
-//   that holds most, at least four;
+// - the first through the point: of the planes through it and two of its ten nearest, holding
+//   at least four, the first of the three that hold most (a degree apart) that the refit keeps;
 // - then up to two more, each through one or two of the rest and the point or any neighbour
 //   (an edge's points lie on both faces), holding most of the rest, at least three.
 // Each plane is refitted by least squares (through the point for the first) to the points it
@@ -837,15 +837,17 @@ void DataSurface::split_at_creases(Impl& m) {
         std::stable_sort(tried.begin(), tried.end(), [](const Plane& x, const Plane& y) { return x.held > y.held; });
         // (A candidate holds the two it was made from whatever it is.)
         if (tried.empty() || own_held + 2 >= tried.front().held) continue;
-        std::size_t tries = 0;
+        std::size_t tries = 0, kept = 0;
         for (std::size_t t = 0; t < tried.size() && tries < kFirstTries; ++t) {
           if (std::any_of(tried.begin(), tried.begin() + std::ptrdiff_t(t), [&](const Plane& q) { return std::abs(q.c.dot(tried[t].c)) >= kSameNormal; }))
             continue;
           ++tries;
           planes[0] = refine(tried[t], true);
+          kept = t;
           if (planes[0].held > 0) break;
         }
-        if (planes[0].held == 0) continue;
+        // (The plane kept, not only the best, must hold more than the point's own normal's.)
+        if (planes[0].held == 0 || own_held + 2 >= tried[kept].held) continue;
         found_planes = 1;
       }
       bool explained = false;
@@ -1007,9 +1009,11 @@ void DataSurface::split_at_creases(Impl& m) {
   m.faced.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     if (face[i].squaredNorm() > 0) {
-      m.crease_points += face[i] != m.normals[i];  // (a face's exact PCA normal, spread to)
-      m.normals[i] = face[i];
       m.faced[i] = 1;
+      // A normal within 1° of its face's is kept (a face's exact or given normal, spread to).
+      if (face[i].dot(m.normals[i]) >= kSameNormal) continue;
+      m.normals[i] = face[i];
+      ++m.crease_points;
     }
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> copies;
   for (auto& f : found) copies.insert(copies.end(), f.begin(), f.end());

@@ -1107,9 +1107,10 @@ TEST(FitSlimHard, ThinPlateWithoutNormalsCountsFewSlitsAtItsEdges) {
   std::cerr << "  patches " << fit.stats.patches << ", crease gaps " << fit.stats.crease_gaps << ", hole share "
             << fit.stats.hole_share << "; against the plate: p99.9/E " << e.p999 / E << ", max/E " << e.max / E
             << ", beyond 2E " << e.share_beyond << ", holes " << e.hole_share << "\n";
-  EXPECT_LE(fit.stats.crease_gaps, 6u);
-  EXPECT_LE(fit.stats.hole_share, 3 * opt.max_hole_share);
-  EXPECT_LE(e.share_beyond, 3e-5);  // 6.4e-5 before
+  // (With the faces' planes spread but the old slit check, 6 slits here; with neither, 27.)
+  EXPECT_LE(fit.stats.crease_gaps, 3u);
+  EXPECT_LE(fit.stats.hole_share, 2 * opt.max_hole_share);
+  EXPECT_LE(e.share_beyond, 1e-4);
   EXPECT_LE(e.hole_share, 1e-4);
 }
 
