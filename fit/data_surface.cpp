@@ -674,6 +674,9 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
 // plane through it less the two it was made from, or where one of its planes through it lies
 // within 1° of its normal: a face's exact normal beside an edge (the crease cuts stop its disc; refitted here,
 // a hexagonal prism's exact normals drew fins of 10E at 1e-3 where they had 2E).
+// Then the faces' planes spread to the points beside them (see below). Every point given its
+// face's plane is planar for the crease cuts (Impl::faced); one whose normal lies within 1° of
+// that plane keeps its own.
 void DataSurface::split_at_creases(Impl& m) {
   const auto& o = m.options;
   const std::size_t n = m.points.size(), k = o.crease_neighbours + 1;
@@ -687,7 +690,6 @@ void DataSurface::split_at_creases(Impl& m) {
     std::size_t held;
   };
   std::vector<Eigen::Vector3d> face(n, Eigen::Vector3d::Zero());  // zero: unchanged
-  std::vector<Eigen::Vector3d> lone(n, Eigen::Vector3d::Zero());  // its own face's plane alone found
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   const std::span<const std::uint32_t> order = m.index->order();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
@@ -884,18 +886,7 @@ void DataSurface::split_at_creases(Impl& m) {
       // One plane with strays beside it: the strays' face is no plane here (a curved face's
       // rim), so no crease cut would stop this point's disc at it; left as it is (fandisk's
       // vertices at 3e-3: 2.6 % of the pixels beyond 2E where 0.15 % were).
-      if (!explained || (found_planes == 1 && !rest.empty())) {
-        // Its own face's plane alone, beside another face seen only as strays or a row along
-        // the edge (a point a spacing or two from an edge): taken below where that other face's
-        // own points have planes (so the crease cuts stop this disc at it).
-        if ((found_planes == 1 || (found_planes == 2 && planes[1].held == 0)) && !(std::abs(planes[0].c.dot(nrm)) >= kSameNormal)) {
-          double sign0 = planes[0].c.dot(nrm);
-          for (std::size_t a = 0; a < v.size(); ++a)
-            if (std::abs(planes[0].c.dot(v[a])) <= tol) sign0 += planes[0].c.dot(m.normals[id[a]]);
-          if (std::abs(sign0) >= 0.1) lone[i] = sign0 > 0 ? planes[0].c : Eigen::Vector3d(-planes[0].c);
-        }
-        continue;
-      }
+      if (!explained || (found_planes == 1 && !rest.empty())) continue;
       bool apart = true;
       for (std::size_t a = 0; a < found_planes; ++a)
         for (std::size_t b = a + 1; b < found_planes; ++b)
@@ -926,19 +917,16 @@ void DataSurface::split_at_creases(Impl& m) {
   // Then the faces' planes spread to the points beside the edges that the above left: PCA's
   // normals lean there a degree or two (a plate 1 x 1 x 0.05 without normals kept 740 points
   // beside its edges rounded, their discs uncut past the edges: the crease cuts take planar points
-  // only). In each of kSpread rounds, a point not yet faced takes, among its nearest:
-  // - (its own plane found alone, beside another face seen only as strays or a row along the
-  //   edge) its own plane, where a point of another face (turned more than acos(crease_cos), off
-  //   its plane) has its face's plane: the other face is a plane there too (a curved face's rim
-  //   is not, and no cut would stop a flat disc at it);
-  // - or the plane of a faced point that it lies on (within tol), facing its own side (a point
-  //   a spacing from an edge can lean 75° towards the other face: a box 1 x 0.6 x 0.3 of
-  //   20,000 points kept 45 such points rounded more than 2° where only normals within 30°
-  //   took the plane, now 14), whichever of them is nearer.
-  // The plane of normal f through x holds three quarters of the nearest nb whose normals (their
-  // faces' where they have one) lie within 30° of it, spread across it (across a fifth of their length): a cylinder's tangent
-  // plane holds a band along its axis, and without this the planes spread along such bands to a
-  // third of a cylinder's points (radius 40 spacings), 3° off at most.
+  // only). In each of kSpread rounds, a point not yet faced takes the plane of the nearest faced
+  // point whose plane it lies on (within tol), facing its own side (a point a spacing from an
+  // edge can lean 75° towards the other face: a box 1 x 0.6 x 0.3 of 20,000 points kept 45
+  // such points rounded more than 2° where only normals within 30° took the plane, now 14).
+  // (A rule for a point whose own face's plane alone was found, taken where the other face's
+  // points took theirs, changed 1 point of the box and none of a thin plate with this one.)
+  // The plane must hold three quarters of the point's nearest whose normals (their faces' where
+  // they have one) lie within 30° of it, spread across it (across a fifth of their length): a
+  // cylinder's tangent plane holds a band along its axis, and without this the planes spread
+  // along such bands to a third of a cylinder's points (radius 40 spacings), 3° off at most.
   const auto holds_around = [&](const std::vector<Neighbour>& nb, const Eigen::Vector3d& x, const Eigen::Vector3d& f,
                                 double tol) {
     std::size_t close = 0, held = 0;
@@ -979,7 +967,7 @@ void DataSurface::split_at_creases(Impl& m) {
       std::vector<Neighbour> nb;
       for (std::size_t a = r.begin(); a != r.end(); ++a) {
         const std::uint32_t i = asked[a];
-        const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i], &c = lone[i];
+        const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i];
         m.index->nearest(p, k, nb);
         std::size_t seen = 0;
         double d6 = 0;
@@ -990,11 +978,6 @@ void DataSurface::split_at_creases(Impl& m) {
         for (const auto& [j, d2] : nb) {
           const Eigen::Vector3d& f = face[j];
           if (j == i || f.squaredNorm() == 0 || m.normals[j].dot(nrm) < -0.2) continue;
-          if (c.squaredNorm() > 0 && std::abs(f.dot(c)) < o.crease_cos && std::abs(c.dot(m.points[j] - p)) > tol &&
-              holds_around(nb, p, c, tol)) {
-            taken[a] = c;
-            break;
-          }
           if (f.dot(nrm) > 0 && std::abs(f.dot(m.points[j] - p)) <= tol && holds_around(nb, m.points[j], f, tol)) {
             taken[a] = f;
             break;

@@ -1087,7 +1087,9 @@ TEST(DataSurface, CreasePointsOfAThinPlateTakeTheirFacesPlanesBesideTheEdges) {
   std::cerr << "  PCA normals more than 1° off their face: " << rounded << ", now on it " << faced
             << "; discs beyond 2E of the plate " << a.share_beyond << " (without " << b.share_beyond << ")\n";
   EXPECT_GE(double(faced), 0.95 * double(rounded));  // 0.75 when the faces' planes did not spread
-  EXPECT_LE(a.share_beyond, 0.1 * b.share_beyond);  // 0.15 when they did not
+  // 0.13 when the planes do not spread; 0.076 when they spread but the faced points' discs are
+  // not cut unless planar by their neighbours' heights; 0.049 with both.
+  EXPECT_LE(a.share_beyond, 0.07 * b.share_beyond);
 }
 
 // The plate fitted at 3e-3. When only its edges' crease points took their planes, the rounded
