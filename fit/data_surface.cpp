@@ -690,6 +690,9 @@ void DataSurface::split_at_creases(Impl& m) {
     std::size_t held;
   };
   std::vector<Eigen::Vector3d> face(n, Eigen::Vector3d::Zero());  // zero: unchanged
+  // tol per point: twice crease_planarity of its 6th nearest's distance, of those not facing away
+  // (0 where fewer lie near); the spread below asks it again.
+  std::vector<double> tol_of(n, 0.0);
   tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
   const std::span<const std::uint32_t> order = m.index->order();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
@@ -707,12 +710,13 @@ void DataSurface::split_at_creases(Impl& m) {
       v.clear(), id.clear();
       for (const auto& [j, d2] : nb)
         if (j != i && m.normals[j].dot(nrm) >= -0.2) v.push_back(m.points[j] - p), id.push_back(j);
+      if (v.size() >= 6) tol_of[i] = 2.0 * o.crease_planarity * v[5].norm();
       if (v.size() < 8) continue;
       // Only where the normals turn: a crease's neighbourhood holds normals of both faces or
       // between them, a smooth surface's turn slowly (its scan lines, planes through the point
       // and each line, are no faces: without this, 257 points of a raw range scan changed).
       if (std::none_of(id.begin(), id.end(), [&](std::uint32_t j) { return m.normals[j].dot(nrm) < kTurned; })) continue;
-      const double tol = 2.0 * o.crease_planarity * v[std::min<std::size_t>(5, v.size() - 1)].norm();
+      const double tol = tol_of[i];
       if (!(tol > 0)) continue;  // copies of the point among its nearest
       // Points that spread across a plane (not only along a line: an edge's points hold any plane
       // through it), by the moments' eigenvalues λ₁ ≤ λ₂ of count of them: across a fifth of
@@ -968,13 +972,9 @@ void DataSurface::split_at_creases(Impl& m) {
       for (std::size_t a = r.begin(); a != r.end(); ++a) {
         const std::uint32_t i = asked[a];
         const Eigen::Vector3d &p = m.points[i], &nrm = m.normals[i];
-        m.index->nearest(p, k, nb);
-        std::size_t seen = 0;
-        double d6 = 0;
-        for (const auto& [j, d2] : nb)
-          if (j != i && m.normals[j].dot(nrm) >= -0.2 && ++seen == 6) d6 = std::sqrt(d2);
-        const double tol = 2.0 * o.crease_planarity * d6;
+        const double tol = tol_of[i];
         if (!(tol > 0)) continue;
+        m.index->nearest(p, k, nb);
         for (const auto& [j, d2] : nb) {
           const Eigen::Vector3d& f = face[j];
           if (j == i || f.squaredNorm() == 0 || m.normals[j].dot(nrm) < -0.2) continue;
