@@ -1080,6 +1080,7 @@ double DataSurface::disc_radius(std::size_t i) const { return impl_->disc.at(i);
 const Eigen::Vector3d& DataSurface::normal(std::size_t i) const { return impl_->normals.at(i); }
 std::size_t DataSurface::crease_points() const { return impl_->crease_points; }
 std::size_t DataSurface::crease_copies() const { return impl_->crease_copies; }
+bool DataSurface::faced(std::size_t i) const { return i < impl_->faced.size() && impl_->faced[i] != 0; }
 double DataSurface::spacing(std::size_t i) const { return impl_->spacing.at(i); }
 void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const {
   out.clear();

@@ -122,6 +122,10 @@ public:
   /// on edges (DataSurfaceOptions::crease_points).
   std::size_t crease_points() const;
   std::size_t crease_copies() const;
+  /// Whether point i's disc lies in a face's plane found at a crease (DataSurfaceOptions::
+  /// crease_points: its own normal kept where it was that plane's within 1°, and the second
+  /// discs): a point of a sharp edge's faces.
+  bool faced(std::size_t i) const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
   /// Height of point i's bent disc over its tangent plane at the tangential offset t (points

@@ -472,6 +472,12 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::holes_between
   return all;
 }
 
+bool SlimFitter::beside_crease(std::size_t i, std::vector<Neighbour>& nb) const {
+  if (surface_ || !data_ || !index_) return false;
+  index_->nearest(P_[i], DataSurfaceOptions{}.crease_neighbours + 1, nb);
+  return std::any_of(nb.begin(), nb.end(), [&](const Neighbour& x) { return data_->faced(x.first); });
+}
+
 // A point's coverage hole is seen when the view along the point's normal, through the spot, from
 // outside its disc, shows a hole the way bench fit counts them (judge_ray: the data's tangent discs
 // there, sure enough to count, and the blend showing nothing, or something nearer the data's far

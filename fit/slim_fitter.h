@@ -142,6 +142,10 @@ private:
   bool held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 6>& ring, double rho, double band,
                   const PointIndex& centres, double max_radius, std::optional<std::uint32_t>& last,
                   std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
+  /// Whether a point of a sharp edge's faces (DataSurface::faced) lies among point i's
+  /// crease_neighbours nearest: its coverage hole is a disc tilted off a crease, not a cell the
+  /// balls are too small for (nb: scratch).
+  bool beside_crease(std::size_t i, std::vector<Neighbour>& nb) const;
   Ray spot_ray(std::size_t i, const Eigen::Vector3d& x) const;
   std::optional<Eigen::Vector3d> seen_hole(const Ray& ray, const ReferenceScene& scene, const TraceOptions& trace) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_holes(
