@@ -43,12 +43,6 @@ bool intersect_slim_patch(const SlimPatch& patch, const Ray& ray, double tmin, d
   return true;
 }
 
-double SlimSlab::disc_radius() const {
-  if (s0 <= 0.0 && s1 >= 0.0) return 1.0;
-  const double m = std::min(s0 * s0, s1 * s1);
-  return std::sqrt(std::max(0.0, 1.0 - m));
-}
-
 SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
   SlimSlab slab;
   const Quadric& q = patch.local;
@@ -65,19 +59,55 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
   Eigen::Matrix2d P;
   P << t1.dot(q.A * t1), t1.dot(q.A * t2), t2.dot(q.A * t1), t2.dot(q.A * t2);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(P, Eigen::EigenvaluesOnly);
-  const double mu_lo = std::min(eig.eigenvalues()(0), 0.0), mu_hi = std::max(eig.eigenvalues()(1), 0.0);
-  // Interval test per bin of s: can g vanish there? Bins where it cannot are outside the slab.
-  // Every term is bounded from above and below over the bin, so the test is conservative; a
-  // relative margin covers the rounding of the GPU's float copy.
+  const double mu_lo = eig.eigenvalues()(0), mu_hi = eig.eigenvalues()(1);
+  // Interval test per bin of s and per distance r = ‖w‖ from the axis: over the bin, with
+  // ‖w‖ = r, g lies in [lo(r), hi(r)]: lo(r) = min h − 2|s|m·r + μ_lo·r² and hi(r) = max h +
+  // 2|s|m·r + μ_hi·r² (wᵀA⊥w = r²·(between A⊥'s eigenvalues)). The zero set can reach r only
+  // where lo(r) ≤ 0 ≤ hi(r); a bin where no r ≤ ρ does is outside the slab, and the largest r
+  // that does bounds the piece's reach from the axis there. Every term is bounded from above and
+  // below over the bin, so the test is conservative; a relative margin covers the rounding of
+  // the GPU's float copy.
   constexpr int kBins = 64;
-  const double scale = std::abs(q.c) + 2.0 * bn + std::abs(a) + 2.0 * m + mu_hi - mu_lo;
+  const double scale = std::abs(q.c) + 2.0 * bn + std::abs(a) + 2.0 * m + std::abs(mu_hi) + std::abs(mu_lo);
   const double margin = 1e-6 * scale;
+  // The largest r in [0, rho] with lo(r) ≤ 0 ≤ hi(r), or −1: that set's largest point is rho or a
+  // root of lo or hi.
+  const auto reach = [&](double h_lo, double h_hi, double k, double rho) {
+    std::array<double, 6> cand{};
+    std::size_t count = 0;
+    cand[count++] = rho;
+    cand[count++] = 0.0;
+    const auto roots = [&](double qa, double qb, double qc) {  // qa r² + qb r + qc = 0
+      if (std::abs(qa) <= 1e-300) {
+        if (qb != 0.0) cand[count++] = -qc / qb;
+        return;
+      }
+      const double disc = qb * qb - 4.0 * qa * qc;
+      if (disc < 0.0) return;
+      const double sq = std::sqrt(disc);
+      const double t = -0.5 * (qb + (qb >= 0.0 ? sq : -sq));
+      cand[count++] = t / qa;
+      if (t != 0.0) cand[count++] = qc / t;
+    };
+    roots(mu_lo, -k, h_lo - margin);
+    roots(mu_hi, k, h_hi + margin);
+    std::sort(cand.begin(), cand.begin() + std::ptrdiff_t(count), std::greater<>());
+    const double slack = 1e-12 * scale;
+    for (std::size_t i = 0; i < count; ++i) {
+      const double r = cand[i];
+      if (!(r >= 0.0) || r > rho) continue;
+      const double lo = h_lo - k * r + mu_lo * r * r - margin, hi = h_hi + k * r + mu_hi * r * r + margin;
+      if (lo <= slack && hi >= -slack) return r;
+    }
+    return -1.0;
+  };
+  std::array<double, kBins> bin_reach{};
   int first = -1, last = -1;
   for (int i = 0; i < kBins; ++i) {
     const double sa = -1.0 + 2.0 * i / kBins, sb = -1.0 + 2.0 * (i + 1) / kBins;
     const double s_abs = std::max(std::abs(sa), std::abs(sb));
     const double s_min_abs = (sa <= 0.0 && sb >= 0.0) ? 0.0 : std::min(std::abs(sa), std::abs(sb));
-    const double rho2 = std::max(0.0, 1.0 - s_min_abs * s_min_abs);
+    const double rho = std::sqrt(std::max(0.0, 1.0 - s_min_abs * s_min_abs));
     // c + 2‖b‖s + a s² over [sa, sb]: a quadratic, extremes at the ends or its vertex.
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     const auto h = [&](double s) { return q.c + 2.0 * bn * s + a * s * s; };
@@ -86,10 +116,8 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
       const double sv = -bn / a;
       if (sv > sa && sv < sb) lo = std::min(lo, h(sv)), hi = std::max(hi, h(sv));
     }
-    const double coupling = 2.0 * s_abs * m * std::sqrt(rho2);
-    lo += -coupling + mu_lo * rho2 - margin;
-    hi += coupling + mu_hi * rho2 + margin;
-    if (lo <= 0.0 && hi >= 0.0) {
+    bin_reach[std::size_t(i)] = reach(lo, hi, 2.0 * s_abs * m, rho);
+    if (bin_reach[std::size_t(i)] >= 0.0) {
       if (first < 0) first = i;
       last = i;
     }
@@ -97,13 +125,49 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
   slab.axis = e;
   if (first < 0) {  // the zero set misses the ball: nothing to draw, the thinnest slab will do
     slab.s0 = slab.s1 = std::clamp(-q.c / (2.0 * bn), -1.0, 1.0);
+    slab.r0 = slab.r1 = std::sqrt(std::max(0.0, 1.0 - slab.s0 * slab.s0));
     slab.tight = true;
     return slab;
   }
   slab.s0 = -1.0 + 2.0 * first / kBins;
   slab.s1 = -1.0 + 2.0 * (last + 1) / kBins;
   slab.tight = slab.s1 - slab.s0 < max_thickness;
-  if (!slab.tight) slab = SlimSlab{};
+  if (!slab.tight) return SlimSlab{};
+  // The frustum: the radius at each bin boundary is the larger of its two bins' reach, and a
+  // radius linear in s above all of them holds the piece (linear over each bin, above both ends).
+  // Of the lines along the upper hull's edges and the flat one at the largest reach, the one
+  // whose frustum has the least surface area (four times its mean projected area, Cauchy).
+  std::vector<Eigen::Vector2d> hull;  // (s, r), s increasing
+  for (int j = first; j <= last + 1; ++j) {
+    double r = -1.0;
+    if (j - 1 >= first) r = std::max(r, bin_reach[std::size_t(j - 1)]);
+    if (j <= last) r = std::max(r, bin_reach[std::size_t(j)]);
+    if (r < 0.0) continue;
+    const Eigen::Vector2d p(-1.0 + 2.0 * j / kBins, r);
+    const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& x, const Eigen::Vector2d& y) {
+      return (x - o).x() * (y - o).y() - (x - o).y() * (y - o).x();
+    };
+    while (hull.size() >= 2 && cross(hull[hull.size() - 2], hull.back(), p) >= 0.0) hull.pop_back();
+    hull.push_back(p);
+  }
+  // A margin for the renderer's float ray: its hit passes the ball test r ≤ 1 a few float ulps
+  // outside the ball (where the piece meets the ball's sphere, the frustum is tight).
+  constexpr double kPad = 1e-4;
+  for (auto& p : hull) p.y() += kPad;
+  double widest = 0.0;
+  for (const auto& p : hull) widest = std::max(widest, p.y());
+  const double height = slab.s1 - slab.s0;
+  const auto area = [&](double r0, double r1) {
+    return r0 * r0 + r1 * r1 + (r0 + r1) * std::sqrt((r1 - r0) * (r1 - r0) + height * height);
+  };
+  slab.r0 = slab.r1 = widest;
+  double best = area(widest, widest);
+  for (std::size_t k = 0; k + 1 < hull.size(); ++k) {
+    const Eigen::Vector2d &x = hull[k], &y = hull[k + 1];
+    const double slope = (y.y() - x.y()) / (y.x() - x.x());
+    const double r0 = std::max(0.0, x.y() + slope * (slab.s0 - x.x())), r1 = std::max(0.0, x.y() + slope * (slab.s1 - x.x()));
+    if (const double f = area(r0, r1); f < best) best = f, slab.r0 = r0, slab.r1 = r1;
+  }
   return slab;
 }
 

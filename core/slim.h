@@ -41,17 +41,18 @@ double slim_offset_of(const Model& model);
 SlimBlendOptions slim_blend_of(const Model& model, double offset = -1);
 
 /// A slab that holds a patch's zero set inside its ball, in local units (ball radius 1): every
-/// u with g(u) = 0 and ‖u‖ ≤ 1 has s0 ≤ axisᵀu ≤ s1. With axis = b/‖b‖ (the gradient's direction
-/// at the centre), g(u) = 0 gives axisᵀu = −(c + uᵀAu)/(2‖b‖), and uᵀAu lies between min(λ_min, 0)
-/// and max(λ_max, 0) in the unit ball (A's eigenvalues). The splat of a tight slab bounds the
-/// surface piece, not the ball ([Toledo04] waste); `tight` is false (the slab is the whole ball)
-/// when b = 0 or the slab is no thinner than max_thickness.
+/// u with g(u) = 0 and ‖u‖ ≤ 1 has s0 ≤ axisᵀu ≤ s1, and lies within r(s) of the axis, r linear
+/// from r0 at s0 to r1 at s1: the piece lies in that frustum (the hull of two discs). With
+/// axis = b/‖b‖ (the gradient's direction at the centre), per bin of s and distance r from the
+/// axis, interval bounds of g over the bin tell where the zero set can be: a bowl's piece reaches
+/// the rim only at its top, so its frustum narrows towards the centre. The splat of a tight slab
+/// bounds the surface piece, not the ball ([Toledo04] waste); `tight` is false (the slab is the
+/// whole ball, r0 = r1 = 1) when b = 0 or the slab is no thinner than max_thickness.
 struct SlimSlab {
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit, local (world-aligned) axes
   double s0 = -1, s1 = 1;                           ///< extent along axis, −1 ≤ s0 ≤ s1 ≤ 1
+  double r0 = 1, r1 = 1;                            ///< the frustum's radii at s0 and s1, ≥ 0
   bool tight = false;
-  /// Radius of the slab's cross-section with the ball: 1 when s0 ≤ 0 ≤ s1, else √(1 − min s²).
-  double disc_radius() const;
 };
 SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness = 1.5);
 

@@ -59,6 +59,7 @@ GpuBall pack(const SlimPatch& b, std::int32_t id, const FixedOrigin& origin) {
     g.clip[k][3] = float(p.d / n);
   }
   g.extra[0] = b.max_push ? float(*b.max_push) : -1.0f;
+  g.extra[1] = float(slab.r0), g.extra[2] = float(slab.r1);
   return g;
 }
 

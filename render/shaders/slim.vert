@@ -2,8 +2,8 @@
 // that bounds the patch's surface piece, not the ball. The piece lies in the slab
 // s0 ≤ axisᵀu ≤ s1 of its zero set cut by the ball (core/slim.h slim_patch_slab, computed at
 // load); the proxy is the convex polygon of u_sides support lines (the first along the
-// projected axis, then at equal steps) of the projected cylinder about that slab (the hull of its
-// two cap discs' exact projected ellipses, [Sigg06] eq. 5): thin where the piece is seen edge-on,
+// projected axis, then at equal steps) of the projected frustum about that slab that holds the
+// piece (the hull of its two cap discs' exact projected ellipses, [Sigg06] eq. 5): thin where the piece is seen edge-on,
 // and with 8 sides it cuts the corners a rectangle leaves around a disc seen face-on (21.5 % of
 // a rectangle around a circle lies outside it, 5.2 % of an octagon). Balls without a tight slab
 // get the ball's axis-aligned tight screen rectangle; balls whose proxy holds the eye or
@@ -12,7 +12,7 @@
 // the per-quadric backface test for spheres ([Stoll06] eq. 18).
 //
 // The polygon lies at one depth, in front of every point of the surface piece: the nearer of the
-// ball's front and the cylinder's nearest point, so a depth test before the fragment stage (pass 2
+// ball's front and the frustum's nearest point, so a depth test before the fragment stage (pass 2
 // of the early-depth path, render/passes/slim_pass.h) rejects only fragments whose hits would
 // fail it.
 //
@@ -29,7 +29,8 @@ struct Ball {
   vec4 q2;         // b2 c, primitive index bits, slab s1
   vec4 slab;       // xyz: unit axis (world axes), w: s0; q2.w: s1; s0 > s1: no tight slab
   vec4 clip[4];    // n (local, world axes), d; the patch keeps nᵀu + d ≥ 0; n = 0: unused
-  vec4 extra;      // x: the ball's own blend push bound (world units), ≤ 0: the model's; yzw unused
+  vec4 extra;      // x: the ball's own blend push bound (world units), ≤ 0: the model's; y, z: the
+                   // slab's frustum radii r0, r1 at s0, s1 (units of R); w unused
 };
 layout(std430, binding = 0) readonly buffer Balls { Ball balls[]; };
 layout(std430, binding = 1) buffer Stats {  // as in slim.frag
@@ -126,11 +127,11 @@ void main() {
   int quadrant = (4 * k_poly + 2) / u_sides;
   bvec2 hi_corner = bvec2(quadrant == 0 || quadrant == 3, quadrant < 2);
 
-  // The cylinder about the slab: its disc of radius ρ, caps at s0 and s1.
+  // The frustum about the slab that holds the piece: caps at s0 and s1, of radii r0 and r1.
   bool tight = has_slab && u_tight != 0;
   float s0 = ball.slab.w, s1 = ball.q2.w;
-  float rho = (s0 <= 0.0 && s1 >= 0.0) ? 1.0 : sqrt(max(0.0, 1.0 - min(s0 * s0, s1 * s1)));
-  float reach = tight ? sqrt(rho * rho + max(s0 * s0, s1 * s1)) : 1.0;
+  float r0 = ball.extra.y, r1 = ball.extra.z;
+  float reach = tight ? sqrt(max(r0 * r0 + s0 * s0, r1 * r1 + s1 * s1)) : 1.0;
   float Rp = R * reach;  // a sphere about the centre that holds the proxy
   bool inside_or_near = dot(C, C) <= Rp * Rp * 1.0001 || C.z + Rp > -u_near;
   vec2 scale = vec2(u_proj[0][0], u_proj[1][1]);
@@ -148,15 +149,15 @@ void main() {
       vec2 a = ahead.xy / -ahead.z - kc;
       a = dot(a, a) > 1e-20 * dot(kc, kc) + 1e-30 ? normalize(a) : vec2(1.0, 0.0);
       vec2 ap = vec2(-a.y, a.x);
-      // The slab's cylinder (its two cap discs of radius ρ, at s0 and s1) projects onto the hull
+      // The frustum (its two cap discs of radii r0 and r1, at s0 and s1) projects onto the hull
       // of the caps' projected ellipses ([Sigg06] eq. 5, prelude.glsl project_ellipse): its
       // extents along a and a⊥ are their supports, in slopes, lengths in units of L.
       float L = max(-C.z, R);
-      mat3 S = (R * rho / L) * (R * rho / L) * (mat3(1.0) - outerProduct(axis, axis));
+      mat3 disc = mat3(1.0) - outerProduct(axis, axis);
       vec2 c0, c1;
       mat2 S0, S1;
-      project_ellipse((C + R * s0 * axis) / L, S, vec2(1.0), c0, S0);
-      project_ellipse((C + R * s1 * axis) / L, S, vec2(1.0), c1, S1);
+      project_ellipse((C + R * s0 * axis) / L, (R * r0 / L) * (R * r0 / L) * disc, vec2(1.0), c0, S0);
+      project_ellipse((C + R * s1 * axis) / L, (R * r1 / L) * (R * r1 / L) * disc, vec2(1.0), c1, S1);
       // Vertex k joins support lines k and k + 1, nᵢ = cos θᵢ a + sin θᵢ a⊥ at θᵢ = i·360°/u_sides,
       // each nᵢ·(k − kc) = hᵢ, the hull's support measured from the centre's slope.
       float step = radians(360.0) / float(u_sides);
@@ -171,9 +172,10 @@ void main() {
       float pad = 1e-5 * (length(kc) + width + height);
       h0 += pad;
       h1 += pad;
-      // The nearest point of the cylinder: a cap centre's z plus its rim's reach in z.
-      float z_cylinder = C.z + R * max(s0 * axis.z, s1 * axis.z) + R * rho * sqrt(max(0.0, 1.0 - axis.z * axis.z));
-      zn = min(zn, z_cylinder);
+      // The nearest point of the frustum: a cap centre's z plus its rim's reach in z.
+      float rim_z = sqrt(max(0.0, 1.0 - axis.z * axis.z));
+      float z_frustum = C.z + R * max(s0 * axis.z + r0 * rim_z, s1 * axis.z + r1 * rim_z);
+      zn = min(zn, z_frustum);
       float det = n0.x * n1.y - n0.y * n1.x;  // sin(step) · (±1 from a's handedness)
       corner = (kc + vec2(h0 * n1.y - h1 * n0.y, n0.x * h1 - n1.x * h0) / det) * scale;
     } else {

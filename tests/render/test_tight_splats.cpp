@@ -46,29 +46,75 @@ SlimPatch random_patch(std::mt19937_64& rng) {
 
 TEST(TightSplats, SlabHoldsEveryZeroSetPointOfItsBall) {
   std::mt19937_64 rng(17);
-  int tight = 0, points = 0, outside = 0;
-  double thickness = 0;
+  int tight = 0, points = 0, outside = 0, wide = 0;
+  double thickness = 0, area = 0, near_rim = 0;
   for (int i = 0; i < 3000; ++i) {
     const SlimPatch p = random_patch(rng);
     const SlimSlab slab = slim_patch_slab(p);
     if (!slab.tight) continue;
     ++tight;
     thickness += slab.s1 - slab.s0;
+    // The frustum's side area against the cylinder of the slab's ball cross-section.
+    const double h = slab.s1 - slab.s0, rho = (slab.s0 <= 0 && slab.s1 >= 0) ? 1.0 : std::sqrt(1 - std::min(slab.s0 * slab.s0, slab.s1 * slab.s1));
+    area += (slab.r0 * slab.r0 + slab.r1 * slab.r1 + (slab.r0 + slab.r1) * std::hypot(slab.r1 - slab.r0, h)) / (2 * rho * rho + 2 * rho * h);
     std::vector<SlimSurfaceSample> samples;
     sample_slim_patch(p, 12, samples);
+    double reach = 0;  // the samples' largest r over the frustum's r(s)
     for (const auto& s : samples) {
-      const double along = ((s.point - p.centre) / p.radius).dot(slab.axis);
+      const Vector3d u = (s.point - p.centre) / p.radius;
+      const double along = u.dot(slab.axis), r = (u - along * slab.axis).norm();
+      const double t = slab.s1 > slab.s0 ? (along - slab.s0) / (slab.s1 - slab.s0) : 0.5;
+      const double limit = slab.r0 + (slab.r1 - slab.r0) * std::clamp(t, 0.0, 1.0);
       ++points;
       outside += along < slab.s0 - 1e-9 || along > slab.s1 + 1e-9;
+      wide += r > limit + 1e-9;
+      if (limit > 0) reach = std::max(reach, r / limit);
     }
+    near_rim += reach;
   }
   EXPECT_EQ(outside, 0);
+  EXPECT_EQ(wide, 0);  // every sample within the frustum
   EXPECT_GT(points, 100000);
-  // Not vacuous: most patches get a slab, thinner than the ball on average.
+  // Not vacuous: most patches get a slab, thinner than the ball on average; the frustums are no
+  // larger than the slab's cylinders (random pieces mostly reach the ball's sphere across the
+  // whole slab: 0.98 of their area, 5 narrow at one end), and the samples reach close to their
+  // side (the bound is not loose).
   EXPECT_GT(tight, 1200);
   EXPECT_LT(thickness / tight, 1.0);
-  std::printf("%d tight slabs of 3000, mean thickness %.3f (ball: 2), %d zero-set points\n", tight,
-              thickness / tight, points);
+  EXPECT_LE(area / tight, 1.0);
+  EXPECT_GT(near_rim / tight, 0.95);
+  std::printf("%d tight slabs of 3000, mean thickness %.3f (ball: 2), frustum area / cylinder %.3f, samples reach "
+              "%.3f of the frustum, %d zero-set points\n",
+              tight, thickness / tight, area / tight, near_rim / tight, points);
+}
+
+TEST(TightSplats, ABowlsFrustumNarrowsTowardsItsBottom) {
+  // z = x² + y² through the centre: the piece meets the ball's sphere at r = 0.786, z = 0.618,
+  // and narrows to its bottom at the centre; a cylinder about its slab would be 1 wide.
+  SlimPatch p;
+  p.local.A = Eigen::Vector3d(1, 1, 0).asDiagonal();
+  p.local.b = Vector3d(0, 0, -0.5);
+  p.local.c = 0;
+  const SlimSlab s = slim_patch_slab(p);
+  ASSERT_TRUE(s.tight);
+  const double flip = s.axis.z() < 0 ? -1 : 1;  // the axis is the gradient's: −z here
+  const double bottom = flip > 0 ? s.s0 : -s.s1, top = flip > 0 ? s.s1 : -s.s0;
+  const double r_bottom = flip > 0 ? s.r0 : s.r1, r_top = flip > 0 ? s.r1 : s.r0;
+  EXPECT_LE(bottom, 0.0);
+  EXPECT_GE(top, 0.618);
+  EXPECT_LE(top, 0.618 + 2.0 / 64 + 1e-9);
+  EXPECT_LT(r_bottom, 0.45);  // the line that gives the least area: 0.36
+  EXPECT_GE(r_top, 0.786);
+  EXPECT_LT(r_top, 0.9);
+  std::vector<SlimSurfaceSample> samples;
+  sample_slim_patch(p, 40, samples);
+  ASSERT_GT(samples.size(), 1000u);
+  for (const auto& x : samples) {
+    const Vector3d u = x.point - p.centre;
+    const double along = u.dot(s.axis), r = (u - along * s.axis).norm();
+    EXPECT_LE(r, s.r0 + (s.r1 - s.r0) * (along - s.s0) / (s.s1 - s.s0) + 1e-9);
+  }
+  std::printf("bowl: s %.3f..%.3f, radii %.3f..%.3f\n", s.s0, s.s1, s.r0, s.r1);
 }
 
 TEST(TightSplats, PlaneGivesAThinSlabAndNoGradientTheBall) {
