@@ -31,6 +31,7 @@ struct Ball {
   // Sharp features, open boundaries, a face's prism: the patch keeps the sheet of its centre.
   ClipPlanes clips;
   Eigen::Vector3d sheet = Eigen::Vector3d::Zero(), other = Eigen::Vector3d::Zero();  // cluster normals
+  Eigen::Vector3d other2 = Eigen::Vector3d::Zero();  // a third sheet's (a corner of three faces), or zero
   bool settled = false;      // the surface side (BallFitter::settle) was checked
   std::int64_t face = -1;    // a face patch (SlimFitOptions::face_patches): the face's plane
   int surface_lattice = 0;   // settle's surface_ok passed on a lattice this fine (lines per side)
@@ -45,7 +46,7 @@ struct Ball {
   bool relaxed = false;
   // A point of the ball (local u, normal n) belongs to this patch's sheet.
   bool owns(const Eigen::Vector3d& u, const Eigen::Vector3d& n) const {
-    return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other));
+    return clips.empty() || (clips.keeps(u) && n.dot(sheet) >= n.dot(other) && (other2.isZero() || n.dot(sheet) >= n.dot(other2)));
   }
 };
 
@@ -102,6 +103,9 @@ struct BallFitter {
   const Subsamples* subsamples = nullptr;
   const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
   const FaceSet* faces = nullptr;     // face patches (SlimFitOptions::face_patches)
+  // Per point, or null: a ball centred there whose fit fails tries its centre's sheet, clipped
+  // (try_sharp), as with opt.sharp: points beside a crease's faces (SlimFitter::beside_crease).
+  const std::vector<std::uint8_t>* sharp_at = nullptr;
   double diagonal = 0;
   /// surface_ok on verification's lattice (fine in world units, as SlimFitter::verify_surface
   /// checks each patch alone) where that is finer than its own: set for the repairs' candidates.
@@ -131,7 +135,9 @@ private:
   std::optional<Ball> try_both_sides(std::uint32_t ci, double R, Scratch& s) const;
   std::optional<Ball> try_boundary(const Ball& b, const Scratch& s) const;
   std::size_t ball_points(const Eigen::Vector3d& c, double R, Scratch& s) const;
-  std::optional<Ball> try_sharp(std::uint32_t ci, double R, Scratch& s) const;
+  /// planar: only where each sheet's points lie within E of its plane (the planes between the
+  /// sheets are those of flat faces; sharp_at's balls).
+  std::optional<Ball> try_sharp(std::uint32_t ci, double R, Scratch& s, bool planar = false) const;
 };
 
 }  // namespace quadrix::fit_detail

@@ -255,6 +255,10 @@ struct SlimFitOptions {
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
   /// only and gets a clip plane (SlimPatch::clips) between the two sheets.
   bool sharp = false;
+  /// ... and without it, beside a crease's faces where the fit estimated the normals (points
+  /// whose 16 nearest hold a point that took its face's plane: crease_points), so a corner of
+  /// three faces gets patches clipped at two planes (try_sharp splits a third sheet off)
+  bool sharp_at_creases = true;
   double sharp_angle_deg = 30.0;
   /// Neighbours for normal estimation when the cloud has no normals (fit/normals.h).
   std::size_t normal_neighbours = 16;

@@ -257,6 +257,7 @@ private:
   SlimFitResult result_;
   SlimFitStats& st_ = result_.stats;
   std::unique_ptr<PointIndex> index_;
+  std::vector<std::uint8_t> near_crease_;  // per point: beside a crease's faces (BallFitter::sharp_at)
   std::unique_ptr<Subsamples> subsamples_;
   std::shared_ptr<DataSurface> data_;
   std::unique_ptr<BallFitter> fitter_;
