@@ -1038,11 +1038,17 @@ TEST(DataSurface, CreasePointsTakeTheirFacesPlanes) {
 
 // The same box's points without normals, fitted at 1e-3: its crease points' discs bring the fit's
 // surface onto the true box past its edges, with fewer patches.
+// A box 1 × 0.6 × 0.3 of 20,000 points without normals.
+Shape box_without_normals() {
+  Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 20000, 52);
+  s.cloud.normals.clear();
+  return s;
+}
+
 TEST(FitSlimHard, BoxWithoutNormalsFitsNearItsEdgesWithCreasePoints) {
-  const Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 20000, 52);
+  const Shape s = box_without_normals();
   const DataSurface truth = DataSurface::from_mesh(s.mesh);
-  PointCloud cloud = s.cloud;
-  cloud.normals.clear();
+  const PointCloud& cloud = s.cloud;
   std::array<SurfaceError, 2> e;
   std::array<std::size_t, 2> patches{};
   double E = 0;
@@ -1072,15 +1078,13 @@ TEST(FitSlimHard, BoxWithoutNormalsFitsNearItsEdgesWithCreasePoints) {
 // crease's faces a failing ball now tries its centre's sheet, and at a corner that sheet is
 // clipped at both other faces' planes.
 TEST(FitSlimHard, BoxWithoutNormalsClipsItsCornerPatchesAtTwoFaces) {
-  const Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 20000, 52);
+  const Shape s = box_without_normals();
   const DataSurface truth = DataSurface::from_mesh(s.mesh);
-  PointCloud cloud = s.cloud;
-  cloud.normals.clear();
   std::array<SurfaceError, 2> e;
   std::array<std::size_t, 2> patches{}, two_clips{};
   double E = 0;
   for (const bool sharp : {true, false}) {
-    const SlimFitResult fit = fit_slim(cloud, {.max_error = 1e-3, .sharp_at_creases = sharp});
+    const SlimFitResult fit = fit_slim(s.cloud, {.max_error = 1e-3, .sharp_at_creases = sharp});
     E = fit.stats.max_error_abs;
     e[sharp] = measure_surface_error(fit.model, truth, s.box, {.views = 8, .resolution = 256, .bound = 2 * E});
     patches[sharp] = fit.stats.patches;
