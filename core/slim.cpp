@@ -91,15 +91,15 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
     };
     roots(mu_lo, -k, h_lo - margin);
     roots(mu_hi, k, h_hi + margin);
-    std::sort(cand.begin(), cand.begin() + std::ptrdiff_t(count), std::greater<>());
     const double slack = 1e-12 * scale;
+    double best = -1.0;
     for (std::size_t i = 0; i < count; ++i) {
       const double r = cand[i];
-      if (!(r >= 0.0) || r > rho) continue;
+      if (!(r >= 0.0) || r > rho || r <= best) continue;
       const double lo = h_lo - k * r + mu_lo * r * r - margin, hi = h_hi + k * r + mu_hi * r * r + margin;
-      if (lo <= slack && hi >= -slack) return r;
+      if (lo <= slack && hi >= -slack) best = r;
     }
-    return -1.0;
+    return best;
   };
   std::array<double, kBins> bin_reach{};
   int first = -1, last = -1;

@@ -463,25 +463,28 @@ std::optional<Ball> BallFitter::try_sharp(std::uint32_t ci, double R, Scratch& s
     const int k = sheet_of(s.n[j]);
     centroid[std::size_t(k)] += s.u[j], ++members[std::size_t(k)];
   }
+  // A split whose one half holds none of the ball's points: the other cluster whole again.
+  if (members[1] == 0 && members[2] > 0) std::swap(nb, nc), std::swap(centroid[1], centroid[2]), std::swap(members[1], members[2]);
+  if (members[2] == 0 && !nc.isZero()) nb = nb0, nc.setZero();
   if (members[0] == 0 || members[1] == 0) return std::nullopt;
-  if (members[2] == 0) nc.setZero();
   for (std::size_t k = 0; k < 3; ++k)
     if (members[k] > 0) centroid[k] /= double(members[k]);
   const Eigen::Vector3d& pa = centroid[0];
   // (Beside a curved face, a plane through its points' centroid along their mean normal stands
   // off it, and so does the cut: fandisk sampled without normals drew 2× the pixels beyond 2E.)
-  // Up to 2 % of the points may lie farther than E off their sheet's plane (rounded normals beside
-  // an edge that put a point in the other sheet: with none allowed, a 30° wedge's balls failed
-  // and fitted 2.5× the patches, 3-5× the holes).
+  // Up to 2 % of each sheet's points (at least one) may lie farther than E off its plane (rounded
+  // normals beside an edge that put a point in the other sheet: with none allowed, a 30° wedge's
+  // balls failed and fitted 2.5× the patches, 3-5× the holes).
   constexpr double kPlanarStrays = 0.02;
   if (planar) {
     const std::array<Eigen::Vector3d, 3> normal{na, nb, nc};
-    std::size_t off = 0;
+    std::array<std::size_t, 3> off{};
     for (std::size_t j = 0; j < s.u.size(); ++j) {
       const auto k = std::size_t(sheet_of(s.n[j]));
-      off += std::abs(normal[k].dot(s.u[j] - centroid[k])) > E / R;
+      off[k] += std::abs(normal[k].dot(s.u[j] - centroid[k])) > E / R;
     }
-    if (double(off) > kPlanarStrays * double(s.u.size())) return std::nullopt;
+    for (std::size_t k = 0; k < 3; ++k)
+      if (double(off[k]) > std::max(1.0, kPlanarStrays * double(members[k]))) return std::nullopt;
   }
   // The plane keeps dA(u) ≥ dB(u) (signed distances to the two tangent planes): sheet A's side
   // at a convex crease, where the surface is max(dA, dB) = 0. At a concave one (sheet B's points

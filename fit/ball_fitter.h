@@ -104,7 +104,8 @@ struct BallFitter {
   const DataSurface* data = nullptr;  // the points' local surface (tangent discs)
   const FaceSet* faces = nullptr;     // face patches (SlimFitOptions::face_patches)
   // Per point, or null: a ball centred there whose fit fails tries its centre's sheet, clipped
-  // (try_sharp), as with opt.sharp: points beside a crease's faces (SlimFitter::beside_crease).
+  // (try_sharp), as with opt.sharp, where nonzero: points beside faces found at creases
+  // (SlimFitter::beside_crease).
   const std::vector<std::uint8_t>* sharp_at = nullptr;
   double diagonal = 0;
   /// surface_ok on verification's lattice (fine in world units, as SlimFitter::verify_surface

@@ -199,7 +199,9 @@ struct SlimFitOptions {
   /// it, when that ball reaches the spot; else, or when its disc is still not held in a later
   /// round, a disc patch: its tangent plane in a ball of disc_patch_reach × the disc, shrunk by
   /// the repair where it runs off the data and then left with its hole. Only where between
-  /// point_hole_least and point_hole_share of the points have a hole after the first cover:
+  /// point_hole_least and point_hole_share of the points have a hole after the first cover (with
+  /// crease points, of the points not beside an edge or corner: their holes are discs cut or
+  /// tilted there, filled only where a view sees them, as below the band):
   /// above, E is far below the sampling and what fills the cells runs beyond 2E of the points'
   /// tangent discs (kitten at 1e-4: 3,974 of 5,210); below, the balls outgrow the spacing nearly
   /// everywhere and the discs not held sit at creases and corners, where a disc tilts off the
@@ -254,10 +256,13 @@ struct SlimFitOptions {
   /// Sharp features (issue 4 item 2): where a ball's fit fails and the normals in it split into
   /// two clusters more than sharp_angle_deg apart, the patch fits the cluster of its centre
   /// only and gets a clip plane (SlimPatch::clips) between the two sheets.
+  /// Where the normals split into three such clusters (a corner of three faces), the centre's
+  /// sheet is clipped at a plane per other sheet (in every use of the clipped sheet: here, and
+  /// for a ball whose points fit but whose surface fails).
   bool sharp = false;
-  /// ... and without it, beside a crease's faces where the fit estimated the normals (points
-  /// whose 16 nearest hold a point that took its face's plane: crease_points), so a corner of
-  /// three faces gets patches clipped at two planes (try_sharp splits a third sheet off)
+  /// ... and without it, beside an edge or corner where the fit estimated the normals (points
+  /// whose 16 nearest hold points of two faces' planes found by crease_points), where each
+  /// sheet's points lie within E of its plane (all but 2 %)
   bool sharp_at_creases = true;
   double sharp_angle_deg = 30.0;
   /// Neighbours for normal estimation when the cloud has no normals (fit/normals.h).

@@ -472,10 +472,20 @@ std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> SlimFitter::holes_between
   return all;
 }
 
-bool SlimFitter::beside_crease(std::size_t i, std::vector<Neighbour>& nb) const {
-  if (surface_ || !data_ || !index_) return false;
-  index_->nearest(P_[i], DataSurfaceOptions{}.crease_neighbours + 1, nb);
-  return std::any_of(nb.begin(), nb.end(), [&](const Neighbour& x) { return data_->faced(x.first); });
+std::uint8_t SlimFitter::beside_crease(std::size_t i, std::vector<Neighbour>& nb) const {
+  if (surface_ || !data_ || !index_) return 0;
+  const DataSurfaceOptions defaults;
+  index_->nearest(P_[i], defaults.crease_neighbours + 1, nb);
+  // Two faces' points: their faces' planes turned as a crease's (the planes spread across whole
+  // faces, so one face's points alone are any flat face's).
+  const Eigen::Vector3d* first = nullptr;
+  for (const auto& [j, d2] : nb) {
+    if (!data_->faced(j)) continue;
+    const Eigen::Vector3d& n = data_->normal(j);
+    if (!first) first = &n;
+    else if (first->dot(n) < defaults.crease_cos) return kOnFace | kAtEdge;
+  }
+  return first ? kOnFace : 0;
 }
 
 // A point's coverage hole is seen when the view along the point's normal, through the spot, from

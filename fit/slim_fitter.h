@@ -142,10 +142,12 @@ private:
   bool held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 6>& ring, double rho, double band,
                   const PointIndex& centres, double max_radius, std::optional<std::uint32_t>& last,
                   std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
-  /// Whether a point of a sharp edge's faces (DataSurface::faced) lies among point i's
-  /// crease_neighbours nearest: its coverage hole is a disc tilted off a crease, not a cell the
-  /// balls are too small for (nb: scratch).
-  bool beside_crease(std::size_t i, std::vector<Neighbour>& nb) const;
+  /// Among point i's crease_neighbours nearest: kOnFace where a point lies on a face's plane
+  /// found at a crease (DataSurface::faced), and kAtEdge too where points of two such faces do,
+  /// their planes turned more than acos(crease_cos) from each other: an edge or corner is there
+  /// (nb: scratch).
+  static constexpr std::uint8_t kOnFace = 1, kAtEdge = 2;
+  std::uint8_t beside_crease(std::size_t i, std::vector<Neighbour>& nb) const;
   Ray spot_ray(std::size_t i, const Eigen::Vector3d& x) const;
   std::optional<Eigen::Vector3d> seen_hole(const Ray& ray, const ReferenceScene& scene, const TraceOptions& trace) const;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> seen_holes(
@@ -257,7 +259,9 @@ private:
   SlimFitResult result_;
   SlimFitStats& st_ = result_.stats;
   std::unique_ptr<PointIndex> index_;
-  std::vector<std::uint8_t> near_crease_;  // per point: beside a crease's faces (BallFitter::sharp_at)
+  std::vector<std::uint8_t> near_crease_;  // per point: beside_crease's flags (empty: no faced points)
+  std::size_t fillable_holes_ = 0;         // of st_.point_holes, those the fill band fills (failures)
+  bool crease_band_ = false;               // the holes beside edges and corners alone put the fit in the band
   std::unique_ptr<Subsamples> subsamples_;
   std::shared_ptr<DataSurface> data_;
   std::unique_ptr<BallFitter> fitter_;

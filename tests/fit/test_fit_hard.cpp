@@ -1074,9 +1074,10 @@ TEST(FitSlimHard, BoxWithoutNormalsFitsNearItsEdgesWithCreasePoints) {
 // The same box's corners: balls that hold three faces fitted no quadric, and the clipped sheet
 // (try_sharp) was tried only with --sharp, so the balls near a corner shrank until they held one
 // or two faces, and between the smallest the true box showed holes the fit's checks did not see
-// (643 patches, 4.2e-4 of its pixels, 49 of 77 hole pixels within 15E of a corner). Beside a
-// crease's faces a failing ball now tries its centre's sheet, and at a corner that sheet is
-// clipped at both other faces' planes.
+// (674 patches, 2.9e-4 of its pixels; in another sampling 49 of 77 hole pixels lay within 15E of
+// a corner). Beside faces found at creases a failing ball now tries its centre's sheet, and at a
+// corner that sheet is clipped at both other faces' planes: 107 patches, 1.2e-4. (Without it the
+// holes beside the corners now fill the band: 1,156 patches, 2.0e-4.)
 TEST(FitSlimHard, BoxWithoutNormalsClipsItsCornerPatchesAtTwoFaces) {
   const Shape s = box_without_normals();
   const DataSurface truth = DataSurface::from_mesh(s.mesh);
@@ -1092,14 +1093,35 @@ TEST(FitSlimHard, BoxWithoutNormalsClipsItsCornerPatchesAtTwoFaces) {
     std::cerr << "  sharp at creases " << sharp << ": " << fit.stats.patches << " patches, " << fit.stats.clipped_patches
               << " clipped, " << two_clips[sharp] << " at two faces; p99.9/E " << e[sharp].p999 / E << " max/E "
               << e[sharp].max / E << " beyond 2E " << e[sharp].share_beyond << ", holes " << e[sharp].hole_share << "\n";
-    EXPECT_EQ(fit.stats.blend_failures, 0u);
-    EXPECT_EQ(fit.stats.surface_failures, 0u);
+    if (sharp) {
+      EXPECT_EQ(fit.stats.blend_failures, 0u);
+      EXPECT_EQ(fit.stats.surface_failures, 0u);
+    }
   }
   EXPECT_GT(two_clips[1], 0u);
   EXPECT_LT(double(patches[1]), 0.3 * double(patches[0]));
-  EXPECT_LE(e[1].hole_share, 0.5 * e[0].hole_share);
+  EXPECT_LT(e[1].hole_share, e[0].hole_share);
   EXPECT_LE(e[1].p999, 2 * E);
   EXPECT_LE(e[1].share_beyond, std::max(1e-4, e[0].share_beyond));
+}
+
+// A sparse box (2,000 points without normals, a spacing of about 25E at 1e-3): its faces' planes
+// spread from the crease points to nearly every point, and when any point beside a faced one
+// counted as beside a crease, none of its holes decided the fill band: the fit counted no hole
+// and exited 0 with 2.1 % of the true box's pixels open (review). Only the holes beside an edge
+// or corner (two faces' points among the nearest) are set aside now; the others are counted.
+TEST(FitSlimHard, ASparseBoxWithoutNormalsCountsItsHoles) {
+  Shape s = make(box({0, 0, 0}, {1, 0.6, 0.3}), 2000, 52);
+  s.cloud.normals.clear();
+  const DataSurface truth = DataSurface::from_mesh(s.mesh);
+  const SlimFitResult fit = fit_slim(s.cloud, {.max_error = 1e-3});
+  const double E = fit.stats.max_error_abs;
+  const SurfaceError e = measure_surface_error(fit.model, truth, s.box, {.views = 8, .resolution = 256, .bound = 2 * E});
+  std::cerr << "  " << fit.stats.patches << " patches, " << fit.stats.point_holes << " points with a hole, the fit's hole share "
+            << fit.stats.hole_share << "; true holes " << e.hole_share << "\n";
+  ASSERT_GT(e.hole_share, 1e-3);  // the case: E far below the sampling
+  EXPECT_TRUE(fit.stats.holes_exceeded);
+  EXPECT_GT(fit.stats.point_holes, 0u);
 }
 
 // A plate 1 x 1 x 0.05 without normals (5 spacings thick): PCA rounds the normals of the points
