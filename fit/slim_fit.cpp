@@ -771,7 +771,7 @@ void SlimFitter::verify_and_repair() {
       // points: 28 %), and every hole is filled as in the band.
       const std::size_t edge_points = P_.size() - smooth_points;
       crease_band_ = edge_points > 0 && double(gaps.size() - smooth) >= 3.0 * opt_.point_hole_least * double(edge_points) &&
-                     double(gaps.size()) <= opt_.point_hole_share * double(P_.size());
+                     double(gaps.size()) <= opt_.point_hole_share * double(P_.size()) && share <= opt_.point_hole_share;
       fill_point_holes_ = (share >= opt_.point_hole_least && share <= opt_.point_hole_share) || crease_band_;
       see_point_holes_ = opt_.see_point_holes && opt_.cover_point_holes && !surface_ && share < opt_.point_hole_least && !crease_band_;
       if (share > opt_.point_hole_share) {
