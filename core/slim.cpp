@@ -138,15 +138,15 @@ SlimSlab slim_patch_slab(const SlimPatch& patch, double max_thickness) {
   // Of the lines along the upper hull's edges and the flat one at the largest reach, the one
   // whose frustum has the least surface area (four times its mean projected area, Cauchy).
   std::vector<Eigen::Vector2d> hull;  // (s, r), s increasing
+  const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& x, const Eigen::Vector2d& y) {
+    return (x - o).x() * (y - o).y() - (x - o).y() * (y - o).x();
+  };
   for (int j = first; j <= last + 1; ++j) {
     double r = -1.0;
     if (j - 1 >= first) r = std::max(r, bin_reach[std::size_t(j - 1)]);
     if (j <= last) r = std::max(r, bin_reach[std::size_t(j)]);
     if (r < 0.0) continue;
     const Eigen::Vector2d p(-1.0 + 2.0 * j / kBins, r);
-    const auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& x, const Eigen::Vector2d& y) {
-      return (x - o).x() * (y - o).y() - (x - o).y() * (y - o).x();
-    };
     while (hull.size() >= 2 && cross(hull[hull.size() - 2], hull.back(), p) >= 0.0) hull.pop_back();
     hull.push_back(p);
   }

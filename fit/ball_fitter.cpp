@@ -464,8 +464,11 @@ std::optional<Ball> BallFitter::try_sharp(std::uint32_t ci, double R, Scratch& s
     centroid[std::size_t(k)] += s.u[j], ++members[std::size_t(k)];
   }
   // A split whose one half holds none of the ball's points: the other cluster whole again.
-  if (members[1] == 0 && members[2] > 0) std::swap(nb, nc), std::swap(centroid[1], centroid[2]), std::swap(members[1], members[2]);
-  if (members[2] == 0 && !nc.isZero()) nb = nb0, nc.setZero();
+  if (members[1] == 0 || members[2] == 0) {
+    centroid[1] += centroid[2], members[1] += members[2];
+    centroid[2].setZero(), members[2] = 0;
+    nb = nb0, nc.setZero();
+  }
   if (members[0] == 0 || members[1] == 0) return std::nullopt;
   for (std::size_t k = 0; k < 3; ++k)
     if (members[k] > 0) centroid[k] /= double(members[k]);
