@@ -277,6 +277,9 @@ std::optional<Ball> BallFitter::try_both_sides(std::uint32_t ci, double R, Scrat
 // boundary points in the ball (DataSurface::boundary_near) when they bend measurably (a
 // curved boundary: a straight cut across the sheet would leave slivers past it), else across
 // the sheet, facing the boundary points' inward tangent or the points' tangential centroid.
+// Points beside a sharp crease count as such boundary points here (DataSurface::boundary_near's
+// crease_sides), though their discs reach the crease: the patch of the face stops there, and
+// another patch or the crease's clipped ones cover the rest.
 std::optional<Ball> BallFitter::try_boundary(const Ball& b, const Scratch& s) const {
   if (s.u.size() < 3) return std::nullopt;
   const Eigen::Vector3d& c0 = P[b.centre];
@@ -288,7 +291,7 @@ std::optional<Ball> BallFitter::try_boundary(const Ball& b, const Scratch& s) co
   Eigen::Vector3d m = centroid - nbar.dot(centroid) * nbar;
   // The data's boundary in the ball, in local coordinates.
   thread_local std::vector<DataSurface::BoundarySample> edge;
-  data->boundary_near(c0, b.R, edge);
+  data->boundary_near(c0, b.R, edge, /*crease_sides=*/true);
   Eigen::Vector3d inward = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
   for (const auto& e : edge) inward += e.inward, mean += (e.point - c0) / b.R;
   const double count = double(edge.size());

@@ -145,7 +145,10 @@ public:
   struct BoundarySample {
     Eigen::Vector3d point, inward;
   };
-  void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out) const;
+  /// With crease_sides, also the points beside a sharp crease that have no neighbour of their
+  /// own face past it, as a boundary's do (their tangent towards their face's points), though
+  /// the crease cuts, not the boundary's star, stop their discs: where a patch may stop too.
+  void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out, bool crease_sides = false) const;
   /// Whether x lies within r of the data's open boundary: a mesh's open edges (exactly), a
   /// cloud's boundary points.
   bool near_open_boundary(const Eigen::Vector3d& x, double r) const;
