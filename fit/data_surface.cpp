@@ -127,6 +127,9 @@ struct DataSurface::Impl {
   // by construction (the crease cuts' gate; its neighbours within a disc may be another face's
   // rounded ones, as a plate's edge rows are).
   std::vector<std::uint8_t> faced;
+  // Points: planar for the crease cuts (from_points: faced, or their own sheet's neighbours
+  // within crease_planarity of the spacing of their plane); empty without crease_cuts.
+  std::vector<std::uint8_t> planar;
   // Points: the disc's second-order term, the height ½(a x² + 2b xy + c y²) over the tangent plane
   // (x, y along normal.unitOrthogonal() and normal × it), fitted to the same-sheet neighbours'
   // heights: a tangent disc is flat, so where E is below the sampling's sag (a sphere of 400
@@ -505,6 +508,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   });
   confirm_boundaries(m, reach);
   if (options.crease_cuts) cut_at_creases(m, planar);
+  if (options.crease_cuts) m.planar = planar;
   // A point beside a crease has no neighbour on its own sheet past the crease, so the centroid
   // test above takes it for an open boundary, and its disc stopped a quarter of its radius past
   // it there (the star of sectors) well before the crease: beside a box's corners no disc reached
@@ -1122,6 +1126,7 @@ const Eigen::Vector3d& DataSurface::normal(std::size_t i) const { return impl_->
 std::size_t DataSurface::crease_points() const { return impl_->crease_points; }
 std::size_t DataSurface::crease_copies() const { return impl_->crease_copies; }
 bool DataSurface::faced(std::size_t i) const { return i < impl_->faced.size() && impl_->faced[i] != 0; }
+bool DataSurface::planar(std::size_t i) const { return i < impl_->planar.size() && impl_->planar[i] != 0; }
 double DataSurface::spacing(std::size_t i) const { return impl_->spacing.at(i); }
 void DataSurface::boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out, bool crease_sides) const {
   out.clear();

@@ -126,6 +126,9 @@ public:
   /// crease_points: its own normal kept where it was that plane's within 1°, and the second
   /// discs): a point of a sharp edge's faces.
   bool faced(std::size_t i) const;
+  /// Whether point i is planar for the crease cuts (points with crease_cuts): faced, or its own
+  /// sheet's neighbours within its disc lie within crease_planarity × the spacing of its plane.
+  bool planar(std::size_t i) const;
   /// Tangent-disc radius of point i (points only).
   double disc_radius(std::size_t i) const;
   /// Height of point i's bent disc over its tangent plane at the tangential offset t (points

@@ -307,11 +307,19 @@ void SlimFitter::make_fitter() {
   bool any_faced = false;
   if (!surface_ && data_)
     for (std::size_t i = 0; i < P_.size() && !any_faced; ++i) any_faced = data_->faced(i);
+  // Given normals (each point its face's own, as a CAD model sampled gives them), no point is
+  // faced: the points on a face are the planar ones. (Without this the same box with its exact
+  // normals fitted worse than without them: 647 patches and 5.3e-4 of its pixels open, against
+  // 96 and 3.3e-5; now 156 and 6.6e-5.)
+  planar_faces_ = !any_faced && !surface_ && data_ && !st_.normals_estimated;
+  if (planar_faces_) any_faced = true;
   if (any_faced) {
     near_crease_.assign(P_.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P_.size(), 1024), [&](const auto& r) {
       std::vector<Neighbour> nb;
-      for (std::size_t i = r.begin(); i != r.end(); ++i) near_crease_[i] = beside_crease(i, nb);
+      // (Given normals: only a planar point, so a smooth scan's million points cost little.)
+      for (std::size_t i = r.begin(); i != r.end(); ++i)
+        near_crease_[i] = planar_faces_ && !data_->planar(i) ? 0 : beside_crease(i, nb);
     });
     if (opt_.sharp_at_creases && !opt_.sharp) fitter_->sharp_at = &near_crease_;
     log::debug("fit_slim: {} points lie beside faces found at creases, {} of them beside an edge or corner",

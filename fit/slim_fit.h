@@ -260,9 +260,10 @@ struct SlimFitOptions {
   /// sheet is clipped at a plane per other sheet (in every use of the clipped sheet: here, and
   /// for a ball whose points fit but whose surface fails).
   bool sharp = false;
-  /// ... and without it, beside an edge or corner where the fit estimated the normals (points
-  /// whose 16 nearest hold points of two faces' planes found by crease_points), where each
-  /// sheet's points lie within E of its plane (all but 2 %)
+  /// ... and without it, beside an edge or corner (points whose 16 nearest hold points of two
+  /// faces' planes: found by crease_points where the fit estimated the normals, else planar
+  /// points with given normals turned as a crease's, DataSurface::planar), where each sheet's
+  /// points lie within E of its plane (all but 2 %)
   bool sharp_at_creases = true;
   double sharp_angle_deg = 30.0;
   /// Neighbours for normal estimation when the cloud has no normals (fit/normals.h).

@@ -480,7 +480,7 @@ std::uint8_t SlimFitter::beside_crease(std::size_t i, std::vector<Neighbour>& nb
   // faces, so one face's points alone are any flat face's).
   const Eigen::Vector3d* first = nullptr;
   for (const auto& [j, d2] : nb) {
-    if (!data_->faced(j)) continue;
+    if (!on_face(j)) continue;
     const Eigen::Vector3d& n = data_->normal(j);
     if (!first) first = &n;
     else if (first->dot(n) < defaults.crease_cos) return kOnFace | kAtEdge;

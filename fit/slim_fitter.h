@@ -259,7 +259,11 @@ private:
   SlimFitResult result_;
   SlimFitStats& st_ = result_.stats;
   std::unique_ptr<PointIndex> index_;
-  std::vector<std::uint8_t> near_crease_;  // per point: beside_crease's flags (empty: no faced points)
+  std::vector<std::uint8_t> near_crease_;  // per point: beside_crease's flags (empty: no point on a face)
+  // Given normals: the points on a face are the planar ones (DataSurface::planar), not those
+  // crease points gave a face's plane (DataSurface::faced, estimated normals only).
+  bool planar_faces_ = false;
+  bool on_face(std::size_t j) const { return planar_faces_ ? data_->planar(j) : data_->faced(j); }
   std::size_t fillable_holes_ = 0;         // of st_.point_holes, those the fill band fills (failures)
   bool crease_band_ = false;               // the holes beside edges and corners alone put the fit in the band
   std::unique_ptr<Subsamples> subsamples_;
