@@ -294,8 +294,9 @@ void SlimFitter::make_fitter() {
   fitter_->data = data_.get();
   fitter_->faces = faces_.get();
   fitter_->diagonal = st_.diagonal;
-  // Clouds whose normals the fit estimated and whose points lie on faces meeting at sharp edges
-  // (DataSurface::faced): the points beside such faces, and those beside an edge or corner
+  // Clouds whose points lie on faces meeting at sharp edges (DataSurface::faced where the fit
+  // estimated the normals; with given normals the planar points, below): the points beside such
+  // faces, and those beside an edge or corner
   // (beside_crease). Beside such faces a ball that fails tries its centre's sheet clipped at the
   // other faces' planes, as `--sharp` does everywhere: a box of 20,000 points without normals at
   // 1e-3 took 674 patches and left 2.9e-4 of the true box's pixels as holes, most within 15E of
@@ -756,8 +757,8 @@ void SlimFitter::verify_and_repair() {
     // everywhere and the discs not held sit at creases and corners, where an estimated normal
     // tilts the disc off the data (a box of 20,000 points without normals: 107; the balls and
     // disc patches that filled them stood out as fins 5–13E past its corners).
-    // Holes beside an edge or corner of faces meeting at a crease (near_crease_) are discs cut or
-    // tilted there whatever the sampling, so only the other points and their holes tell whether E
+    // Holes beside an edge or corner of faces meeting at a crease (near_crease_, with estimated
+    // or given normals) are discs cut or tilted there whatever the sampling, so only the other points and their holes tell whether E
     // is below what the sampling resolves: fandisk's 6,475 vertices without normals at 3e-3 had
     // 330 holes, nearly all there, and filled as the band fills, they stood out as fins (2.5 % of
     // the pixels beyond 2E of the mesh, against 0.28 % left to the holes seen); whether 323 or

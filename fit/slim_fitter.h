@@ -142,8 +142,9 @@ private:
   bool held_whole(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 6>& ring, double rho, double band,
                   const PointIndex& centres, double max_radius, std::optional<std::uint32_t>& last,
                   std::vector<Neighbour>& nb, std::vector<std::uint32_t>& near) const;
-  /// Among point i's crease_neighbours nearest: kOnFace where a point lies on a face's plane
-  /// found at a crease (DataSurface::faced), and kAtEdge too where points of two such faces do,
+  /// Among point i's crease_neighbours nearest: kOnFace where a point lies on a face (on_face: a
+  /// face's plane found at a crease, DataSurface::faced, or with given normals a planar point),
+  /// and kAtEdge too where points of two such faces do,
   /// their planes turned more than acos(crease_cos) from each other: an edge or corner is there
   /// (nb: scratch).
   static constexpr std::uint8_t kOnFace = 1, kAtEdge = 2;
