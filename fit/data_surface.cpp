@@ -148,7 +148,7 @@ struct DataSurface::Impl {
   bool wound_inward = false;  // the triangles enclose a negative volume: their winding faces inwards
   std::unique_ptr<PointIndex> index;
   Bvh bvh;
-  // Boundary samples and their index over their positions (index() after the last push).
+  // Boundary samples and their index over their positions (index_them() after the last push).
   struct Samples {
     std::vector<DataSurface::BoundarySample> samples;
     std::vector<Eigen::Vector3d> points;  // the index's span
@@ -524,8 +524,10 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
     }
   });
   confirm_boundaries(m, reach);
-  if (options.crease_cuts) cut_at_creases(m, planar);
-  if (options.crease_cuts) m.planar = planar;
+  if (options.crease_cuts) {
+    cut_at_creases(m, planar);
+    m.planar = planar;
+  }
   // A point beside a crease has no neighbour on its own sheet past the crease, so the centroid
   // test above takes it for an open boundary, and its disc stopped a quarter of its radius past
   // it there (the star of sectors) well before the crease: beside a box's corners no disc reached
@@ -556,12 +558,13 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
         }
         return false;
       };
+      // The rays across a sector, as fractions of its 60°: its middle, 15° and 29° to either side.
+      static constexpr std::array<double, 5> kAcross{0.5 - 29.0 / 60.0, 0.25, 0.5, 0.75, 0.5 + 29.0 / 60.0};
       std::array<bool, 6> shut{};
       bool closed = true;
       for (int s = 0; s < 6 && closed; ++s) {
         if (m.sector_far[i][s] > 0) continue;
-        shut[s] = true;
-        for (const double f : {0.5 - 29.0 / 60.0, 0.25, 0.5, 0.75, 0.5 + 29.0 / 60.0}) shut[s] = shut[s] && ray_cut(sector_direction(s, f));
+        shut[s] = std::all_of(kAcross.begin(), kAcross.end(), [&](double f) { return ray_cut(sector_direction(s, f)); });
         closed = shut[s];
       }
       if (!closed) continue;
@@ -574,14 +577,16 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
     }
   }
   // A boundary point's disc stays flat (a crease side's too): its shape (a star of sectors, cut
-  // short past the boundary) measures the tangential excess to its nearest shape point, and the height there is that of the
-  // tangent plane (the bent height at the clamped offset would not belong to a point of the disc).
+  // short past the boundary) measures the tangential excess to its nearest shape point, and the
+  // height there is that of the tangent plane (the bent height at the clamped offset would not
+  // belong to a point of the disc).
   // So does a disc confirm_boundaries widened past the neighbours its bend was fitted to (a step
   // in the sampling density): extrapolated there, the bend would make the data permissive. The
   // others are capped at max_disc_slope on their final radius.
   double slope = 0;  // the steepest bent disc's rim slope (2·reach/radius)
   for (std::size_t i = 0; i < m.bend.size(); ++i) {
-    if (fitted_disc[i] == 0.0 || m.inward[i].squaredNorm() > 0 || (!m.star_only.empty() && m.star_only[i]) || m.disc[i] > fitted_disc[i]) {
+    const bool star = m.inward[i].squaredNorm() > 0 || (!m.star_only.empty() && m.star_only[i]);
+    if (fitted_disc[i] == 0.0 || star || m.disc[i] > fitted_disc[i]) {
       m.bend[i].setZero();
       continue;
     }

@@ -305,16 +305,15 @@ void SlimFitter::make_fitter() {
   // patches and 4× the holes at 1e-3.) The holes beside an edge or corner do not decide whether
   // every hole is filled (below).
   near_crease_.clear();
-  bool any_faced = false;
+  bool on_faces = false;
   if (!surface_ && data_)
-    for (std::size_t i = 0; i < P_.size() && !any_faced; ++i) any_faced = data_->faced(i);
+    for (std::size_t i = 0; i < P_.size() && !on_faces; ++i) on_faces = data_->faced(i);
   // Given normals (each point its face's own, as a CAD model sampled gives them), no point is
   // faced: the points on a face are the planar ones. (Without this the same box with its exact
   // normals fitted worse than without them: 647 patches and 5.3e-4 of its pixels open, against
   // 96 and 3.3e-5; now 156 and 6.6e-5.)
-  planar_faces_ = !any_faced && !surface_ && data_ && !st_.normals_estimated;
-  if (planar_faces_) any_faced = true;
-  if (any_faced) {
+  planar_faces_ = !on_faces && !surface_ && data_ && !st_.normals_estimated;
+  if (on_faces || planar_faces_) {
     near_crease_.assign(P_.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P_.size(), 1024), [&](const auto& r) {
       std::vector<Neighbour> nb;
@@ -758,13 +757,14 @@ void SlimFitter::verify_and_repair() {
     // tilts the disc off the data (a box of 20,000 points without normals: 107; the balls and
     // disc patches that filled them stood out as fins 5–13E past its corners).
     // Holes beside an edge or corner of faces meeting at a crease (near_crease_, with estimated
-    // or given normals) are discs cut or tilted there whatever the sampling, so only the other points and their holes tell whether E
-    // is below what the sampling resolves: fandisk's 6,475 vertices without normals at 3e-3 had
-    // 330 holes, nearly all there, and filled as the band fills, they stood out as fins (2.5 % of
-    // the pixels beyond 2E of the mesh, against 0.28 % left to the holes seen); whether 323 or
-    // 330 crossed point_hole_least turned on the data's smallest changes. (Counting every point
-    // of a face whose plane a crease point spread across as beside the crease took a sparse box,
-    // 2,000 points at 1e-3, out of the band: no hole counted, exit 0, 2.1 % of its pixels open.)
+    // or given normals) are discs cut or tilted there whatever the sampling, so only the other
+    // points and their holes tell whether E is below what the sampling resolves: fandisk's 6,475
+    // vertices without normals at 3e-3 had 330 holes, nearly all there, and filled as the band
+    // fills, they stood out as fins (2.5 % of the pixels beyond 2E of the mesh, against 0.28 % left
+    // to the holes seen); whether 323 or 330 crossed point_hole_least turned on the data's smallest
+    // changes. (Counting every point of a face whose plane a crease point spread across as beside
+    // the crease took a sparse box, 2,000 points at 1e-3, out of the band: no hole counted, exit 0,
+    // 2.1 % of its pixels open.)
     const auto at_crease = [&](std::uint32_t i) { return !near_crease_.empty() && (near_crease_[i] & kAtEdge) != 0; };
     if (round == 0) {
       disc_shrunk_.assign(P_.size(), 0);
