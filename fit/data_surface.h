@@ -68,6 +68,10 @@ struct DataSurfaceOptions {
   /// it estimated the normals (SlimFitOptions::crease_points).
   bool crease_points = false;
   std::size_t crease_neighbours = 16;
+  /// Rim cuts: a disc near an open boundary is cut where the boundary points' discs end (the
+  /// support lines of their ends: DataSurface::cut_at_rims), so the data stops near the rim
+  /// instead of reaching up to two spacings past it.
+  bool rim_cuts = true;
 };
 
 class DataSurface {
@@ -152,6 +156,12 @@ public:
   /// own face past it, as a boundary's do (their tangent towards their face's points), though
   /// the crease cuts, not the boundary's star, stop their discs: where a patch may stop too.
   void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out, bool crease_sides = false) const;
+  /// Lines across the data's surface just past its open rim near c: for each of a cloud's
+  /// boundary points within r of c that stands for an open rim (rim_cuts: no other sheet ahead
+  /// of it, as beside a crease), along its normal through the points `offset` past where its
+  /// disc ends, outward, for each offset (out is cleared first; none for a mesh, none without
+  /// rim_cuts).
+  void past_boundary(const Eigen::Vector3d& c, double r, std::span<const double> offsets, std::vector<Ray>& out) const;
   /// Whether x lies within r of the data's open boundary: a mesh's open edges (exactly), a
   /// cloud's boundary points.
   bool near_open_boundary(const Eigen::Vector3d& x, double r) const;
@@ -163,6 +173,7 @@ private:
   static void confirm_boundaries(Impl& m, const std::vector<double>& reach);  // points
   static void cut_at_creases(Impl& m, const std::vector<std::uint8_t>& planar);  // points
   static void split_at_creases(Impl& m);  // points
+  static void cut_at_rims(Impl& m);  // points, after the boundary is final
   std::unique_ptr<Impl> impl_;
 };
 

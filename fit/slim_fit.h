@@ -228,6 +228,10 @@ struct SlimFitOptions {
   /// is off them takes its face's plane, and an edge point gives each face a disc
   /// (DataSurfaceOptions::crease_points)
   bool crease_points = true;
+  /// ... and cut where an open boundary's own discs end (DataSurfaceOptions::rim_cuts: the data,
+  /// and so the fit, stops near an open rim); false: the discs just inside a rim reach up to two
+  /// spacings past it
+  bool rim_cuts = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;
