@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <map>
 
 #include "core/error.h"
 #include "core/io/file.h"
@@ -343,6 +344,41 @@ TEST(IoKit, PlyKindsByContent) {
   EXPECT_EQ(known_file_kind(dir / "notes.md"), std::nullopt);
   EXPECT_EQ(detect_file_kind(dir / "notes.md"), FileKind::points);
   EXPECT_EQ(known_file_kind(dir / "m.ply"), FileKind::model);
+}
+
+// A nearly closed mesh's winding is judged by its signed volume about its own centre: about the
+// world origin, a box with a small hole in its top (0.07 % of its edges open) moved 1e5 up read
+// as wound inward (the hole's cone to the origin outweighs the box), and fits measured against it
+// were judged inside out.
+TEST(IoKit, ANearlyClosedMeshFarFromTheOriginKeepsItsWinding) {
+  constexpr int n = 30;
+  PolygonMesh box;
+  std::map<std::array<int, 3>, int> index;  // grid corners, shared between faces
+  // Six faces of the unit cube, each an n × n grid of quads wound outward; the top (+y) lacks a
+  // 2 × 2 block of cells.
+  for (int axis = 0; axis < 3; ++axis)
+    for (const int side : {0, 1}) {
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      const auto at = [&](int i, int j) {
+        std::array<int, 3> key{};
+        key[axis] = side * n, key[u] = i, key[w] = j;
+        const auto [it, added] = index.try_emplace(key, int(box.vertices.size()));
+        if (added) box.vertices.emplace_back(double(key[0]) / n, double(key[1]) / n, double(key[2]) / n);
+        return it->second;
+      };
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          if (axis == 1 && side == 1 && i >= 10 && i < 12 && j >= 10 && j < 12) continue;
+          const int a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+          // (u, w, axis) is right-handed: counter-clockwise seen from +axis is a, b, c, d.
+          if (side == 1) box.add_face(std::array<int, 4>{a, b, c, d});
+          else box.add_face(std::array<int, 4>{a, d, c, b});
+        }
+    }
+  ASSERT_EQ(orient_faces_coherently(box), 0u);
+  ASSERT_FALSE(mesh_wound_inward(box));
+  for (auto& v : box.vertices) v.y() += 1e5;
+  EXPECT_FALSE(mesh_wound_inward(box));
 }
 
 }  // namespace
