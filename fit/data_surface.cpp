@@ -580,14 +580,16 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
         // crease (the other face's points are no neighbours), by up to 50° at an open box's rim
         // beside its vertical edges, where the rim's discs then stopped on a slant, reaching
         // 1.6 spacings past the rim beside the edge. The lean is taken out along each cut's
-        // normal.
-        const Eigen::Vector3d u = m.normals[i].unitOrthogonal(), w = m.normals[i].cross(u);
-        Eigen::Vector3d in = m.inward[i];
-        for (std::uint32_t k = m.cut_begin[i]; k < m.cut_begin[i + 1]; ++k) {
-          const Eigen::Vector3d a = m.cuts[k].x() * u + m.cuts[k].y() * w;
-          in -= std::min(0.0, in.dot(a)) * a;
+        // normal (with rim_cuts, whose lines it sets).
+        if (options.rim_cuts) {
+          const Eigen::Vector3d u = m.normals[i].unitOrthogonal(), w = m.normals[i].cross(u);
+          Eigen::Vector3d in = m.inward[i];
+          for (std::uint32_t k = m.cut_begin[i]; k < m.cut_begin[i + 1]; ++k) {
+            const Eigen::Vector3d a = m.cuts[k].x() * u + m.cuts[k].y() * w;
+            in -= std::min(0.0, in.dot(a)) * a;
+          }
+          if (in.norm() > 0.5) m.inward[i] = in.normalized();
         }
-        if (in.norm() > 0.5) m.inward[i] = in.normalized();
         continue;
       }
       m.crease_sides.samples.push_back({m.points[i], m.inward[i]});

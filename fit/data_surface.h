@@ -70,7 +70,9 @@ struct DataSurfaceOptions {
   std::size_t crease_neighbours = 16;
   /// Rim cuts: a disc near an open boundary is cut where the boundary points' discs end (the
   /// support lines of their ends: DataSurface::cut_at_rims), so the data stops near the rim
-  /// instead of reaching up to two spacings past it.
+  /// instead of reaching up to two spacings past it; a boundary point beside a crease no longer
+  /// leans away from it (from_points); past_boundary gives lines past the rim. False: as before
+  /// the cuts.
   bool rim_cuts = true;
 };
 

@@ -1,10 +1,10 @@
 #include "core/io/io.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
