@@ -157,6 +157,7 @@ struct DataSurface::Impl {
     std::vector<Eigen::Vector3d> normals;
     std::vector<double> reach;
     std::vector<std::uint8_t> rim;
+    double widest_reach = 0;  // the largest of reach
     std::vector<Eigen::Vector3d> points;  // the index's span
     std::unique_ptr<PointIndex> index;
     void index_them() {
@@ -628,6 +629,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
       m.boundary.samples.push_back({m.points[i], m.inward[i]});
       m.boundary.normals.push_back(m.normals[i]);
       m.boundary.reach.push_back(m.end_reach(i));
+      m.boundary.widest_reach = std::max(m.boundary.widest_reach, m.end_reach(i));
       m.boundary.rim.push_back(0);
     }
   m.boundary.index_them();
@@ -1378,11 +1380,16 @@ void DataSurface::past_boundary(const Eigen::Vector3d& c, double r, std::span<co
   const auto& b = impl_->boundary;
   if (!b.index || b.normals.empty()) return;
   thread_local std::vector<Neighbour> nb;
-  b.index->radius(c, r, nb);
+  // A rim point outside the ball may still have its lines cross it.
+  const double farthest = offsets.empty() ? 0.0 : *std::max_element(offsets.begin(), offsets.end());
+  b.index->radius(c, r + b.widest_reach + farthest, nb);
   for (const auto& [k, d2] : nb)
     if (b.rim[k])
-      for (const double off : offsets)
-        out.push_back(Ray{b.samples[k].point - (b.reach[k] + off) * b.samples[k].inward, b.normals[k]});
+      for (const double off : offsets) {
+        const Ray line{b.samples[k].point - (b.reach[k] + off) * b.samples[k].inward, b.normals[k]};
+        const Eigen::Vector3d v = c - line.origin;
+        if ((v - v.dot(line.dir) * line.dir).squaredNorm() < r * r) out.push_back(line);
+      }
 }
 
 double DataSurface::lipschitz() const { return impl_->lipschitz; }

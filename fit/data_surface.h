@@ -158,11 +158,11 @@ public:
   /// own face past it, as a boundary's do (their tangent towards their face's points), though
   /// the crease cuts, not the boundary's star, stop their discs: where a patch may stop too.
   void boundary_near(const Eigen::Vector3d& c, double r, std::vector<BoundarySample>& out, bool crease_sides = false) const;
-  /// Lines across the data's surface just past its open rim near c: for each of a cloud's
-  /// boundary points within r of c that stands for an open rim (rim_cuts: no other sheet ahead
-  /// of it, as beside a crease), along its normal through the points `offset` past where its
-  /// disc ends, outward, for each offset (out is cleared first; none for a mesh, none without
-  /// rim_cuts).
+  /// Lines across the data's surface just past its open rim within r of c: for each of a cloud's
+  /// boundary points that stands for an open rim (rim_cuts: no other sheet ahead of it, as beside
+  /// a crease), along its normal through the points `offset` past where its disc ends, outward,
+  /// for each offset, where that line passes within r of c (out is cleared first; none for a
+  /// mesh, none without rim_cuts).
   void past_boundary(const Eigen::Vector3d& c, double r, std::span<const double> offsets, std::vector<Ray>& out) const;
   /// Whether x lies within r of the data's open boundary: a mesh's open edges (exactly), a
   /// cloud's boundary points.
