@@ -676,9 +676,9 @@ void DataSurface::cut_at_rims(Impl& m) {
   // The boundary points by sample (from_points pushes them in point order).
   std::vector<std::uint32_t> at;
   at.reserve(m.boundary.samples.size());
-  double widest = 0;  // the farthest any boundary's end lies past its point
   for (std::size_t i = 0; i < n; ++i)
-    if (m.inward[i].squaredNorm() > 0) at.push_back(std::uint32_t(i)), widest = std::max(widest, m.end_reach(i));
+    if (m.inward[i].squaredNorm() > 0) at.push_back(std::uint32_t(i));
+  const double widest = m.boundary.widest_reach;  // the farthest any boundary's end lies past its point
   // Smoothed outward tangents; zero where another sheet lies ahead.
   std::vector<Eigen::Vector3d> outward(at.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, at.size(), 256), [&](const auto& r) {
