@@ -383,6 +383,33 @@ struct DataSurface::Impl {
   }
 
   DataSurfaceOptions options;
+
+  // Cut lines per disc ((point, (a_u, a_w, c)) pairs, gathered per thread), appended after each
+  // disc's lines already there (cut_begin, cuts): the crease cuts', then the rim cuts'.
+  using Lines = std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>;
+  void add_cuts(tbb::enumerable_thread_specific<Lines>& found) {
+    Lines all;
+    for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
+    if (all.empty()) return;
+    std::stable_sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    const std::size_t n = points.size();
+    std::vector<Eigen::Vector3d> merged;
+    merged.reserve(cuts.size() + all.size());
+    std::vector<std::uint32_t> begin(n + 1, 0);
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!cut_begin.empty()) merged.insert(merged.end(), cuts.begin() + cut_begin[i], cuts.begin() + cut_begin[i + 1]);
+      for (; next < all.size() && all[next].first == i; ++next) merged.push_back(all[next].second);
+      begin[i + 1] = std::uint32_t(merged.size());
+    }
+    cuts = std::move(merged);
+    cut_begin = std::move(begin);
+  }
+  // Whether a line in direction a lies within 20° of one kept for the same disc (out[first …]):
+  // the next line in much the same direction cuts little more.
+  static bool near_kept(const Lines& out, std::size_t first, const Eigen::Vector2d& a) {
+    return std::any_of(out.begin() + std::ptrdiff_t(first), out.end(), [&](const auto& o) { return o.second.template head<2>().dot(a) > 0.94; });
+  }
 };
 
 DataSurface::DataSurface() : impl_(std::make_unique<Impl>()) {}
@@ -725,7 +752,7 @@ void DataSurface::cut_at_rims(Impl& m) {
   if (usable.size() < kGroup) return;
   const PointIndex rims{std::span<const Eigen::Vector3d>(usable_at)};
   // The lines, (point, (a_u, a_w, c)) pairs, each thread's; rare (rims).
-  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::enumerable_thread_specific<Impl::Lines> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
     auto& out = found.local();
     std::vector<Neighbour> nb, own;
@@ -785,31 +812,14 @@ void DataSurface::cut_at_rims(Impl& m) {
         std::size_t kept = 0;
         for (const Eigen::Vector3d& l : candidates) {
           if (kept == kLinesPerRim) break;
-          const Eigen::Vector2d a = l.head<2>();
-          if (std::any_of(out.begin() + std::ptrdiff_t(first), out.end(), [&](const auto& x) { return x.second.template head<2>().dot(a) > 0.94; }))
-            continue;
+          if (Impl::near_kept(out, first, l.head<2>())) continue;
           out.emplace_back(std::uint32_t(i), l);
           ++kept;
         }
       }
     }
   });
-  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> all;
-  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
-  if (all.empty()) return;
-  // Each disc's lines after its crease cuts.
-  std::stable_sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::vector<Eigen::Vector3d> cuts;
-  cuts.reserve(m.cuts.size() + all.size());
-  std::vector<std::uint32_t> cut_begin(n + 1, 0);
-  std::size_t next = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!m.cut_begin.empty()) cuts.insert(cuts.end(), m.cuts.begin() + m.cut_begin[i], m.cuts.begin() + m.cut_begin[i + 1]);
-    for (; next < all.size() && all[next].first == i; ++next) cuts.push_back(all[next].second);
-    cut_begin[i + 1] = std::uint32_t(cuts.size());
-  }
-  m.cuts = std::move(cuts);
-  m.cut_begin = std::move(cut_begin);
+  m.add_cuts(found);  // after each disc's crease cuts
 }
 
 // A point whose nearest neighbours lie to one side is on an open boundary only if the other
@@ -879,7 +889,7 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
   // mesh farther than 2E from their discs, against 0.13 % uncut, and the kitten at 1e-3 went from
   // 630 patches to 877 with a hole share of 1.1e-2 (exit 7).
   // Cut lines are rare (creases): each thread keeps (point, line) pairs, gathered below.
-  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::enumerable_thread_specific<Impl::Lines> found;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
     auto& out = found.local();
     std::vector<Neighbour> nb;
@@ -919,22 +929,13 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
       for (const Eigen::Vector3d& l : lines) {
         if (kept == kMaxCuts) break;
         const Eigen::Vector2d a = l.head<2>().normalized();
-        if (std::any_of(out.begin() + std::ptrdiff_t(first), out.end(), [&](const std::pair<std::uint32_t, Eigen::Vector3d>& o) { return o.second.head<2>().dot(a) > 0.94; }))
-          continue;
+        if (Impl::near_kept(out, first, a)) continue;
         out.emplace_back(std::uint32_t(i), Eigen::Vector3d(a.x(), a.y(), l.z()));
         ++kept;
       }
     }
   });
-  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> all;
-  for (auto& f : found) all.insert(all.end(), f.begin(), f.end());
-  if (all.empty()) return;
-  std::stable_sort(all.begin(), all.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-  m.cut_begin.assign(n + 1, 0);
-  for (const auto& [i, l] : all) ++m.cut_begin[i + 1];
-  for (std::size_t i = 0; i < n; ++i) m.cut_begin[i + 1] += m.cut_begin[i];
-  m.cuts.reserve(all.size());
-  for (const auto& [i, l] : all) m.cuts.push_back(l);
+  m.add_cuts(found);
 }
 
 // Crease points (DataSurfaceOptions::crease_points). Where point i's crease_neighbours nearest
@@ -978,7 +979,7 @@ void DataSurface::split_at_creases(Impl& m) {
   // tol per point: twice crease_planarity of its 6th nearest's distance, of those not facing away
   // (0 where fewer lie near); the spread below asks it again.
   std::vector<double> tol_of(n, 0.0);
-  tbb::enumerable_thread_specific<std::vector<std::pair<std::uint32_t, Eigen::Vector3d>>> found;
+  tbb::enumerable_thread_specific<Impl::Lines> found;
   const std::span<const std::uint32_t> order = m.index->order();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
     auto& out = found.local();
