@@ -867,7 +867,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
 }
 
 // Crease cuts (DataSurfaceOptions::crease_cuts): each point within a disc's radius and a spacing
-// whose normal m turns between acos(crease_cos) and its reverse from the disc's n cuts the disc at
+// whose normal m turns between acos(crease_cos) and the reverse of acos(knife_cos) from the disc's n cuts the disc at
 // its tangent plane, keeping the disc's own side: at a convex crease (the other face's point q
 // lies below the disc's plane and the disc's point below q's: (q − p)·(n − m) < 0) the side below
 // q's plane, at a concave one the side above; a q whose plane has the disc's own point on the
@@ -875,7 +875,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
 // (|(q − p)·(n − m)| under a tenth of their distance: both on the edge, apart along it) is left
 // to the others. Of the lines, the nearest to the point first, at most kMaxCuts, none within 20°
 // of a nearer one (the next line in much the same direction cuts little more). A dihedral
-// sharper than acos(crease_cos) (normals more than 139° apart) is not cut: its fins stay.
+// sharper than acos(knife_cos) (normals more than 166° apart) is not cut: its fins stay.
 void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& planar) {
   constexpr std::size_t kMaxCuts = 4;
   const double cos_max = m.options.crease_cos;
@@ -903,7 +903,7 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
       for (const auto& [j, d2] : nb) {
         const Eigen::Vector3d& mj = m.normals[j];
         const double cosine = mj.dot(nrm);
-        if (j == i || cosine >= cos_max || cosine <= -cos_max || !planar[j]) continue;
+        if (j == i || cosine >= cos_max || cosine <= -m.options.knife_cos || !planar[j]) continue;
         const Eigen::Vector3d d = m.points[j] - p;
         const double side = d.dot(nrm - mj);
         // (d2 = 0: a point's second disc on an edge, split_at_creases, which tells neither.)
@@ -975,6 +975,11 @@ void DataSurface::split_at_creases(Impl& m) {
     double d;
     std::size_t held;
   };
+  // Neighbours facing away (the far side of a thin part) are left out: normals turned more than
+  // 101.5°, or with knife edges (knife_cos) more than acos(−knife_cos), 166°, so an acute edge's
+  // other face counts (a 30° wedge's turns 150°: left out, the points beside the knife edge had
+  // fewer than 8 neighbours and kept PCA's rounded normals; the data stood 32E past the edge).
+  const double facing_away = o.knife_cos > o.crease_cos ? -o.knife_cos : -0.2;
   std::vector<Eigen::Vector3d> face(n, Eigen::Vector3d::Zero());  // zero: unchanged
   // tol per point: twice crease_planarity of its 6th nearest's distance, of those not facing away
   // (0 where fewer lie near); the spread below asks it again.
@@ -995,7 +1000,7 @@ void DataSurface::split_at_creases(Impl& m) {
       m.index->nearest(p, k, nb);
       v.clear(), id.clear();
       for (const auto& [j, d2] : nb)
-        if (j != i && m.normals[j].dot(nrm) >= -0.2) v.push_back(m.points[j] - p), id.push_back(j);
+        if (j != i && m.normals[j].dot(nrm) >= facing_away) v.push_back(m.points[j] - p), id.push_back(j);
       if (v.size() >= 6) tol_of[i] = 2.0 * o.crease_planarity * v[5].norm();
       if (v.size() < 8) continue;
       // Only where the normals turn: a crease's neighbourhood holds normals of both faces or
@@ -1177,11 +1182,6 @@ void DataSurface::split_at_creases(Impl& m) {
       // rim), so no crease cut would stop this point's disc at it; left as it is (fandisk's
       // vertices at 3e-3: 2.6 % of the pixels beyond 2E where 0.15 % were).
       if (!explained || (found_planes == 1 && !rest.empty())) continue;
-      bool apart = true;
-      for (std::size_t a = 0; a < found_planes; ++a)
-        for (std::size_t b = a + 1; b < found_planes; ++b)
-          apart = apart && std::abs(planes[a].c.dot(planes[b].c)) < o.crease_cos;
-      if (!apart) continue;
       if (std::any_of(planes.begin(), planes.begin() + std::ptrdiff_t(found_planes),
                       [&](const Plane& q) { return std::abs(q.d) <= tol && std::abs(q.c.dot(nrm)) >= kSameNormal; }))
         continue;
@@ -1199,6 +1199,17 @@ void DataSurface::split_at_creases(Impl& m) {
       }
       if (std::any_of(sign.begin(), sign.begin() + std::ptrdiff_t(found_planes), [](double x) { return std::abs(x) < 0.1; }))
         continue;
+      // Oriented, the faces turn from each other by more than acos(crease_cos) and less than the
+      // reverse of acos(knife_cos): a knife edge's faces (a 30° wedge's turn 150°) are faces too.
+      // (Unoriented, as before knife_cos, they had to turn less than 139°: the wedge's edge kept
+      // PCA's rounded normals, its discs uncut, and its data stood 32E past the edge at 1e-3.)
+      bool apart = true;
+      for (std::size_t a = 0; a < found_planes; ++a)
+        for (std::size_t b = a + 1; b < found_planes; ++b) {
+          const double turn = (sign[a] > 0 ? 1.0 : -1.0) * (sign[b] > 0 ? 1.0 : -1.0) * planes[a].c.dot(planes[b].c);
+          apart = apart && turn < o.crease_cos && turn > -o.knife_cos;
+        }
+      if (!apart) continue;
       face[i] = sign[0] > 0 ? planes[0].c : Eigen::Vector3d(-planes[0].c);
       for (std::size_t q = 1; q < found_planes; ++q)
         if (std::abs(planes[q].d) <= tol) out.emplace_back(i, sign[q] > 0 ? planes[q].c : Eigen::Vector3d(-planes[q].c));

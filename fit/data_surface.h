@@ -68,6 +68,11 @@ struct DataSurfaceOptions {
   /// it estimated the normals (SlimFitOptions::crease_points).
   bool crease_points = false;
   std::size_t crease_neighbours = 16;
+  /// Knife edges: faces whose normals turn more than the reverse of acos(crease_cos) (139°), up to
+  /// the reverse of acos(knife_cos) (166°), meet at a crease too, for the crease points and the
+  /// crease cuts (a cut only where the planes cross within the disc: a thin plate's two sides,
+  /// parallel, cut nothing). knife_cos = crease_cos: as before (no cut past 139°).
+  double knife_cos = 0.97;
   /// Rim cuts: a disc near an open boundary is cut where the boundary points' discs end (the
   /// support lines of their ends: DataSurface::cut_at_rims), so the data stops near the rim
   /// instead of reaching up to two spacings past it; a boundary point beside a crease no longer
