@@ -867,15 +867,15 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
 }
 
 // Crease cuts (DataSurfaceOptions::crease_cuts): each point within a disc's radius and a spacing
-// whose normal m turns between acos(crease_cos) and the reverse of acos(knife_cos) from the disc's n cuts the disc at
-// its tangent plane, keeping the disc's own side: at a convex crease (the other face's point q
-// lies below the disc's plane and the disc's point below q's: (q − p)·(n − m) < 0) the side below
-// q's plane, at a concave one the side above; a q whose plane has the disc's own point on the
-// other side cuts nothing. A pair too close to the crease to tell which it is
-// (|(q − p)·(n − m)| under a tenth of their distance: both on the edge, apart along it) is left
-// to the others. Of the lines, the nearest to the point first, at most kMaxCuts, none within 20°
-// of a nearer one (the next line in much the same direction cuts little more). A dihedral
-// sharper than acos(knife_cos) (normals more than 166° apart) is not cut: its fins stay.
+// whose normal m turns between acos(crease_cos) and the reverse of acos(knife_cos) from the disc's
+// n cuts the disc at its tangent plane, keeping the disc's own side: at a convex crease (the other
+// face's point q lies below the disc's plane and the disc's point below q's: (q − p)·(n − m) < 0)
+// the side below q's plane, at a concave one the side above; a q whose plane has the disc's own
+// point on the other side cuts nothing. A pair too close to the crease to tell which it is
+// (|(q − p)·(n − m)| under a tenth of their distance: both on the edge, apart along it) is left to
+// the others. Of the lines, the nearest to the point first, at most kMaxCuts, none within 20° of a
+// nearer one (the next line in much the same direction cuts little more). A dihedral sharper than
+// acos(knife_cos) (normals more than 166° apart) is not cut: its fins stay.
 void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& planar) {
   constexpr std::size_t kMaxCuts = 4;
   const double cos_max = m.options.crease_cos;
