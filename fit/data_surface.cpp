@@ -878,7 +878,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach) 
 // acos(knife_cos) (normals more than 166° apart) is not cut: its fins stay.
 void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& planar) {
   constexpr std::size_t kMaxCuts = 4;
-  const double cos_max = m.options.crease_cos;
+  const double cos_max = m.options.crease_cos, knife_cos = m.options.knife_cos;
   const std::size_t n = m.points.size();
   const double slack = m.crease_copies > 0 ? 1e-9 : 0.0;
   // Planar points only (DataSurfaceOptions::crease_planarity; `planar`, judged from_points from
@@ -903,7 +903,7 @@ void DataSurface::cut_at_creases(Impl& m, const std::vector<std::uint8_t>& plana
       for (const auto& [j, d2] : nb) {
         const Eigen::Vector3d& mj = m.normals[j];
         const double cosine = mj.dot(nrm);
-        if (j == i || cosine >= cos_max || cosine <= -m.options.knife_cos || !planar[j]) continue;
+        if (j == i || cosine >= cos_max || cosine <= -knife_cos || !planar[j]) continue;
         const Eigen::Vector3d d = m.points[j] - p;
         const double side = d.dot(nrm - mj);
         // (d2 = 0: a point's second disc on an edge, split_at_creases, which tells neither.)

@@ -1343,6 +1343,22 @@ TEST(DataSurface, CreasePointsOfAThinPlateTakeTheirFacesPlanesBesideTheEdges) {
 // beyond 2E of the discs at 1e-3, p99.9 19E, max 33E. With knife_cos (faces turned up to 166°)
 // the edge's points take their faces' planes and the cuts stop them: 1.8 %, 12E, 21E.
 TEST(DataSurface, AKnifeEdgesPointsTakeTheirFacesPlanes) {
+  // A shape's discs (20,000 points, PCA normals, crease points) against it, with creases to 139°
+  // only (knife_cos = crease_cos: the code before) and with knife edges.
+  const auto compare = [](const char* name, const Shape& s) {
+    const DataSurface truth = DataSurface::from_mesh(s.mesh);
+    const double E = 1e-3 * s.box.diagonal();
+    const std::vector<Vec> pca = estimate_normals(s.cloud.points, {}).normals;
+    std::array<SurfaceError, 2> e;
+    for (const bool knife : {false, true}) {
+      DataSurfaceOptions o{.crease_points = true};
+      if (!knife) o.knife_cos = o.crease_cos;
+      e[knife] = discs_against(DataSurface::from_points(s.cloud.points, pca, o), truth, s.box, 2 * E);
+      std::cerr << "  " << name << ", " << (knife ? "knife edges: " : "creases to 139° only: ") << "discs beyond 2E "
+                << e[knife].share_beyond << ", p99.9 " << e[knife].p999 / E << "E, max " << e[knife].max / E << "E\n";
+    }
+    return e;
+  };
   const double h = 0.6 * std::tan(std::numbers::pi / 6);
   // Its three sides and two triangular caps ((u, uv) over the triangle: denser towards its
   // right-angled corner).
@@ -1351,36 +1367,14 @@ TEST(DataSurface, AKnifeEdgesPointsTakeTheirFacesPlanes) {
   };
   const std::vector<Sheet> wedge = {quad({0, 0, 0}, {1, 0, 0}, {0, 0.6, 0}), quad({0, 0.6, 0}, {1, 0, 0}, {0, -0.6, h}),
                                     quad({0, 0, 0}, {1, 0, 0}, {0, 0, h}), cap(0), cap(1)};
-  const Shape s = make(wedge, 20000, 54);
-  const DataSurface truth = DataSurface::from_mesh(s.mesh);
-  const double E = 1e-3 * s.box.diagonal();
-  const std::vector<Vec> pca = estimate_normals(s.cloud.points, {}).normals;
-  std::array<SurfaceError, 2> e;
-  for (const bool knife : {false, true}) {
-    DataSurfaceOptions o{.crease_points = true};
-    if (!knife) o.knife_cos = o.crease_cos;
-    e[knife] = discs_against(DataSurface::from_points(s.cloud.points, pca, o), truth, s.box, 2 * E);
-    std::cerr << "  " << (knife ? "knife edges: " : "creases to 139° only: ") << "discs beyond 2E of the wedge " << e[knife].share_beyond
-              << ", p99.9 " << e[knife].p999 / E << "E, max " << e[knife].max / E << "E\n";
-  }
+  const std::array<SurfaceError, 2> e = compare("30° wedge", make(wedge, 20000, 54));
   EXPECT_LT(e[1].share_beyond, 0.7 * e[0].share_beyond);
   EXPECT_LT(e[1].p999, 0.8 * e[0].p999);
   EXPECT_LT(e[1].max, 0.8 * e[0].max);
   // A plate 0.02 thick (about two spacings): its far side's rounded normals, within 166° of a
   // point's, are now neighbours, and its plane, parallel, is no reason to leave the point as it
   // is: 6.5 % → 4.2 % beyond 2E (when it was, 14.6 %: a reviewer's case).
-  const Shape plate = make(box({0, 0, 0}, {1, 1, 0.02}), 20000, 7);
-  const DataSurface plate_truth = DataSurface::from_mesh(plate.mesh);
-  const std::vector<Vec> plate_pca = estimate_normals(plate.cloud.points, {}).normals;
-  const double plate_E = 1e-3 * plate.box.diagonal();
-  std::array<SurfaceError, 2> p;
-  for (const bool knife : {false, true}) {
-    DataSurfaceOptions o{.crease_points = true};
-    if (!knife) o.knife_cos = o.crease_cos;
-    p[knife] = discs_against(DataSurface::from_points(plate.cloud.points, plate_pca, o), plate_truth, plate.box, 2 * plate_E);
-    std::cerr << "  plate 0.02 thick, " << (knife ? "knife edges: " : "creases to 139° only: ") << "discs beyond 2E "
-              << p[knife].share_beyond << "\n";
-  }
+  const std::array<SurfaceError, 2> p = compare("plate 0.02 thick", make(box({0, 0, 0}, {1, 1, 0.02}), 20000, 7));
   EXPECT_LE(p[1].share_beyond, p[0].share_beyond);
 }
 
