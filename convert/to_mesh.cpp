@@ -272,9 +272,65 @@ double lattice_sag(const TetPatch& t, int k) {
 // centroid) and colour: the surface drawn is unchanged. Cuts are begun on pieces fewer than
 // `generations` cuts deep (a cut's closure can cut a neighbour a few generations deeper), and
 // none once there are max_tets pieces (the closure of the last may pass it by a few).
+// Besides, a piece holding one of `cut_at`'s points (where a mesh made before was measured beyond
+// its bound) is cut, first, while its longest edge is above that point's `longest`, up to
+// kCutAtGenerations deep: the estimate cannot see every departure, the measure can.
+struct CutAt {
+  Eigen::Vector3d at;
+  double longest;  ///< cut the piece holding `at` while its longest edge is longer
+};
+constexpr int kCutAtGenerations = 18;  // about six halvings of every edge
+
+/// Calls `visit` with each of `sorted` (by x of `.at`) inside the tetrahedron or on it within a
+/// rounding, until it returns true.
+template <class T, class F>
+void points_in_tetrahedron(const std::array<Eigen::Vector3d, 4>& c, std::span<const T> sorted, F&& visit) {
+  Eigen::Vector3d lo = c[0], hi = lo;
+  double size = 0;
+  for (int i = 1; i < 4; ++i) lo = lo.cwiseMin(c[i]), hi = hi.cwiseMax(c[i]), size = std::max(size, (c[i] - c[0]).norm());
+  const double eps = 1e-9 * size;
+  auto it = std::lower_bound(sorted.begin(), sorted.end(), lo.x() - eps, [](const T& p, double x) { return p.at.x() < x; });
+  if (it == sorted.end() || it->at.x() > hi.x() + eps) return;
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i) m.col(i) = c[i + 1] - c[0];
+  const Eigen::PartialPivLU<Eigen::Matrix3d> lu(m);
+  for (; it != sorted.end() && it->at.x() <= hi.x() + eps; ++it) {
+    if ((it->at.array() < lo.array() - eps).any() || (it->at.array() > hi.array() + eps).any()) continue;
+    const Eigen::Vector3d w = lu.solve(it->at - c[0]);
+    if ((w.array() >= -1e-9).all() && w.sum() <= 1 + 1e-9 && visit(*it)) return;
+  }
+}
+
+/// For each of `points` inside one of `pieces`, where to cut that piece once more: the point and
+/// half the piece's longest edge (the drawn surface's points beyond a mesh, where the lattice
+/// missed a part of the surface: a noisy volume's small blobs).
+std::vector<CutAt> cuts_at_points(std::span<const TetPatch> pieces, std::span<const Eigen::Vector3d> points) {
+  struct At {
+    Eigen::Vector3d at;
+    std::size_t index;
+  };
+  std::vector<At> sorted;
+  for (std::size_t i = 0; i < points.size(); ++i) sorted.push_back({points[i], i});
+  std::sort(sorted.begin(), sorted.end(), [](const At& a, const At& b) { return a.at.x() < b.at.x(); });
+  std::vector<double> longest(points.size(), -1.0);
+  for (const TetPatch& t : pieces) {
+    double edge = 0;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) edge = std::max(edge, (t.corners[i] - t.corners[j]).norm());
+    points_in_tetrahedron(t.corners, std::span<const At>(sorted), [&](const At& a) {
+      longest[a.index] = std::max(longest[a.index], 0.5 * edge);
+      return false;
+    });
+  }
+  std::vector<CutAt> out;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (longest[i] > 0) out.push_back({points[i], longest[i]});
+  return out;
+}
 std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int k, double sag, int generations,
-                                         std::size_t max_tets) {
-  if (generations <= 0 || std::none_of(patches.begin(), patches.end(), [&](const TetPatch& t) { return lattice_sag(t, k) > sag; }))
+                                         std::size_t max_tets, std::span<const CutAt> cut_at = {}) {
+  if (cut_at.empty() &&
+      (generations <= 0 || std::none_of(patches.begin(), patches.end(), [&](const TetPatch& t) { return lattice_sag(t, k) > sag; })))
     return {patches.begin(), patches.end()};
   std::vector<Eigen::Vector3d> vx;
   std::map<std::array<double, 3>, int> vid;
@@ -355,17 +411,37 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
       ++alive;
     }
   };
-  // Each round cuts the pieces still over `sag`, those farthest over it first, until the count
-  // reaches max_tets.
-  for (int round = 0; round < generations && alive < max_tets; ++round) {
+  // The points to cut at, by x, for the pieces' boxes to find theirs.
+  std::vector<CutAt> points(cut_at.begin(), cut_at.end());
+  std::sort(points.begin(), points.end(), [](const CutAt& a, const CutAt& b) { return a.at.x() < b.at.x(); });
+  // Whether piece t holds a point it must be cut at: inside it, or on it within a rounding.
+  const auto cut_here = [&](const Tet& t) {
+    if (points.empty() || t.generation >= kCutAtGenerations) return false;
+    const std::uint64_t e = longest(t);
+    const double edge = (vx[e >> 32] - vx[e & 0xffffffffu]).norm();
+    bool found = false;
+    const std::array<Eigen::Vector3d, 4> corners{vx[t.v[0]], vx[t.v[1]], vx[t.v[2]], vx[t.v[3]]};
+    points_in_tetrahedron(corners, std::span<const CutAt>(points), [&](const CutAt& c) {
+      return found = c.longest < edge;
+    });
+    return found;
+  };
+  // Each round cuts the pieces still over `sag`, those farthest over it first (the pieces to cut at
+  // points before them), until the count reaches max_tets.
+  // The cuts at points are not held to max_tets (they are few, and the estimate's cuts can reach it
+  // first: HeadMR's 84,870 tetrahedra came to 8× at every lattice).
+  for (int round = 0; round < std::max(generations, cut_at.empty() ? 0 : kCutAtGenerations); ++round) {
     std::vector<std::pair<double, int>> over;
     for (std::size_t t = 0; t < tets.size(); ++t)
-      if (tets[t].alive && tets[t].generation < generations)
-        if (const double q = lattice_sag(piece(tets[t]), k); q > sag) over.emplace_back(q, int(t));
+      if (tets[t].alive) {
+        if (cut_here(tets[t])) over.emplace_back(std::numeric_limits<double>::infinity(), int(t));
+        else if (tets[t].generation < generations && alive < max_tets)
+          if (const double q = lattice_sag(piece(tets[t]), k); q > sag) over.emplace_back(q, int(t));
+      }
     if (over.empty()) break;
     std::sort(over.begin(), over.end(), std::greater<>());
     for (const auto& [q, t] : over) {
-      if (alive >= max_tets) break;
+      if (alive >= max_tets && std::isfinite(q)) break;
       if (tets[t].alive) bisect(longest(tets[t]));
     }
   }
@@ -379,10 +455,22 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
 
 // Tetrahedron patches on lattices of k to an edge, each cut first (refine_for_lattice) where that
 // lattice would leave its surface by more than a quarter of the bound.
-void mesh_tets(const Model& model, int k, double bound, Builder& out) {
+// With `cut_at` (points where a mesh made before left its bound), the pieces holding them are cut
+// too (refine_for_lattice); `face_cut_at`, when given, gets for each face made the point and edge
+// length that would cut its piece once more: the face's centroid and half its piece's longest edge.
+void mesh_tets(const Model& model, int k, double bound, Builder& out, std::span<const CutAt> cut_at = {},
+               std::vector<CutAt>* face_cut_at = nullptr, std::vector<TetPatch>* pieces = nullptr) {
   constexpr int kCutGenerations = 6;  // cuts begun; a cut's closure can reach a few deeper
   constexpr std::size_t kMaxPieces = 8;  // times the patches
-  const std::vector<TetPatch> tets = refine_for_lattice(model.tets, k, 0.25 * bound, kCutGenerations, kMaxPieces * model.tets.size());
+  std::vector<TetPatch> tets =
+      refine_for_lattice(model.tets, k, 0.25 * bound, kCutGenerations, kMaxPieces * model.tets.size(), cut_at);
+  struct Keep {  // the pieces given back at the end
+    std::vector<TetPatch>& tets;
+    std::vector<TetPatch>* pieces;
+    ~Keep() {
+      if (pieces) *pieces = std::move(tets);
+    }
+  } keep{tets, pieces};
   // Corners welded by exact position, so neighbours name their shared lattice points alike.
   std::map<std::array<double, 3>, std::uint64_t> corner_ids;
   const auto corner_id = [&](const Eigen::Vector3d& x) {
@@ -404,6 +492,7 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out) {
   std::unordered_map<EdgeKey, int, EdgeHash> crossings;
   std::set<std::array<int, 3>> zero_faces;  // triangles of three nodes on the surface, made once
   for (const TetPatch& tet : tets) {
+    const std::size_t first_face = out.mesh.face_count();
     const Eigen::Vector3d centroid = tet.centroid();
     std::array<std::uint64_t, 4> g;
     for (int i = 0; i < 4; ++i) g[i] = corner_id(tet.corners[i]);
@@ -480,6 +569,16 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out) {
         if (s >= 1 - kAtNode) return vertex_at(EdgeKey{keys[j], keys[j]}, p[j]);
         return vertex_at(EdgeKey{keys[i], keys[j]}, p[i] + s * (p[j] - p[i]));
       });
+    }
+    if (face_cut_at) {
+      double longest = 0;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) longest = std::max(longest, (tet.corners[i] - tet.corners[j]).norm());
+      for (std::size_t f = first_face; f < out.mesh.face_count(); ++f) {
+        const auto t = out.mesh.face(f);
+        const auto& V = out.mesh.vertices;
+        face_cut_at->push_back({(V[t[0]] + V[t[1]] + V[t[2]]) / 3.0, 0.5 * longest});
+      }
     }
   }
 }
@@ -777,6 +876,8 @@ constexpr int kFinRounds = 5;
 /// Rounds that leave out the opened mesh's last faces with samples beyond the bound, and how many
 /// faces one round may leave out at least (else a thousandth of the mesh's).
 constexpr int kTrimRounds = 3;
+// A lattice round cuts at most this many faces' pieces (or 1 in 200 of the faces).
+constexpr std::size_t kLatticeRoundFaces = 4096;
 constexpr std::size_t kTrimFaces = 64;
 
 /// × bound: how far the opened mesh's vertices may move off the surface they were on, towards
@@ -1929,12 +2030,17 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   // The last mesh made: its SLIM triangles' first face, and the reach its samples were measured with.
   std::size_t slim_first_face = 0;
   double mesh_reach = 0;
+  // Tetrahedron pieces cut where a mesh made before left its bound (lattice rounds, below), and
+  // for the last mesh made, each of its tetrahedron faces' point and length to cut it at.
+  std::vector<CutAt> tet_cut_at, tet_face_cut_at;
+  std::vector<TetPatch> tet_pieces;
   const auto mesh_at = [&](int level, std::span<const KuhnCellDepth> refined, std::vector<Eigen::Vector3d>* where,
                            std::vector<Eigen::Vector3d>* surface_bad = nullptr, bool* surface_measured = nullptr,
                            bool* undone = nullptr) {
     Builder b;
     b.colours = has_any_colour(model);
-    if (!model.tets.empty()) mesh_tets(model, 1 << level, bound, b);
+    tet_face_cut_at.clear();
+    if (!model.tets.empty()) mesh_tets(model, 1 << level, bound, b, tet_cut_at, &tet_face_cut_at, &tet_pieces);
     std::size_t unions_failed = 0;
     const bool glyph_union = o.union_glyphs && unions_glyphs(model) && model.glyphs.size() <= o.union_max_glyphs;
     if (glyph_union)
@@ -2226,6 +2332,45 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     // whose sheets the mesh's normals cannot tell apart (cracks of a fit), not from parts the grid
     // missed; a finer grid there follows the same cracks (the kitten: more samples beyond and a
     // larger maximum after each round), so the grid is not refined.
+    // Tetrahedra alone: where a few of the lattice's faces stay beyond the bound (a quadric that
+    // bends within its piece more than the sag estimate sees: a noisy scan's, lobster: 12 of 20M
+    // samples, 1.4 bounds), the pieces that made them are cut (each edge about halved) and the
+    // mesh made again, in rounds, a round kept while it brings the maximum down; the doubling
+    // follows only where that does not reach the bound (far fewer triangles than a doubling).
+    if (model.slims.empty() && !model.tets.empty() && o.lattice_rounds > 0 && r.mesh.face_count() > 0) {
+      std::vector<Eigen::Vector3d> surface_beyond = measure_surface_side(r, kKeepBeyond);
+      surface_measured = true;
+      for (int round = 0; round < o.lattice_rounds && !r.within; ++round) {
+        BeyondSamples at;
+        mesh_to_surface(scene, trace, r.mesh, 4.0 * bound, bound, &at, &memo);
+        std::vector<CutAt> more;
+        for (std::size_t f = 0; f < tet_face_cut_at.size() && f < at.faces.size(); ++f)
+          if (at.faces[f] > bound) more.push_back(tet_face_cut_at[f]);
+        const std::size_t faces_beyond = more.size();
+        // Many faces beyond the bound: the lattice is too coarse everywhere, for a doubling.
+        if (faces_beyond + surface_beyond.size() == 0 ||
+            faces_beyond > std::max<std::size_t>(kLatticeRoundFaces, r.mesh.face_count() / 200))
+          break;
+        const std::vector<CutAt> missed = cuts_at_points(tet_pieces, surface_beyond);
+        more.insert(more.end(), missed.begin(), missed.end());
+        if (more.empty()) break;
+        const std::size_t kept = tet_cut_at.size();
+        tet_cut_at.insert(tet_cut_at.end(), more.begin(), more.end());
+        ToMeshResult next = mesh_at(level, {}, nullptr);
+        std::vector<Eigen::Vector3d> next_surface_beyond = measure_surface_side(next, kKeepBeyond);
+        log::info("mesh: lattice round {}: the pieces of {} faces and drawn points beyond the bound cut, {} triangles; beyond the bound {} / {} "
+                  "(was {} / {}), max {:.3g} / {:.3g}",
+                  round + 1, more.size(), next.mesh.face_count(), next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
+                  r.mesh_to_surface.beyond, r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
+        if (!next.within && (total_beyond(next) >= total_beyond(r) || next.max_error() > r.max_error())) {
+          tet_cut_at.resize(kept);
+          break;
+        }
+        next.lattice_rounds = r.lattice_rounds + 1;
+        r = std::move(next);
+        surface_beyond = std::move(next_surface_beyond);
+      }
+    }
     if (grid_refining && undone) log::info("mesh: local refinement undone: no grid refinement");
     if (grid_refining && !undone) {
       // Where samples stay beyond the bound after the triangles' own refinement (parts or gaps

@@ -51,6 +51,10 @@ struct ToMeshOptions {
   /// the SLIM mesh made again; a round kept only if it leaves fewer samples beyond and no larger
   /// maximum; none where the triangles' refinement was undone: a cracked blend); 0: off
   int grid_refinements = 2;
+  /// Tetrahedra: rounds per resolution cutting the pieces whose lattice faces stay beyond the
+  /// bound (each edge about halved per round) and meshing again, while few faces are beyond (at
+  /// most 4,096 or 1 in 200) and a round brings the maximum down; 0: off
+  int lattice_rounds = 6;
   /// SLIM: rounds moving vertices part of the way towards what grazing views see, where the
   /// per-ray blend shows them the surface off where a head-on view does (convert/between_views.h);
   /// a round kept only if it leaves fewer samples beyond the bound and no larger maximum; 0: off
@@ -101,6 +105,7 @@ struct ToMeshResult {
   int grid_rounds = 0;              ///< local grid refinement rounds kept on the last grid
   std::size_t refined_cells = 0;    ///< grid cells asked to be cut finer (the closure cuts some neighbours too)
   int view_rounds = 0;              ///< rounds of moves towards what grazing views see, kept
+  int lattice_rounds = 0;           ///< rounds of tetrahedron pieces cut where their faces left the bound, kept
   int fin_rounds = 0;               ///< rounds of open sheets added on patches' rims drawn alone, kept
   std::size_t fin_triangles = 0;    ///< triangles of those sheets
   std::size_t faces_left_out = 0;   ///< SLIM faces left out over cracks and steps of the blend

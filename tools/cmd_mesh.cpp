@@ -109,6 +109,7 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
                          {"refinements", r.refinements},
                          {"local_rounds", r.local_rounds},
                          {"grid_rounds", r.grid_rounds},
+                         {"lattice_rounds", r.lattice_rounds},
                          {"refined_cells", r.refined_cells},
                          {"view_rounds", r.view_rounds},
                          {"fin_rounds", r.fin_rounds},
@@ -176,6 +177,12 @@ void add_mesh(CLI::App& root, Commands& commands) {
                   "again; kept while it leaves fewer samples beyond and no larger maximum; none where the triangles' "
                   "refinement was undone); 0: off")
       ->check(number({.lo = 0, .hi = 8}))
+      ->capture_default_str();
+  app->add_option("--lattice-rounds", a->options.lattice_rounds,
+                  "Tetrahedra (volumes, quads, skins): rounds per resolution cutting the pieces whose faces stay "
+                  "beyond the bound (each edge about halved) and meshing again, while few faces are beyond (at most "
+                  "4,096 or 1 in 200) and a round brings the maximum down; 0: off")
+      ->check(number({.lo = 0, .hi = 12}))
       ->capture_default_str();
   app->add_option("--view-rounds", a->options.view_rounds,
                   "SLIM: rounds moving vertices part of the way towards what grazing views see, where the per-ray "
