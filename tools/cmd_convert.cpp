@@ -1,4 +1,6 @@
 // quadrix convert quads MESH -o FILE: quad meshes to tetrahedron-clipped quadrics ([Stoll06] §4.5).
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "convert/quads.h"
@@ -37,12 +39,14 @@ void add_convert(CLI::App& root, Commands& commands) {
                   "Store a quad as two flat triangles when its patch is within this fraction of its diameter of them")
       ->check(number({.lo = 0, .hi = 1}));
   app->add_flag("--skip-degenerate", a->options.skip_degenerate, "Skip zero-area faces instead of failing");
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         if (!a->colour.empty()) a->options.colour = parse_rgb(a->colour);
                         a->options.source = a->mesh;
                         const PolygonMesh mesh = read_mesh(a->mesh);
                         const double start = report.elapsed();
+                        std::optional<Progress> progress(std::in_place, "quads", progress_allowed(common), Progress::Indeterminate{});
                         QuadConversion conv = convert_quads(mesh, a->options);
+                        progress.reset();
                         const double seconds = report.elapsed() - start;
                         const auto& c = conv.counts;
                         auto& meta = conv.model.metadata;

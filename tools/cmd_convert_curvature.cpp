@@ -1,5 +1,7 @@
 // quadrix convert curvature-glyphs MESH -o FILE: one ellipsoid per vertex along the principal
 // curvature directions ([Toledo04] Fig. 1, 9). Registered under `convert` by add_convert_curvature.
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "convert/curvature_glyphs.h"
@@ -31,10 +33,12 @@ void add_convert_curvature(CLI::App& convert, Commands& commands) {
   app->add_option("--thickness", a->options.thickness, "Semi-axis along the normal in mean edge lengths")
       ->check(number({.lo = 0.001, .hi = 100.0}))
       ->capture_default_str();
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const double t0 = report.elapsed();
                         const PolygonMesh mesh = read_mesh(a->mesh);
+                        std::optional<Progress> progress(std::in_place, "curvature glyphs", progress_allowed(common), Progress::Indeterminate{});
                         CurvatureGlyphs g = curvature_glyphs(mesh, a->options);
+                        progress.reset();
                         g.model.metadata["producer"] = fmt::format(
                             "quadrix convert curvature-glyphs {} -o {} --jet-degree {} --neighbours {} --size {} --thickness {}",
                             a->mesh, a->out, a->options.jet_degree, a->options.neighbours, a->options.size,

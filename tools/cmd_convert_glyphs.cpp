@@ -1,6 +1,8 @@
 // quadrix convert glyphs MOLECULE -o FILE: a PDB/mmCIF molecule as sphere and cylinder glyphs
 // ([Sigg06], [Toledo04]); or --ellipsoids FILE.csv, a table of ellipsoid glyphs. Registered under
 // the `convert` group by add_convert_glyphs.
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "convert/ellipsoids_csv.h"
@@ -34,7 +36,7 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
   app->add_option("--colour-by", a->colour_by, "element (CPK, default), chain or residue")
       ->check(CLI::IsMember({"element", "chain", "residue"}));
   app->add_flag("--no-water", a->no_water, "Leave out water molecules (residues HOH, WAT, DOD, H2O)");
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const double t0 = report.elapsed();
                         if (!a->ellipsoids.empty()) {
                           Model m = read_ellipsoids_csv(a->ellipsoids);
@@ -47,10 +49,12 @@ void add_convert_glyphs(CLI::App& convert, Commands& commands) {
                           return kOk;
                         }
                         if (a->input.empty()) throw InvalidInput("convert glyphs: give a MOLECULE file or --ellipsoids FILE.csv");
+                        std::optional<Progress> progress(std::in_place, "glyphs", progress_allowed(common), Progress::Indeterminate{});
                         const Molecule mol = read_molecule(a->input, {.water = !a->no_water});
                         const double read_seconds = report.elapsed() - t0;
                         MoleculeGlyphs g = molecule_glyphs(
                             mol, {.style = parse_molecule_style(a->style), .colour_by = parse_colour_by(a->colour_by)});
+                        progress.reset();
                         auto& meta = g.model.metadata;
                         meta["producer"] = command_line();
                         meta["source"] = a->input;

@@ -73,8 +73,14 @@ int run_mesh(const MeshArgs& a, const CommonOptions& common, Report& report) {
   Progress progress("mesh", progress_allowed(common));
   o.progress = progress.callback();
   ToMeshResult r = mesh_model(model, o);
-  // STL holds no vertex normals (each triangle's own): none claimed.
-  if (io::lower_extension(a.out) == ".stl") r.mesh.normals.clear();
+  // STL holds no vertex normals (each triangle's own) and no colours: none claimed (the summary
+  // said "with colours" and the report `colours: true` for an STL file without them).
+  if (io::lower_extension(a.out) == ".stl") {
+    r.mesh.normals.clear();
+    if (!r.mesh.colours.empty())
+      log::warn("mesh: {}: STL holds no colours; the model's are left out (.ply, .obj and .off keep them)", a.out);
+    r.mesh.colours.clear();
+  }
   write_mesh(r.mesh, a.out);
   // Crossing triangles (convert/self_intersections.h): what a printer's slicer or a boolean
   // operation refuses, though every sample lies within the bound.

@@ -78,7 +78,7 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                   "4096, so the inside has vertices for the field: a cube's 6 tetrahedra have none, and its distance "
                   "field was 0 everywhere)")
       ->check(non_negative());
-  commands.push_back({app, [a](const CommonOptions&, Report& report) {
+  commands.push_back({app, [a](const CommonOptions& common, Report& report) {
                         const std::string kind = a->field.at(0);
                         if (!(kind == "distance" && a->field.size() == 1) && !(kind == "volume" && a->field.size() == 2))
                           throw CLI::ValidationError("--field", "expected 'distance' or 'volume FILE'");
@@ -109,6 +109,7 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                             enclosed += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
                           o.max_volume = std::abs(enclosed) / kDefaultVolumeCells;
                         }
+                        std::optional<Progress> progress(std::in_place, "tetrahedralize", progress_allowed(common), Progress::Indeterminate{});
                         const SurfaceTetrahedralization tets = tetrahedralize_closed_surface(mesh.vertices, triangles, o);
                         const double tet_seconds = report.elapsed() - t0;
 
@@ -127,6 +128,7 @@ void add_tetrahedralize(CLI::App& root, Commands& commands) {
                         }
                         const double field_seconds = report.elapsed() - t1;
                         const auto [lo, hi] = std::minmax_element(field.begin(), field.end());
+                        progress.reset();
                         write_medit_mesh(out, a->out);
                         write_file_atomically(values, [&](std::ostream& os) {
                           os << (volume ? fmt::format("# values of {} at the vertices of {} (trilinear)\n", a->field[1], a->out)

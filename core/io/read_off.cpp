@@ -1,6 +1,14 @@
-// OFF: "[ST][C][N]OFF" (extra per-vertex columns after x y z [nx ny nz] ignored), then
+// OFF: "[ST][C][N]OFF" (with C, each vertex line's colour after x y z [nx ny nz]: r g b [a],
+// integers 0-255 or, where any is written with a point or exponent, 0-1, as Geomview reads them;
+// kept where every vertex has one; other extra columns ignored), then
 // "nv nf [ne]" (on the keyword line or the next), nv vertex lines, nf faces "n i0 … i(n-1)
 // [colour]" with 0-based indices; a face may continue on following lines. Nothing may follow.
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "core/error.h"
@@ -10,6 +18,26 @@
 #include "core/limits.h"
 
 namespace quadrix::io {
+namespace {
+
+// A vertex colour "r g b [a]" as written, each within 0..255; fewer than three values (a
+// colour-map index) give none. `fractions` is set where one is written with a point or an
+// exponent: Geomview reads a file's colours as 0-1 then.
+std::optional<std::array<double, 3>> read_colour(TextReader& r, const std::string& what, bool& fractions) {
+  std::array<double, 3> c{};
+  int n = 0;
+  for (; n < 4 && !r.at_line_end(); ++n) {
+    const std::string_view tok = r.token();
+    double v = 0;
+    if (!TextReader::parse(tok, v) || !(v >= 0 && v <= 255)) r.fail("{}: '{}' is not a number in 0..255", what, echo(tok));
+    fractions = fractions || tok.find_first_of(".eE") != std::string_view::npos;
+    if (n < 3) c[n] = v;
+  }
+  if (n < 3) return std::nullopt;
+  return c;
+}
+
+}  // namespace
 
 Surface read_off(std::string_view text, const std::filesystem::path& path) {
   TextReader r(text, path);
@@ -19,6 +47,7 @@ Surface read_off(std::string_view text, const std::filesystem::path& path) {
                       magic.substr(0, magic.size() - 3).find_first_not_of("STCN") == std::string_view::npos;
   if (!is_off) r.fail("not an OFF file: header '{}' (4OFF, nOFF and binary OFF are not supported)", echo(magic));
   const bool has_normals = magic.substr(0, magic.size() - 3).find('N') != std::string_view::npos;
+  const bool has_colours = magic.substr(0, magic.size() - 3).find('C') != std::string_view::npos;
   if (r.rest_of_line().find("BINARY") != std::string_view::npos) r.fail("binary OFF is not supported");
   if (r.at_line_end() && !r.next_line()) r.fail("truncated OFF file: missing the vertex/face counts line");
   const long long nv = r.integer("vertex count"), nf = r.integer("face count");
@@ -36,16 +65,34 @@ Surface read_off(std::string_view text, const std::filesystem::path& path) {
   Surface s;
   s.mesh.vertices.reserve(static_cast<std::size_t>(nv));
   if (has_normals) s.normals.reserve(static_cast<std::size_t>(nv));
+  std::vector<std::array<double, 3>> colours;  // as written
+  bool fractions = false;
   for (long long v = 0; v < nv; ++v) {
     if (!r.next_line()) r.fail("truncated OFF file: header declares {} vertices, found {}", nv, v);
     Eigen::Vector3d p, n;
     for (int k = 0; k < 3; ++k) p[k] = r.number(fmt::format("vertex {}", v));
     if (!is_world_point(p)) r.fail("vertex {} ({}, {}, {}) {}", v, p.x(), p.y(), p.z(), world_fault(p));
     s.mesh.vertices.push_back(p);
-    if (!has_normals) continue;
-    for (int k = 0; k < 3; ++k) n[k] = r.number(fmt::format("vertex {} normal", v));
-    if (!n.allFinite() || !(n.norm() > 0)) r.fail("vertex {}: zero or non-finite normal", v);
-    s.normals.push_back(n.normalized());
+    if (has_normals) {
+      for (int k = 0; k < 3; ++k) n[k] = r.number(fmt::format("vertex {} normal", v));
+      if (!n.allFinite() || !(n.norm() > 0)) r.fail("vertex {}: zero or non-finite normal", v);
+      s.normals.push_back(n.normalized());
+    }
+    if (has_colours && !r.at_line_end())
+      if (const auto c = read_colour(r, fmt::format("vertex {} colour", v), fractions)) colours.push_back(*c);
+  }
+  if (colours.size() == s.mesh.vertices.size()) {  // a colour per vertex or none
+    s.mesh.colours.reserve(colours.size());
+    for (std::size_t v = 0; v < colours.size(); ++v) {
+      std::array<std::uint8_t, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        if (fractions && colours[v][k] > 1)
+          throw FormatError(fmt::format("{}: vertex {}: colour ({}, {}, {}) outside 0..1, where the file writes colours as "
+                                        "fractions (with a point)", path.string(), v, colours[v][0], colours[v][1], colours[v][2]));
+        c[k] = static_cast<std::uint8_t>(std::lround(fractions ? 255 * colours[v][k] : colours[v][k]));
+      }
+      s.mesh.colours.push_back(c);
+    }
   }
   s.mesh.offsets.reserve(static_cast<std::size_t>(nf) + 1);
   std::vector<int> face;

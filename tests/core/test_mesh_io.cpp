@@ -207,7 +207,16 @@ TEST_P(MeshIoRoundTrip, NormalsAndColoursReadBack) {
   for (std::size_t v = 0; v < m.normals.size(); ++v) EXPECT_LT((r.normals[v] - m.normals[v]).norm(), 1e-6) << "vertex " << v;
   for (std::size_t v = 0; v < m.vertices.size(); ++v) EXPECT_EQ(r.vertices[v], m.vertices[v]) << "vertex " << v;
   EXPECT_EQ(r.indices, m.indices);
-  if (std::string(GetParam()) == ".ply") EXPECT_EQ(r.colours, m.colours);  // the OFF reader skips colours
+  // Colours come back from PLY, OFF (CNOFF, 0-255) and OBJ (v x y z r g b, 0-1 to 4 digits): the
+  // OFF and OBJ readers skipped them, so a mesh Quadrix wrote in colour read back grey.
+  EXPECT_EQ(r.colours, m.colours) << p;
+  // Colours without normals (COFF, OBJ's v x y z r g b alone) come back too.
+  {
+    PolygonMesh c = m;
+    c.normals.clear();
+    write_mesh(c, p);
+    EXPECT_EQ(read_mesh(p).colours, m.colours) << p;
+  }
   // Without normals, none come back.
   m.normals.clear();
   write_mesh(m, p);
@@ -448,4 +457,47 @@ TEST_F(ImageIo, WriteRejectsBadImages) {
   i.rgba.resize(3);
   EXPECT_THROW(write_png(i, dir_ / "x.png"), InvalidInput);
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
+}
+
+// OFF vertex colours as Geomview reads them (integers 0-255, or 0-1 where any is written with a
+// point), OBJ's v x y z r g b (0-1) beside v x y z w (a weight, no colour); a colour out of range
+// names the file, line and column.
+TEST(MeshIoColours, OffAndObjColoursReadAsWritersWriteThem) {
+  const fs::path dir = fs::temp_directory_path() / ("quadrix_colours_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto write = [&](const char* name, const char* text) {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  };
+  const char* faces = "3 0 1 2\n";
+  PolygonMesh m = read_mesh(write("i.off", (std::string("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 128 0 255\n0 1 0 0 0 7 255\n") + faces).c_str()));
+  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 7}}));
+  m = read_mesh(write("f.off", (std::string("COFF\n3 1 0\n0 0 0 1.0 0 0 1\n1 0 0 0 0.5 0 1\n0 1 0 0 0 1 1\n") + faces).c_str()));
+  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
+  m = read_mesh(write("c.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 0.5 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
+  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
+  m = read_mesh(write("w.obj", "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nf 1 2 3\n"));
+  EXPECT_TRUE(m.colours.empty());
+  m = read_mesh(write("some.obj", "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
+  EXPECT_TRUE(m.colours.empty());  // a colour per vertex or none
+  try {
+    read_mesh(write("bad.obj", "v 0 0 0\nv 1 0 0 0 2 0\nv 0 1 0\nf 1 2 3\n"));
+    ADD_FAILURE() << "a colour of 2 was read";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.obj:2:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("outside [0, 1]"), std::string::npos) << e.what();
+  }
+  try {
+    read_mesh(write("bad.off", (std::string("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 300 0 255\n0 1 0 0 0 7 255\n") + faces).c_str()));
+    ADD_FAILURE() << "a colour of 300 was read";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.off:4:"), std::string::npos) << e.what();
+  }
+  try {  // fractions with a point elsewhere in the file: 2 is out of range
+    read_mesh(write("frac.off", (std::string("COFF\n3 1 0\n0 0 0 1.0 0 0 1\n1 0 0 0 2 0 1\n0 1 0 0 0 1 1\n") + faces).c_str()));
+    ADD_FAILURE() << "a fraction of 2 was read";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("frac.off: vertex 1"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
 }

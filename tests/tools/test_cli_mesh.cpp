@@ -49,9 +49,16 @@ TEST_F(CliMesh, EveryFormatReadsBackWithinTheReportedError) {
     // The unit sphere glyph: every vertex read back lies on it (STL stores float32).
     const double tol = std::string(ext) == ".stl" ? 1e-6 : 1e-12;
     for (const auto& v : m.vertices) ASSERT_NEAR(v.norm(), 1.0, tol) << ext;
-    if (std::string(ext) == ".ply") {
-      ASSERT_EQ(m.colours.size(), m.vertices.size());  // the glyph's colour carried over
+    // The glyph's colour carried over, and read back (OFF and OBJ read grey); STL holds none and
+    // claims none (its summary said "with colours").
+    if (std::string(ext) != ".stl") {
+      ASSERT_EQ(m.colours.size(), m.vertices.size()) << ext;
       EXPECT_TRUE(j["colours"].get<bool>());
+    } else {
+      EXPECT_TRUE(m.colours.empty());
+      EXPECT_FALSE(j["colours"].get<bool>());
+      EXPECT_NE(r.out.find("STL holds no colours"), std::string::npos) << r.out;
+      EXPECT_EQ(r.out.find("with colours"), std::string::npos) << r.out;
     }
     // The sphere's own normals, except in STL (face normals only; it claimed them).
     EXPECT_EQ(j["normals"].get<bool>(), std::string(ext) != ".stl") << ext;

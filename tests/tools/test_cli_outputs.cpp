@@ -203,6 +203,16 @@ TEST_F(CliOutputs, ProgressBarOnATerminalOnlyForLongWork) {
   r = under_pty("fit " + q(write("p.xyz", xyz)) + " -o " + q(dir_ / "f.qxm") + " --allow-exceed", now);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("fit ["), std::string::npos) << r.out;
+  // Conversions without fractions show the marker too (tetrahedralize showed nothing for 2.2 s).
+  const auto cube = write("cube.off",
+                          "OFF\n8 6 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+                          "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
+  r = under_pty("convert quads " + q(cube) + " -o " + q(dir_ / "c.qxm"), now);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("quads ["), std::string::npos) << r.out;
+  r = under_pty("tetrahedralize " + q(cube) + " -o " + q(dir_ / "c.mesh"), now);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("tetrahedralize ["), std::string::npos) << r.out;
   // --quiet on a terminal, or a pipe: no bar.
   r = under_pty(render + " --quiet", now);
   ASSERT_EQ(r.code, 0) << r.out;
