@@ -3,7 +3,7 @@
 ///
 /// | primitives | how                                                                       |
 /// |------------|---------------------------------------------------------------------------|
-/// | tetrahedron patches | each tetrahedron first cut (conforming longest-edge bisection) where its lattice would leave its surface by more than a quarter of the bound, then each piece's edgewise subdivision into k³ tetrahedra, marching tetrahedra on its quadric; crossings are the quadric's exact roots on the edges; lattice points and crossings welded across shared faces (watertight where neighbours agree in sign) |
+/// | tetrahedron patches | each tetrahedron first cut (conforming longest-edge bisection) where its lattice would leave its surface by more than half the bound (estimated), then each piece's edgewise subdivision into k³ tetrahedra, marching tetrahedra on its quadric, and, where the tetrahedra tessellate (a volume's cells), the pieces whose faces or nearest drawn points stay beyond the bound cut again in rounds (lattice_rounds); crossings are the quadric's exact roots on the edges; lattice points and crossings welded across shared faces (watertight where neighbours agree in sign) |
 /// | SLIM       | marching tetrahedra (Kuhn split) on a grid whose nodes are labelled inside/outside by the per-ray blend itself (core/slim.h): the crossings of the grid lines through each node, majority of the three axes, the blended Taubin distance Σwᵢdᵢ/Σwᵢ deciding split votes; each vertex is where its grid edge enters the blend (else moved onto it along its normal); triangles over holes of the blend are left out (open edges there) |
 /// | glyphs     | icospheres (spheres, ellipsoids) and n-gon prisms with capped ends (cylinders), vertices on the surface |
 ///

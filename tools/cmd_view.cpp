@@ -142,6 +142,7 @@ void add_view(CLI::App& root, Commands& commands) {
     std::string surface;
     std::vector<std::string> animate;
     bool no_cull = false;
+    std::string background = "255,255,255";
     bool outlines = false;
     bool shadows = false, lines = false;
     double pixel_error = render::RenderOptions{}.slim_pixel_error;
@@ -166,6 +167,8 @@ void add_view(CLI::App& root, Commands& commands) {
       ->check(CLI::IsMember({"phong", "envmap", "npr"}))
       ->capture_default_str();
   app->add_flag("--no-cull", a->no_cull, "Start with culling off");
+  app->add_option("--background", a->background, "Background R,G,B, as render's (a window has no transparency)")
+      ->capture_default_str();
   app->add_option("--pixel-error", a->pixel_error, "SLIM level of detail for models with a hierarchy: each frame "
                                                    "draws the coarsest balls whose error projects below P pixels "
                                                    "(0: full detail)")
@@ -219,6 +222,7 @@ void add_view(CLI::App& root, Commands& commands) {
                           for (const auto& v : mesh->vertices) box.extend(v);
                         ViewState st;
                         st.options.cull = !a->no_cull;
+                        st.options.background = parse_rgb(a->background, "--background");
                         st.options.slim_outlines = a->outlines;
                         st.options.shadows = a->shadows;
                         st.options.outlines = a->lines;

@@ -112,9 +112,10 @@ TEST(View, CameraOptionsAndKeysSaveACameraThatRenderReproduces) {
   const std::string q = QUADRIX_BINARY, d = dir.path().string();
   const std::string model = d + "/c.qxm";
   ASSERT_EQ(sh(q + " synth cylinder -o " + model), 0);
-  // --up, --view and --zoom as render takes them; K and P (pressed by --press) write the camera
-  // and the screenshot under their default names in the working folder.
-  const std::string view_args = " --size 160x120 --up +z --view iso --zoom 0.8";
+  // --up, --view, --zoom and --background as render takes them; K and P (pressed by --press) write
+  // the camera and the screenshot under their default names in the working folder.
+  const std::string bg = " --background 40,60,90";
+  const std::string view_args = " --size 160x120 --up +z --view iso --zoom 0.8" + bg;
   const int rc = sh("cd " + d + " && xvfb-run -a -s '-screen 0 640x480x24' " + q + " view " + model + view_args +
                     " --frames 3 --press kp --quiet");
   if (rc == 6) GTEST_SKIP() << "no OpenGL 4.5 context through GLFW under Xvfb";
@@ -122,13 +123,16 @@ TEST(View, CameraOptionsAndKeysSaveACameraThatRenderReproduces) {
   ASSERT_TRUE(std::filesystem::exists(dir / "quadrix-camera.json"));
   ASSERT_TRUE(std::filesystem::exists(dir / "quadrix-screenshot.png"));
   const auto shot = quadrix::read_png(dir / "quadrix-screenshot.png");
+  EXPECT_EQ(shot.pixel(0, 0)[0], 40);  // the top left corner: background
+  EXPECT_EQ(shot.pixel(0, 0)[1], 60);
+  EXPECT_EQ(shot.pixel(0, 0)[2], 90);
   // render with the same options, and render from the saved camera: the same picture.
   ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/same.png" + view_args + " --quiet"), 0);
-  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/saved.png --camera " + d + "/quadrix-camera.json --quiet"), 0);
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/saved.png --camera " + d + "/quadrix-camera.json" + bg + " --quiet"), 0);
   EXPECT_GE(same_share(shot, quadrix::read_png(dir / "same.png")), 0.999);
   EXPECT_GE(same_share(shot, quadrix::read_png(dir / "saved.png")), 0.999);
   // A different view gives a different picture (the comparison can fail).
-  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/other.png --size 160x120 --view front --quiet"), 0);
+  ASSERT_EQ(sh(q + " render " + model + " -o " + d + "/other.png --size 160x120 --view front" + bg + " --quiet"), 0);
   EXPECT_LT(same_share(shot, quadrix::read_png(dir / "other.png")), 0.95);
 }
 
