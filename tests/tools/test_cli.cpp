@@ -168,6 +168,27 @@ TEST(Cli, RenderRefusesWhatItCannotWriteOrShade) {
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "ok.PNG"));
   EXPECT_TRUE(std::filesystem::exists(dir / "d.pfm"));
+  // GL honours every shading: three different pictures of the sphere (the comparison can fail: it
+  // returned Phong for all three on the CPU backend before that refused).
+  std::vector<Image8> shaded;
+  for (const std::string shading : {"phong", "envmap", "npr"}) {
+    const auto out = dir / ("gl-" + shading + ".png");
+    r = quadrix_run("render --backend gl " + q(model) + " -o " + q(out) + " --size 64x64 --shading " + shading);
+    if (r.code == 6) GTEST_SKIP() << "no OpenGL 4.5 context: " << r.out;
+    ASSERT_EQ(r.code, 0) << shading << ": " << r.out;
+    shaded.push_back(read_png(out));
+  }
+  for (std::size_t a = 0; a < shaded.size(); ++a)
+    for (std::size_t b = a + 1; b < shaded.size(); ++b) {
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < shaded[a].rgba.size(); i += 4)
+        for (int k = 0; k < 3; ++k)
+          if (std::abs(int(shaded[a].rgba[i + k]) - int(shaded[b].rgba[i + k])) > 8) {
+            ++differ;
+            break;
+          }
+      EXPECT_GT(differ, 64u * 64u / 20) << "shadings " << a << " and " << b << " drew the same picture";
+    }
 }
 
 TEST(Cli, InfoJsonSaysWhyAFileIsInvalid) {
