@@ -422,7 +422,7 @@ std::vector<TetPatch> refine_for_lattice(std::span<const TetPatch> patches, int 
     bool found = false;
     const std::array<Eigen::Vector3d, 4> corners{vx[t.v[0]], vx[t.v[1]], vx[t.v[2]], vx[t.v[3]]};
     points_in_tetrahedron(corners, std::span<const CutAt>(points), [&](const CutAt& c) {
-      return found = c.longest < edge;
+      return found = c.longest * (1 + 1e-9) < edge;  // a halved edge is half only to a rounding
     });
     return found;
   };
@@ -1828,27 +1828,6 @@ FinSheets fin_sheets(const Model& model, const ReferenceScene& scene, const Trac
   return fins;
 }
 
-// Whether the tetrahedra fill space as a volume's cells do, most of their faces shared whole by
-// two of them (corners at one exact position), where a quad mesh's tetrahedra meet only along
-// edges: the lattice rounds cut only such cells (a quad's patch runs along its tetrahedron's edges,
-// and cutting pieces apart opened its seams: beast 6 -> 10,602 open edges).
-bool tetrahedra_tessellate(std::span<const TetPatch> tets) {
-  if (tets.empty()) return false;
-  using Corner = std::array<double, 3>;
-  std::map<std::array<Corner, 3>, int> faces;
-  for (const TetPatch& t : tets)
-    for (int skip = 0; skip < 4; ++skip) {
-      std::array<Corner, 3> f;
-      for (int i = 0, n = 0; i < 4; ++i)
-        if (i != skip) f[n++] = {t.corners[i].x(), t.corners[i].y(), t.corners[i].z()};
-      std::sort(f.begin(), f.end());
-      ++faces[f];
-    }
-  std::size_t shared = 0;
-  for (const auto& [f, n] : faces) shared += n == 2 ? 2 : 0;
-  return 2 * shared >= 4 * tets.size();
-}
-
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -2339,7 +2318,11 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
   std::optional<ToMeshResult> grid_mesh;
   if (closed_tets && 2 * lattice_exact < model.tets.size()) grid_mesh = mesh_on_grid();
   const bool grid_within = grid_mesh && grid_mesh->within;
-  const bool tessellation = model.slims.empty() && tetrahedra_tessellate(model.tets);
+  // The lattice rounds cut only a tessellation's cells (core/model.h tetrahedra_tessellate): a quad
+  // mesh's tetrahedra meet only along edges, and cutting their pieces apart opened its seams
+  // (beast 6 -> 10,602 open edges); a skin's mixed cells are triangulated differently on each side
+  // of a shared face, and a cut there leaves T-junctions.
+  const bool tessellation = model.slims.empty() && !model.tets.empty() && tetrahedra_tessellate(model);
   for (int level = 0; level <= o.max_refinements && !grid_within; ++level) {
     // The SLIM grid keeps a byte per node: no doubling past kMaxNodes of them.
     constexpr double kMaxNodes = 1.5e9;
@@ -2388,8 +2371,9 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
                   "(was {} / {}), max {:.3g} / {:.3g}",
                   round + 1, more.size(), next.mesh.face_count(), next.mesh_to_surface.beyond, next.surface_to_mesh.beyond,
                   r.mesh_to_surface.beyond, r.surface_to_mesh.beyond, next.mesh_to_surface.max, next.surface_to_mesh.max);
-        if (next.open_edges > r.open_edges ||
-            (!next.within && (total_beyond(next) >= total_beyond(r) || next.max_error() > r.max_error()))) {
+        // (Open edges may grow: where the surface reaches the volume's border, the pieces cut
+        // there add border edges; a tessellation's cuts are conforming and open no seam.)
+        if (!next.within && (total_beyond(next) >= total_beyond(r) || next.max_error() > r.max_error())) {
           tet_cut_at.resize(kept);
           break;
         }

@@ -769,6 +769,7 @@ VolumeConversion convert_volume(const Volume& volume, const VolumeIsoOptions& op
   }
   log::debug("{}: iso {}: {} of {} cells visited, {} tetrahedra tested, {} kept", what, V, out.cells_visited,
              out.cells, out.tets_tested, out.model.tets.size());
+  out.model.metadata["tetrahedra"] = "tessellation";  // the grid's Kuhn cells (core/model.h tetrahedra_tessellate)
   return out;
 }
 
@@ -924,6 +925,7 @@ VolumeConversion convert_tet_mesh(const TetMesh& mesh, std::span<const double> v
   for (auto& k : kept) std::move(k.begin(), k.end(), std::back_inserter(out.model.tets));
   log::debug("{}: iso {}: {} tetrahedra, {} kept; {} of {} vertex gradients from the linear fallback", what, V,
              mesh.tets.size(), out.model.tets.size(), out.linear_gradients, mesh.vertices.size());
+  out.model.metadata["tetrahedra"] = "tessellation";  // the mesh's cells
   return out;
 }
 

@@ -111,7 +111,7 @@ struct VolumeIsoOptions {
 };
 
 struct VolumeConversion {
-  Model model;                     ///< tet patches only; metadata left to the caller
+  Model model;                     ///< tet patches only; metadata left to the caller, but `tetrahedra tessellation`
   std::size_t cells = 0;           ///< grid cells (a tet mesh: its tetrahedra)
   std::size_t cells_visited = 0;   ///< cells whose neighbourhood range could reach V (tet mesh: all)
   std::size_t tets_tested = 0;     ///< tetrahedra whose control net was computed

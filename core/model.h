@@ -167,6 +167,15 @@ struct Model {
   bool empty() const { return size() == 0; }
 };
 
+/// Whether the model says (metadata `tetrahedra tessellation`, as `convert volume` writes) that its
+/// tetrahedra are the cells of one tessellation: no two overlap, and neighbours share whole faces
+/// (a grid's Kuhn cells, a tetrahedral mesh's cells). A skin's mixed cells, triangulated
+/// differently on each side of a shared face, and a quad mesh's tetrahedra are not marked.
+inline bool tetrahedra_tessellate(const Model& model) {
+  const auto it = model.metadata.find("tetrahedra");
+  return it != model.metadata.end() && it->second == "tessellation";
+}
+
 /// A metadata value read as a number (strtod: the whole leading number, any value it parses,
 /// infinities included; callers check the range they accept); nullopt when absent or not a number.
 std::optional<double> metadata_number(const Model& model, const std::string& key);

@@ -122,8 +122,7 @@ void Renderer::set_model(const Model& model) { set_model(model, AmpOptions{}); }
 void Renderer::set_model(const Model& model, const AmpOptions& amp) {
   const Box3 box = bounds(model);
   check_drawable_extent(box.min, box.max, "the model");
-  const auto tetrahedra = model.metadata.find("tetrahedra");
-  impl_->tet.upload(model.tets, tetrahedra != model.metadata.end() && tetrahedra->second == "tessellation");
+  impl_->tet.upload(model.tets, tetrahedra_tessellate(model));
   impl_->glyph.upload(model.glyphs);
   impl_->slim.upload(model);
   impl_->box = box;

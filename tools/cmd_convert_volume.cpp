@@ -97,7 +97,6 @@ ExitCode run_tets(const Args& a, const CommonOptions& common, Report& report) {
   meta["mesh"] = fmt::format("{} vertices, {} tetrahedra", mesh.vertices.size(), mesh.tets.size());
   meta["patches"] = a.linear ? "linear" : "quadratic";
   meta["reconstruction"] = midpoints;
-  meta["tetrahedra"] = "tessellation";  // the input mesh's cells: no two overlap
   meta["value_range"] = fmt::format("{:g},{:g}", conv.value_min, conv.value_max);
   write_model(conv.model, a.out, a.write);
   report.json["convert"] = {{"kind", "volume"},
@@ -209,7 +208,6 @@ void add_convert_volume(CLI::App& convert, Commands& commands) {
                         meta["iso"] = fmt::format("{:.17g}", o.iso);
                         meta["iso_source"] = iso_source;
                         meta["grid"] = fmt::format("{}x{}x{}", volume.dims[0], volume.dims[1], volume.dims[2]);
-                        meta["tetrahedra"] = "tessellation";  // cells of the grid: no two overlap
                         meta["spacing"] = fmt::format("{:g},{:g},{:g}", volume.spacing.x(), volume.spacing.y(),
                                                       volume.spacing.z());
                         meta["patches"] = a->linear ? "linear" : "quadratic";

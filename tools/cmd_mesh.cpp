@@ -185,7 +185,7 @@ void add_mesh(CLI::App& root, Commands& commands) {
       ->check(number({.lo = 0, .hi = 8}))
       ->capture_default_str();
   app->add_option("--lattice-rounds", a->options.lattice_rounds,
-                  "Tetrahedra (volumes, quads, skins): rounds per resolution cutting the pieces whose faces stay "
+                  "A volume's tetrahedra (marked 'tetrahedra tessellation', as convert volume writes): rounds per resolution cutting the pieces whose faces stay "
                   "beyond the bound (each edge about halved) and meshing again, while few faces are beyond (at most "
                   "4,096 or 1 in 200) and a round brings the maximum down; 0: off")
       ->check(number({.lo = 0, .hi = 12}))

@@ -1,15 +1,17 @@
-// OBJ: "v x y z [w | r g b]" (the colour, 0-1, kept where every vertex has one), "vn x y z" and
+// OBJ: "v x y z [w | r g b]" (the colour scaled by text_colours_rgb8, kept where every vertex
+// has a good one), "vn x y z" and
 // "f v[/vt][/vn] …" with 1-based or negative (relative) indices; every other statement (vt, g, o,
 // s, usemtl, l, …) is ignored.
 #include <algorithm>
 #include <cctype>
-#include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/io/file.h"
 #include "core/io/formats.h"
+#include "core/io/text_colours.h"
 #include "core/io/text_reader.h"
 #include "core/limits.h"
 
@@ -20,7 +22,7 @@ Surface read_obj(std::string_view text, const std::filesystem::path& path) {
   Surface s;
   PolygonMesh& mesh = s.mesh;
   std::vector<Eigen::Vector3d> normals;
-  std::vector<std::array<std::uint8_t, 3>> colours;  // while every vertex so far has one
+  std::vector<std::optional<TextColour>> colours;  // as written, per vertex
   std::vector<int> face;
   struct Pending {  // positive indices are checked once all vertices are known
     std::size_t face, line, col;
@@ -40,22 +42,8 @@ Surface read_obj(std::string_view text, const std::filesystem::path& path) {
         r.fail("{} {} ({}, {}, {}) {}", is_v ? "vertex" : "normal", i, p.x(), p.y(), p.z(), world_fault(p));
       if (is_v) {
         mesh.vertices.push_back(p);
-        // x y z r g b: a colour (MeshLab's and Quadrix's own OBJ); x y z w: a weight, ignored.
-        if (!r.at_line_end()) {
-          const std::string_view first = r.token();
-          double c0 = 0;
-          if (!TextReader::parse(first, c0)) r.fail("vertex {}: '{}' is not a number", i, echo(first));
-          if (!r.at_line_end()) {
-            Eigen::Vector3d c(c0, 0, 0);
-            c[1] = r.number(fmt::format("vertex {} green", i));  // in order: a constructor's arguments are not
-            c[2] = r.number(fmt::format("vertex {} blue", i));
-            if (!c.allFinite() || (c.array() < 0).any() || (c.array() > 1).any())
-              r.fail("vertex {}: colour ({}, {}, {}) outside [0, 1]", i, c.x(), c.y(), c.z());
-            if (colours.size() + 1 == mesh.vertices.size())
-              colours.push_back({static_cast<std::uint8_t>(std::lround(255 * c.x())), static_cast<std::uint8_t>(std::lround(255 * c.y())),
-                                 static_cast<std::uint8_t>(std::lround(255 * c.z()))});
-          }
-        }
+        // x y z r g b: a colour (MeshLab's and Quadrix's own OBJ); x y z w: a weight, no colour.
+        colours.push_back(read_text_colour(r, 3));
       } else {
         if (!(p.norm() > 0)) r.fail("normal {}: zero normal", i);
         normals.push_back(p.normalized());
@@ -93,7 +81,7 @@ Surface read_obj(std::string_view text, const std::filesystem::path& path) {
                                      fmt::format("face {}: vertex index {} out of range [1, {}]", p.face, p.index,
                                                  mesh.vertices.size())));
   if (normals.size() == mesh.vertices.size()) s.normals = std::move(normals);
-  if (colours.size() == mesh.vertices.size()) mesh.colours = std::move(colours);
+  mesh.colours = text_colours_rgb8(colours, mesh.vertices.size(), path);
   return s;
 }
 

@@ -1,11 +1,8 @@
 // OFF: "[ST][C][N]OFF" (with C, each vertex line's colour after x y z [nx ny nz]: r g b [a],
-// integers 0-255 or, where any is written with a point or exponent, 0-1, as Geomview reads them;
-// kept where every vertex has one; other extra columns ignored), then
+// scaled by text_colours_rgb8, kept where every vertex has a good one; other extra columns
+// ignored), then
 // "nv nf [ne]" (on the keyword line or the next), nv vertex lines, nf faces "n i0 … i(n-1)
 // [colour]" with 0-based indices; a face may continue on following lines. Nothing may follow.
-#include <array>
-#include <cmath>
-#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -14,30 +11,11 @@
 #include "core/error.h"
 #include "core/io/file.h"
 #include "core/io/formats.h"
+#include "core/io/text_colours.h"
 #include "core/io/text_reader.h"
 #include "core/limits.h"
 
 namespace quadrix::io {
-namespace {
-
-// A vertex colour "r g b [a]" as written, each within 0..255; fewer than three values (a
-// colour-map index) give none. `fractions` is set where one is written with a point or an
-// exponent: Geomview reads a file's colours as 0-1 then.
-std::optional<std::array<double, 3>> read_colour(TextReader& r, const std::string& what, bool& fractions) {
-  std::array<double, 3> c{};
-  int n = 0;
-  for (; n < 4 && !r.at_line_end(); ++n) {
-    const std::string_view tok = r.token();
-    double v = 0;
-    if (!TextReader::parse(tok, v) || !(v >= 0 && v <= 255)) r.fail("{}: '{}' is not a number in 0..255", what, echo(tok));
-    fractions = fractions || tok.find_first_of(".eE") != std::string_view::npos;
-    if (n < 3) c[n] = v;
-  }
-  if (n < 3) return std::nullopt;
-  return c;
-}
-
-}  // namespace
 
 Surface read_off(std::string_view text, const std::filesystem::path& path) {
   TextReader r(text, path);
@@ -65,8 +43,7 @@ Surface read_off(std::string_view text, const std::filesystem::path& path) {
   Surface s;
   s.mesh.vertices.reserve(static_cast<std::size_t>(nv));
   if (has_normals) s.normals.reserve(static_cast<std::size_t>(nv));
-  std::vector<std::array<double, 3>> colours;  // as written
-  bool fractions = false;
+  std::vector<std::optional<TextColour>> colours;  // as written
   for (long long v = 0; v < nv; ++v) {
     if (!r.next_line()) r.fail("truncated OFF file: header declares {} vertices, found {}", nv, v);
     Eigen::Vector3d p, n;
@@ -78,22 +55,9 @@ Surface read_off(std::string_view text, const std::filesystem::path& path) {
       if (!n.allFinite() || !(n.norm() > 0)) r.fail("vertex {}: zero or non-finite normal", v);
       s.normals.push_back(n.normalized());
     }
-    if (has_colours && !r.at_line_end())
-      if (const auto c = read_colour(r, fmt::format("vertex {} colour", v), fractions)) colours.push_back(*c);
+    if (has_colours) colours.push_back(read_text_colour(r, 4));
   }
-  if (colours.size() == s.mesh.vertices.size()) {  // a colour per vertex or none
-    s.mesh.colours.reserve(colours.size());
-    for (std::size_t v = 0; v < colours.size(); ++v) {
-      std::array<std::uint8_t, 3> c{};
-      for (int k = 0; k < 3; ++k) {
-        if (fractions && colours[v][k] > 1)
-          throw FormatError(fmt::format("{}: vertex {}: colour ({}, {}, {}) outside 0..1, where the file writes colours as "
-                                        "fractions (with a point)", path.string(), v, colours[v][0], colours[v][1], colours[v][2]));
-        c[k] = static_cast<std::uint8_t>(std::lround(fractions ? 255 * colours[v][k] : colours[v][k]));
-      }
-      s.mesh.colours.push_back(c);
-    }
-  }
+  if (has_colours) s.mesh.colours = text_colours_rgb8(colours, s.mesh.vertices.size(), path);
   s.mesh.offsets.reserve(static_cast<std::size_t>(nf) + 1);
   std::vector<int> face;
   for (long long f = 0; f < nf; ++f) {

@@ -459,45 +459,43 @@ TEST_F(ImageIo, WriteRejectsBadImages) {
   EXPECT_FALSE(fs::exists(dir_ / "x.png"));
 }
 
-// OFF vertex colours as Geomview reads them (integers 0-255, or 0-1 where any is written with a
-// point), OBJ's v x y z r g b (0-1) beside v x y z w (a weight, no colour); a colour out of range
-// names the file, line and column.
+// OFF and OBJ vertex colours as writers write them: 0-255, or 0-1 (every value of the file at
+// most 1, as %g prints pure red "1 0 0"; a vertex written with a point and at most 1 beside
+// 0-255 ones, Geomview's rule); OBJ's v x y z w is a weight. A damaged colour column costs the
+// colours, not the geometry (the readers ignored the columns before and read such files).
 TEST(MeshIoColours, OffAndObjColoursReadAsWritersWriteThem) {
   const fs::path dir = fs::temp_directory_path() / ("quadrix_colours_" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  const auto write = [&](const char* name, const char* text) {
+  const auto read = [&](const char* name, const std::string& text) {
     std::ofstream(dir / name) << text;
-    return dir / name;
+    return read_mesh(dir / name);
   };
-  const char* faces = "3 0 1 2\n";
-  PolygonMesh m = read_mesh(write("i.off", (std::string("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 128 0 255\n0 1 0 0 0 7 255\n") + faces).c_str()));
-  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 7}}));
-  m = read_mesh(write("f.off", (std::string("COFF\n3 1 0\n0 0 0 1.0 0 0 1\n1 0 0 0 0.5 0 1\n0 1 0 0 0 1 1\n") + faces).c_str()));
-  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
-  m = read_mesh(write("c.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 0.5 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
-  EXPECT_EQ(m.colours, (std::vector<std::array<std::uint8_t, 3>>{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
-  m = read_mesh(write("w.obj", "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nf 1 2 3\n"));
-  EXPECT_TRUE(m.colours.empty());
-  m = read_mesh(write("some.obj", "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
-  EXPECT_TRUE(m.colours.empty());  // a colour per vertex or none
-  try {
-    read_mesh(write("bad.obj", "v 0 0 0\nv 1 0 0 0 2 0\nv 0 1 0\nf 1 2 3\n"));
-    ADD_FAILURE() << "a colour of 2 was read";
-  } catch (const FormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.obj:2:"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("outside [0, 1]"), std::string::npos) << e.what();
-  }
-  try {
-    read_mesh(write("bad.off", (std::string("COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 300 0 255\n0 1 0 0 0 7 255\n") + faces).c_str()));
-    ADD_FAILURE() << "a colour of 300 was read";
-  } catch (const FormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.off:4:"), std::string::npos) << e.what();
-  }
-  try {  // fractions with a point elsewhere in the file: 2 is out of range
-    read_mesh(write("frac.off", (std::string("COFF\n3 1 0\n0 0 0 1.0 0 0 1\n1 0 0 0 2 0 1\n0 1 0 0 0 1 1\n") + faces).c_str()));
-    ADD_FAILURE() << "a fraction of 2 was read";
-  } catch (const FormatError& e) {
-    EXPECT_NE(std::string(e.what()).find("frac.off: vertex 1"), std::string::npos) << e.what();
+  using Colours = std::vector<std::array<std::uint8_t, 3>>;
+  const std::string off = "COFF\n3 1 0\n", face = "3 0 1 2\n";
+  EXPECT_EQ(read("i.off", off + "0 0 0 255 0 0 255\n1 0 0 0 128 0 255\n0 1 0 0 0 7 255\n" + face).colours,
+            (Colours{{255, 0, 0}, {0, 128, 0}, {0, 0, 7}}));
+  EXPECT_EQ(read("f.off", off + "0 0 0 1.0 0 0 1\n1 0 0 0 0.5 0 1\n0 1 0 0 0 1 1\n" + face).colours,
+            (Colours{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
+  EXPECT_EQ(read("g.off", off + "0 0 0 1 0 0 1\n1 0 0 0 1 0 1\n0 1 0 0 0 1 1\n" + face).colours,
+            (Colours{{255, 0, 0}, {0, 255, 0}, {0, 0, 255}}));
+  EXPECT_EQ(read("m.off", off + "0 0 0 200 100 50 255\n1 0 0 0.5 0.5 0.5 1\n0 1 0 0 0 7 255\n" + face).colours,
+            (Colours{{200, 100, 50}, {128, 128, 128}, {0, 0, 7}}));
+  EXPECT_EQ(read("c.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 0.5 0\nv 0 1 0 0 0 1\nf 1 2 3\n").colours,
+            (Colours{{255, 0, 0}, {0, 128, 0}, {0, 0, 255}}));
+  EXPECT_EQ(read("b.obj", "v 0 0 0 255 0 0\nv 1 0 0 0 128 0\nv 0 1 0 0 0 7\nf 1 2 3\n").colours,
+            (Colours{{255, 0, 0}, {0, 128, 0}, {0, 0, 7}}));
+  EXPECT_TRUE(read("w.obj", "v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nf 1 2 3\n").colours.empty());
+  EXPECT_TRUE(read("some.obj", "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nf 1 2 3\n").colours.empty());  // one per vertex or none
+  // Damaged columns: the geometry is read, the colours left out.
+  for (const auto& [name, text] : std::vector<std::pair<const char*, std::string>>{
+           {"nan.obj", "v 0 0 0 nan 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"},
+           {"abc.obj", "v 0 0 0 abc 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"},
+           {"big.obj", "v 0 0 0 300 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"},
+           {"neg.off", off + "0 0 0 -1 0 0 255\n1 0 0 0 128 0 255\n0 1 0 0 0 7 255\n" + face}}) {
+    const PolygonMesh m = read(name, text);
+    EXPECT_EQ(m.vertices.size(), 3u) << name;
+    EXPECT_EQ(m.face_count(), 1u) << name;
+    EXPECT_TRUE(m.colours.empty()) << name;
   }
   fs::remove_all(dir);
 }
