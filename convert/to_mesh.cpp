@@ -463,8 +463,8 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out, std::span<
   constexpr int kCutGenerations = 6;  // cuts begun; a cut's closure can reach a few deeper
   constexpr std::size_t kMaxPieces = 8;  // times the patches
   // The estimate's threshold, against the bound: a quarter before the lattice rounds measured and
-  // cut what it misses; half now (neghip 293k -> 274k triangles, Marschner-Lobb 41³ 3.28M ->
-  // 2.06M, both within); the whole bound left Marschner-Lobb 41³ outside (1.67 bounds).
+  // cut what it misses; half now (with the rounds, neghip 293k -> 274k triangles, Marschner-Lobb
+  // 41³ 3.28M -> 2.06M, both within); the whole bound left Marschner-Lobb 41³ outside (1.67 bounds).
   constexpr double kSagOfBound = 0.5;
   std::vector<TetPatch> tets =
       refine_for_lattice(model.tets, k, kSagOfBound * bound, kCutGenerations, kMaxPieces * model.tets.size(), cut_at);
@@ -2337,15 +2337,12 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     bool surface_measured = false;
     bool undone = false;
     ToMeshResult r = mesh_at(level, {}, grid_refining ? &bad : nullptr, &surface_bad, &surface_measured, &undone);
-    // Where the triangles' refinement was undone, the samples beyond the bound come from a blend
-    // whose sheets the mesh's normals cannot tell apart (cracks of a fit), not from parts the grid
-    // missed; a finer grid there follows the same cracks (the kitten: more samples beyond and a
-    // larger maximum after each round), so the grid is not refined.
     // Tetrahedra alone: where a few of the lattice's faces stay beyond the bound (a quadric that
     // bends within its piece more than the sag estimate sees: a noisy scan's, lobster: 12 of 20M
     // samples, 1.4 bounds), the pieces that made them are cut (each edge about halved) and the
-    // mesh made again, in rounds, a round kept while it brings the maximum down; the doubling
-    // follows only where that does not reach the bound (far fewer triangles than a doubling).
+    // mesh made again, in rounds, a round kept while it leaves fewer samples beyond the bound and
+    // no larger maximum; the doubling follows only where that does not reach the bound (far fewer
+    // triangles than a doubling).
     if (tessellation && o.lattice_rounds > 0 && r.mesh.face_count() > 0) {
       std::vector<Eigen::Vector3d> surface_beyond = measure_surface_side(r, kKeepBeyond);
       surface_measured = true;
@@ -2382,6 +2379,10 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
         surface_beyond = std::move(next_surface_beyond);
       }
     }
+    // Where the triangles' refinement was undone, the samples beyond the bound come from a blend
+    // whose sheets the mesh's normals cannot tell apart (cracks of a fit), not from parts the grid
+    // missed; a finer grid there follows the same cracks (the kitten: more samples beyond and a
+    // larger maximum after each round), so the grid is not refined.
     if (grid_refining && undone) log::info("mesh: local refinement undone: no grid refinement");
     if (grid_refining && !undone) {
       // Where samples stay beyond the bound after the triangles' own refinement (parts or gaps
