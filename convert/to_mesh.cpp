@@ -281,6 +281,13 @@ struct CutAt {
 };
 constexpr int kCutAtGenerations = 18;  // about six halvings of every edge
 
+double longest_edge(const std::array<Eigen::Vector3d, 4>& c) {
+  double l = 0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j) l = std::max(l, (c[i] - c[j]).norm());
+  return l;
+}
+
 /// Calls `visit` with each of `sorted` (by x of `.at`) inside the tetrahedron or on it within a
 /// rounding, until it returns true.
 template <class T, class F>
@@ -314,9 +321,7 @@ std::vector<CutAt> cuts_at_points(std::span<const TetPatch> pieces, std::span<co
   std::sort(sorted.begin(), sorted.end(), [](const At& a, const At& b) { return a.at.x() < b.at.x(); });
   std::vector<double> longest(points.size(), -1.0);
   for (const TetPatch& t : pieces) {
-    double edge = 0;
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) edge = std::max(edge, (t.corners[i] - t.corners[j]).norm());
+    const double edge = longest_edge(t.corners);
     points_in_tetrahedron(t.corners, std::span<const At>(sorted), [&](const At& a) {
       longest[a.index] = std::max(longest[a.index], 0.5 * edge);
       return false;
@@ -468,13 +473,6 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out, std::span<
   constexpr double kSagOfBound = 0.5;
   std::vector<TetPatch> tets =
       refine_for_lattice(model.tets, k, kSagOfBound * bound, kCutGenerations, kMaxPieces * model.tets.size(), cut_at);
-  struct Keep {  // the pieces given back at the end
-    std::vector<TetPatch>& tets;
-    std::vector<TetPatch>* pieces;
-    ~Keep() {
-      if (pieces) *pieces = std::move(tets);
-    }
-  } keep{tets, pieces};
   // Corners welded by exact position, so neighbours name their shared lattice points alike.
   std::map<std::array<double, 3>, std::uint64_t> corner_ids;
   const auto corner_id = [&](const Eigen::Vector3d& x) {
@@ -575,9 +573,7 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out, std::span<
       });
     }
     if (face_cut_at) {
-      double longest = 0;
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) longest = std::max(longest, (tet.corners[i] - tet.corners[j]).norm());
+      const double longest = longest_edge(tet.corners);
       for (std::size_t f = first_face; f < out.mesh.face_count(); ++f) {
         const auto t = out.mesh.face(f);
         const auto& V = out.mesh.vertices;
@@ -585,6 +581,7 @@ void mesh_tets(const Model& model, int k, double bound, Builder& out, std::span<
       }
     }
   }
+  if (pieces) *pieces = std::move(tets);
 }
 
 // ---- glyphs -----------------------------------------------------------------------------------
@@ -2251,9 +2248,7 @@ ToMeshResult mesh_model(const Model& model, const ToMeshOptions& o) {
     std::vector<double> edges;
     edges.reserve(model.tets.size());
     for (const TetPatch& t : model.tets) {
-      double l = 0;
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j) l = std::max(l, (t.corners[i] - t.corners[j]).norm());
+      const double l = longest_edge(t.corners);
       edges.push_back(l);
       const Eigen::Vector3d c = t.centroid();
       const bool plane = t.quadric.A.cwiseAbs().maxCoeff() * l <= 1e-12 * t.quadric.b.norm();
