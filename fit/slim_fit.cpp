@@ -220,7 +220,7 @@ void SlimFitter::setup() {
         subsamples_ = std::make_unique<Subsamples>(P_, 4 * opt_.max_check_points, opt_.seed);
       },
       [&] {
-        data_ = std::make_shared<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_, {.bent_discs = opt_.bent_discs, .crease_cuts = opt_.crease_cuts, .crease_points = opt_.crease_points && st_.normals_estimated, .rim_cuts = opt_.rim_cuts}));
+        data_ = std::make_shared<DataSurface>(surface_ ? DataSurface::from_mesh(*surface_) : DataSurface::from_points(P_, N_, {.bent_discs = opt_.bent_discs, .crease_cuts = opt_.crease_cuts, .crease_points = opt_.crease_points && st_.normals_estimated, .rim_cuts = opt_.rim_cuts, .hole_rims = opt_.hole_rims}));
       });
   log::debug("fit_slim: point indices and the data's surface ({}) in {:.2f} s", surface_ ? "mesh" : "tangent discs",
              seconds_since(t1));

@@ -232,6 +232,10 @@ struct SlimFitOptions {
   /// and so the fit, stops near an open rim); false: the discs just inside a rim reach up to two
   /// spacings past it
   bool rim_cuts = true;
+  /// ... and find the rims of holes, slots and bays too, so the data stops there
+  /// (DataSurfaceOptions::hole_rims); false: the discs at such a rim reach up to three spacings
+  /// into it, and across a slit two spacings wide
+  bool hole_rims = true;
   double point_hole_factor = 0.6;
   int point_hole_depth = 1;
   double disc_patch_reach = 1.25;

@@ -1237,8 +1237,16 @@ TEST(DataSurface, DiscsBesideACreaseReachItsCornersAndAnOpenRimStaysOpen) {
 // of its data may follow. Now the lines where the boundary points' discs end cut it: 0.77. The
 // lines must not open the sheet: a square with a round hole, a slot and a five-armed star (concave
 // rims, where a line through one boundary point crosses the data beside it) stay covered inside.
+// Concave rims (DataSurfaceOptions::hole_rims): a hole's rim points, whose neighbours wrap around
+// the hole, were no boundary points, points across the hole or a bay passed for a density step's,
+// and discs widened 3/4 of the way to the nearest point across: the data reached 2.9 spacings into
+// the hole and 3.4 into the star's bays; now 1.8 and 2.1. The slot, under three spacings wide,
+// is still bridged whole (its half-width reads 1.30 spacings before and 1.40 now, as the median
+// spacing changes): only its opening inside is checked.
 TEST(DataSurface, DiscsStopAtAnOpenRimNotPastIt) {
-  const auto check = [](const char* name, const std::function<double(double, double)>& inside, double max_reach) {
+  // The farthest reach past the rim of the two samplings (given and estimated normals).
+  const auto check = [](const char* name, const std::function<double(double, double)>& inside, double max_reach,
+                        bool hole_rims = true) {
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> u(-0.5, 0.5);
     std::vector<Vec> points, normals;
@@ -1246,9 +1254,11 @@ TEST(DataSurface, DiscsStopAtAnOpenRimNotPastIt) {
       const double x = u(rng), y = u(rng);
       if (inside(x, y) >= 0) points.emplace_back(x, y, 0), normals.emplace_back(0, 0, 1);
     }
+    double farthest = 0;
     for (const bool given : {true, false}) {
-      const DataSurface d = given ? DataSurface::from_points(points, normals)
-                                  : DataSurface::from_points(points, estimate_normals(points, {}).normals, {.crease_points = true});
+      const DataSurface d = given ? DataSurface::from_points(points, normals, {.hole_rims = hole_rims})
+                                  : DataSurface::from_points(points, estimate_normals(points, {}).normals,
+                                                             {.crease_points = true, .hole_rims = hole_rims});
       std::vector<double> spacing;
       for (std::size_t i = 0; i < points.size(); ++i) spacing.push_back(d.spacing(i));
       std::nth_element(spacing.begin(), spacing.begin() + std::ptrdiff_t(spacing.size() / 2), spacing.end());
@@ -1264,28 +1274,45 @@ TEST(DataSurface, DiscsStopAtAnOpenRimNotPastIt) {
           if (depth < 0 && covered) reach = std::max(reach, -depth);
           if (depth > 0.5 * sp) ++deep, open += !covered;
         }
-      std::cerr << "  " << name << ", " << (given ? "given" : "estimated") << " normals: the discs reach " << reach / sp
-                << " spacings past the rim; " << open << " of " << deep << " points deeper inside left open\n";
+      std::cerr << "  " << name << (hole_rims ? "" : " (hole_rims off)") << ", " << (given ? "given" : "estimated")
+                << " normals: the discs reach " << reach / sp << " spacings past the rim; " << open << " of " << deep
+                << " points deeper inside left open\n";
       EXPECT_LE(reach, max_reach * sp) << name;
-      EXPECT_LE(open, 2u) << name;  // 0-1
+      EXPECT_LE(open, 4u) << name;  // 0-3 of 100,000-270,000
+      farthest = std::max(farthest, reach / sp);
     }
+    return farthest;
   };
   check("disc", [](double x, double y) { return 0.45 - std::hypot(x, y); }, 1.1);  // 0.77; 1.83 without the cuts
   const auto square = [](double x, double y) { return std::min({x + 0.45, 0.45 - x, y + 0.45, 0.45 - y}); };
-  // Concave rims: the data bridges a hole ten spacings across by 2.9 spacings, a slot two wide
-  // whole and the star's bays by 3.4 (a disc widens to 3/4 of the way to the nearest point of
-  // its sector, across them), with and without the cuts: only the sheet's opening is checked.
+  const std::function<double(double, double)> hole = [&](double x, double y) { return std::min(square(x, y), std::hypot(x, y) - 0.1); };
+  const std::function<double(double, double)> slot = [&](double x, double y) {
+    return std::min(square(x, y), std::max(std::abs(x) - 0.02, std::abs(y) - 0.3));
+  };
+  const std::function<double(double, double)> star = [](double x, double y) {
+    return 0.3 + 0.12 * std::cos(5 * std::atan2(y, x)) - std::hypot(x, y);
+  };
   constexpr double kAny = std::numeric_limits<double>::infinity();
-  check("square with a hole", [&](double x, double y) { return std::min(square(x, y), std::hypot(x, y) - 0.1); }, kAny);
-  check("square with a slot", [&](double x, double y) { return std::min(square(x, y), std::max(std::abs(x) - 0.02, std::abs(y) - 0.3)); }, kAny);
-  check("star", [](double x, double y) { return 0.3 + 0.12 * std::cos(5 * std::atan2(y, x)) - std::hypot(x, y); }, kAny);
+  check("square with a slot", slot, kAny);
+  // The limits on the reach, and on the reach against hole_rims off in the same run.
+  for (const auto& [name, shape, limit] : {std::tuple{"square with a hole", hole, 2.1}, std::tuple{"star", star, 2.5}}) {
+    const double now = check(name, shape, limit), before = check(name, shape, kAny, false);
+    EXPECT_LE(now, 0.7 * before) << name;
+  }
 }
 
 // An open box (no top) fitted at 1e-3 without normals: where its data reached two spacings past
 // the rim, the fit stood up to 9.8E past it (in four samplings, p99.9 of the true box's pixels
 // 1.9-2.7E, 0.097-0.15 % beyond 2E); with the rim cuts (DataSurface::cut_at_rims) the data stops
 // within a spacing of the rim, and the fit with it: 6.0-6.3E, 0.77-1.14E, 0.044-0.052 %.
+// The rim's p99.9 moves by ±0.3E from sampling to sampling and with any change in which points
+// are boundary points: over 16 further samplings it was 0.77-2.20E (mean 1.21E, 4 over 1.3E)
+// before the hole_rims rules (DataSurfaceOptions) and 0.58-1.62E (mean 1.04E, 3 over 1.3E) with
+// them, where these four gave 0.77-1.14E and 0.62-1.43E. So the mean over the four is bounded,
+// and each sampling more loosely. The whole discs are the data before both (rim cuts and
+// hole_rims off): hole_rims alone took one sampling's share beyond 2E from 0.15 % to 0.04 %.
 TEST(FitSlimHard, AnOpenBoxStopsAtItsRim) {
+  double p999_sum = 0;
   std::vector<Sheet> sheets = box({0, 0, 0}, {1, 0.6, 0.3});
   sheets.erase(sheets.begin() + 3);  // the top (y = 0.6)
   for (const std::uint64_t seed : {2, 3, 4, 5}) {
@@ -1295,18 +1322,54 @@ TEST(FitSlimHard, AnOpenBoxStopsAtItsRim) {
     std::array<SurfaceError, 2> e;
     double E = 0;
     for (const bool cut : {false, true}) {
-      const SlimFitResult fit = fit_slim(s.cloud, {.max_error = 1e-3, .rim_cuts = cut});
+      const SlimFitResult fit = fit_slim(s.cloud, {.max_error = 1e-3, .rim_cuts = cut, .hole_rims = cut});
       E = fit.stats.max_error_abs;
       e[cut] = measure_surface_error(fit.model, truth, s.box, {.views = 8, .resolution = 256, .bound = 2 * E});
       std::cerr << "  seed " << seed << (cut ? ", rim cuts: " : ", whole discs: ") << fit.stats.patches
                 << " patches; the true box's pixels beyond 2E " << e[cut].share_beyond << ", p99.9 " << e[cut].p999 / E << "E, max "
                 << e[cut].max / E << "E, open " << e[cut].hole_share << "\n";
     }
-    EXPECT_LE(e[1].p999, 1.3 * E) << seed;
+    EXPECT_LE(e[1].p999, 1.6 * E) << seed;
+    p999_sum += e[1].p999 / E;
     EXPECT_LT(e[1].share_beyond, 0.8 * e[0].share_beyond) << seed;
     EXPECT_LT(e[1].max, e[0].max) << seed;
     EXPECT_LE(e[1].hole_share, 2e-4) << seed;
   }
+  EXPECT_LE(p999_sum / 4, 1.2);  // 0.97E before the hole_rims rules, 1.10E with them
+}
+
+// The hole_rims rules (DataSurfaceOptions) beside a concave crease: a prism of stairs (three
+// steps, sampled by 20,000 points with their faces' normals) fitted at 1e-3. Where the paired
+// sector widening also held beside another sheet, the treads' discs stopped short of the risers
+// (the nearer sector was the edge's) and the fit left holes along the concave edges: 3.1e-4 of
+// the true stairs' pixels against 8.9e-5 without the rules; and the runs that keep boundary
+// points the rules alone made passed through the creases' sides, keeping them beside every edge.
+TEST(FitSlimHard, HoleRimsLeaveAConcaveCreaseAsItWas) {
+  const std::vector<Eigen::Vector2d> outline = {{0, 0}, {0.6, 0}, {0.6, 0.2}, {0.4, 0.2}, {0.4, 0.4}, {0.2, 0.4}, {0.2, 0.6}, {0, 0.6}};
+  PolygonMesh mesh;  // the outline in (y, z), extruded along x over [0, 1], capped
+  const int n = int(outline.size());
+  for (int s = 0; s < 2; ++s)
+    for (const auto& p : outline) mesh.vertices.emplace_back(s, p.x(), p.y());
+  for (int i = 1; i + 1 < n; ++i) mesh.add_face(std::vector<int>{0, i + 1, i}), mesh.add_face(std::vector<int>{n, n + i, n + i + 1});
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    mesh.add_face(std::vector<int>{i, j, n + j}), mesh.add_face(std::vector<int>{i, n + j, n + i});
+  }
+  const PointCloud cloud = sample_faces_uniformly(mesh, 20000, 54);
+  const DataSurface truth = DataSurface::from_mesh(mesh);
+  Box3 box;
+  for (const auto& v : mesh.vertices) box.extend(v);
+  std::array<SurfaceError, 2> e;
+  double E = 0;
+  for (const bool rims : {false, true}) {
+    const SlimFitResult fit = fit_slim(cloud, {.max_error = 1e-3, .hole_rims = rims});
+    E = fit.stats.max_error_abs;
+    e[rims] = measure_surface_error(fit.model, truth, box, {.views = 8, .resolution = 256, .bound = 2 * E});
+    std::cerr << "  hole_rims " << rims << ": " << fit.stats.patches << " patches; the true stairs' pixels open " << e[rims].hole_share
+              << ", beyond 2E " << e[rims].share_beyond << "\n";
+  }
+  EXPECT_LE(e[1].hole_share, std::max(1.2 * e[0].hole_share, 2e-5));
+  EXPECT_LE(e[1].share_beyond, std::max(1.2 * e[0].share_beyond, 1e-5));
 }
 
 // A plate 1 x 1 x 0.05 without normals (5 spacings thick): PCA rounds the normals of the points
