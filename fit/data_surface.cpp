@@ -460,8 +460,9 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
   std::vector<std::uint8_t> rim_kind(m.points.size(), 0);  // hole_rims: kByGap, kCreaseSide or 0
   std::vector<std::uint8_t> planar(m.points.size(), 0);  // crease cuts: cut_at_creases
   // A point and its second disc on an edge (split_at_creases), or two such, at one place: not
-  // each other's neighbours (within 60° of each other, one would read a spacing of 0).
-  const auto twins = [&](std::size_t i, std::uint32_t j, double d2) { return d2 == 0 && (i >= m.given || j >= m.given); };
+  // each other's neighbours (within 60° of each other, one would read a spacing of 0). With
+  // hole_rims, nor two input points at one place.
+  const auto twins = [&](std::size_t i, std::uint32_t j, double d2) { return d2 == 0 && (m.options.hole_rims || i >= m.given || j >= m.given); };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.points.size(), 1024), [&](const auto& r) {
     std::vector<Neighbour> nb;
     std::vector<Eigen::Vector3d> same;  // tangential offsets of same-sheet neighbours
@@ -469,15 +470,32 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
     for (std::size_t o = r.begin(); o != r.end(); ++o) {
       const std::size_t i = order[o];
       const Eigen::Vector3d& n = m.normals[i];
-      for (const std::size_t k : {needed, 2 * needed - 1}) {
+      // (hole_rims) Each place once: a cloud with every point twice (merged scans, a mesh's
+      // unwelded vertices) read half as many neighbours, so twice the chance gaps about a point,
+      // and a spacing of the copies'; asked again with 8 times as many where copies left too few.
+      const std::array<std::size_t, 3> asked{needed, 2 * needed - 1, 8 * needed};
+      std::size_t copies = 0;
+      for (std::size_t a = 0; a < 3 && (a < 2 || copies > 0); ++a) {
+        const std::size_t k = asked[a];
         m.index->nearest(m.points[i], k, nb);
         same.clear();
         dist.clear();
+        copies = 0;
         for (std::size_t j = 0; j < nb.size(); ++j) {
-          if (nb[j].first == i || twins(i, nb[j].first, nb[j].second) || m.normals[nb[j].first].dot(n) < 0.5) continue;
+          if (nb[j].first == i || m.normals[nb[j].first].dot(n) < 0.5) continue;
+          if (twins(i, nb[j].first, nb[j].second)) {
+            copies += i < m.given && nb[j].first < m.given;  // (hole_rims) an input point twice
+            continue;
+          }
+          if (options.hole_rims && j > 0 && nb[j].first < m.given && nb[j - 1].first < m.given && nb[j].second == nb[j - 1].second &&
+              m.points[nb[j].first] == m.points[nb[j - 1].first]) {
+            ++copies;
+            continue;
+          }
           const Eigen::Vector3d v = m.points[nb[j].first] - m.points[i];
           same.push_back(v - n.dot(v) * n);
           dist.push_back(std::sqrt(nb[j].second));
+          if (a == 2 && same.size() + 1 >= needed) break;  // as many places as without the copies
         }
         if (same.size() + 1 >= needed || nb.size() < k) break;
       }
@@ -600,8 +618,9 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
         // lies in the gap (the other face beside a crease: an open box's wall beside its edges).
         const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
         std::array<double, 64> angle;
-        const std::size_t na = std::min<std::size_t>(kb, angle.size());
-        for (std::size_t j = 0; j < na; ++j) angle[j] = std::atan2(same[j].dot(w), same[j].dot(u));
+        std::size_t na = 0;
+        for (std::size_t j = 0; j < kb && na < angle.size(); ++j)
+          if (same[j].squaredNorm() > 0) angle[na++] = std::atan2(same[j].dot(w), same[j].dot(u));
         std::sort(angle.begin(), angle.begin() + std::ptrdiff_t(na));
         double widest_gap = 0, second = 0, middle = 0;
         for (std::size_t j = 0; j < na; ++j) {
@@ -620,7 +639,7 @@ DataSurface DataSurface::from_points(std::span<const Eigen::Vector3d> points, st
           }
           return false;
         };
-        if (widest_gap >= kHoleRimGap && second < 0.5 * widest_gap && !other_sheet_in_gap()) {
+        if (na >= 8 && widest_gap >= kHoleRimGap && second < 0.5 * widest_gap && !other_sheet_in_gap()) {
           m.inward[i] = -(std::cos(middle) * u + std::sin(middle) * w);
           rim_kind[i] = kByGap;
         }
@@ -1000,11 +1019,11 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach, 
     for (const std::uint32_t k : run) spacings.push_back(spacing0[k]);
     std::nth_element(spacings.begin(), spacings.begin() + std::ptrdiff_t(spacings.size() / 2), spacings.end());
     const double sp = spacings[spacings.size() / 2];
-    if (extent2 >= kRimRunExtent * kRimRunExtent * sp * sp) continue;
+    if (sp > 0 && extent2 >= kRimRunExtent * kRimRunExtent * sp * sp) continue;
     for (const std::uint32_t k : run) {
       if (rim_kind[k] != kByGap && old_clear[k] == 0) continue;  // a boundary point before the hole_rims rules
       m.inward[k] = Eigen::Vector3d::Zero();
-      if (old_clear[k] > 0) {
+      if (old_clear[k] > 0 && rim_kind[k] != kByGap) {  // a point the gap flagged was no boundary point to widen
         m.disc[k] = std::max(m.disc[k], 0.75 * old_clear[k]);
         m.spacing[k] = std::max(m.spacing[k], 0.5 * old_clear[k]);
       }
