@@ -36,6 +36,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // (confirm_boundaries).
 constexpr double kHoleRimGap = 100.0 * std::numbers::pi / 180.0;
 constexpr double kRimRunExtent = 6.0, kRimRunStep = 2.0;
+// ... and the most two points' spacings may differ for one to be the far rim of a hole at the other
+// (confirm_boundaries).
+constexpr double kFarRimSpacings = 2.0;
 // How from_points flagged a boundary point, for confirm_boundaries (hole_rims): by the widest gap;
 // by the centroid test, with another sheet's point in its empty direction (a crease's side).
 constexpr std::uint8_t kByGap = 1, kCreaseSide = 2;
@@ -969,7 +972,11 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach, 
         if (!(tn > 0) || std::abs(h) > 0.58 * tn || t.dot(dir) > -0.866 * tn || tn > kOldGap * spacing0[j]) continue;
         if (hole_rims) {
           if (old_clear[i] == 0) old_clear[i] = tn;
-          if (tn > gap_spacings * spacing0[j] || inward0[j].dot(t) > 0) continue;
+          // A far rim facing back, in a sampling like this point's: a density change's sparse point
+          // may face away from its dense side too (radar.xyz, a scan of very uneven density, opened
+          // holes up to a tenth of its width where its fit had covered them).
+          const bool alike = std::max(spacing0[i], spacing0[j]) <= kFarRimSpacings * std::min(spacing0[i], spacing0[j]);
+          if (tn > gap_spacings * spacing0[j] || (alike && inward0[j].dot(t) > 0)) continue;
         }
         m.inward[i] = Eigen::Vector3d::Zero();
         m.disc[i] = std::max(m.disc[i], 0.75 * tn);

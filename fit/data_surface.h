@@ -82,8 +82,8 @@ struct DataSurfaceOptions {
   /// Holes' rims (from_points, confirm_boundaries): a point is on an open boundary also where the
   /// widest angle between its consecutive neighbours about it is 100° or more (at a concave rim
   /// the centroid test passes it); a point across a gap is evidence of a density step only within
-  /// 2.5 of its spacings (3 before) and when it is no boundary point facing away (the far rim of
-  /// the same hole, slot or bay); a disc is widened towards the sectors' nearest points only as far
+  /// 2.5 of its spacings (3 before) and when it is no boundary point facing away with a spacing
+  /// within 2× of this point's (the far rim of the same hole, slot or bay); a disc is widened towards the sectors' nearest points only as far
   /// as the nearer of two opposite sectors' (not beside another sheet). A boundary point only these
   /// rules made stays one only in a run of boundary points at least 6 spacings long: a slit is
   /// long, a random sampling's chance void round. The data then reaches about 40 % less far into
