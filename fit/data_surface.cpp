@@ -974,7 +974,7 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach, 
           if (old_clear[i] == 0) old_clear[i] = tn;
           // A far rim facing back, in a sampling like this point's: a density change's sparse point
           // may face away from its dense side too (radar.xyz, a scan of very uneven density, opened
-          // holes up to a tenth of its width where its fit had covered them).
+          // holes as wide as a third of the model in a view, where its fit had covered them).
           const bool alike = std::max(spacing0[i], spacing0[j]) <= kFarRimSpacings * std::min(spacing0[i], spacing0[j]);
           if (tn > gap_spacings * spacing0[j] || (alike && inward0[j].dot(t) > 0)) continue;
         }

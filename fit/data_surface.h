@@ -86,7 +86,7 @@ struct DataSurfaceOptions {
   /// within 2× of this point's (the far rim of the same hole, slot or bay); a disc is widened towards the sectors' nearest points only as far
   /// as the nearer of two opposite sectors' (not beside another sheet). A boundary point only these
   /// rules made stays one only in a run of boundary points at least 6 spacings long: a slit is
-  /// long, a random sampling's chance void round. The data then reaches about 40 % less far into
+  /// long, a random sampling's chance void round. The data then reaches about a third less far into
   /// holes and bays, and the bunny's base sampled by 20,000 points is no longer bridged where its
   /// holes are slits. False: as before.
   bool hole_rims = true;
