@@ -986,10 +986,8 @@ void DataSurface::confirm_boundaries(Impl& m, const std::vector<double>& reach, 
     }
   });
   if (!hole_rims) return;
-  // The runs: boundary points joined within kRimRunStep spacings (union-find over the flagged).
-  flagged.clear();
-  for (std::size_t i = 0; i < m.points.size(); ++i)
-    if (m.inward[i].squaredNorm() > 0) flagged.push_back(std::uint32_t(i));
+  // The runs: boundary points joined within kRimRunStep spacings (union-find over those still flagged).
+  std::erase_if(flagged, [&](std::uint32_t i) { return m.inward[i].squaredNorm() == 0; });
   std::unordered_map<std::uint32_t, std::uint32_t> parent;
   for (const std::uint32_t i : flagged) parent[i] = i;
   const auto root = [&](std::uint32_t a) {
