@@ -217,6 +217,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
     bool view_holes = true;
     int view_resolution = 512;
     std::size_t sample = 0;
+    std::string sample_normals = "faces";
+    std::uint64_t sample_seed = 1;
     bool fill_point_holes = true;
     double cover_fraction = 0;  // 0: the fit's default
   };
@@ -239,9 +241,16 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
   app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
   app->add_flag("!--no-view-holes", a->view_holes, "Fit as `fit --no-view-holes` does (for comparison)");
   app->add_option("--sample", a->sample,
-                  "Fit each mesh model from this many points drawn uniformly over its faces (points only, the "
-                  "faces' normals) and measure the surface side against the mesh they came from; 0: the mesh itself")
+                  "Fit each mesh model from this many points drawn uniformly over its faces (points only, with "
+                  "the faces' normals unless --sample-normals none) and measure the surface side against the mesh they came from; 0: the mesh itself")
       ->check(number({.lo = 0, .hi = 1e8}))
+      ->capture_default_str();
+  app->add_option("--sample-normals", a->sample_normals,
+                  "With --sample: the points carry their faces' normals (faces), or none, so the fit estimates "
+                  "and orients them as for a scan without normals (none)")
+      ->check(CLI::IsMember({"faces", "none"}))
+      ->capture_default_str();
+  app->add_option("--sample-seed", a->sample_seed, "With --sample: the seed of the points drawn (other samplings)")
       ->capture_default_str();
   app->add_flag("!--no-fill-point-holes", a->fill_point_holes, "Fit as `fit --no-fill-point-holes` does (for comparison)");
   app->add_option("--cover-fraction", a->cover_fraction, "Fit as `fit --cover-fraction` does (for comparison)")
@@ -261,9 +270,18 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       data.push_back(load_dataset(m, a->datasets));
       Dataset& d = data.back();
       if (a->sample > 0 && d.mesh) {
-        d.cloud = sample_faces_uniformly(*d.mesh, a->sample);
+        d.cloud = sample_faces_uniformly(*d.mesh, a->sample, a->sample_seed);
         d.name += fmt::format("_{}pts", a->sample);
+        if (a->sample_seed != 1) d.name += fmt::format("_seed{}", a->sample_seed);
         d.normals = "the faces the points were drawn from";
+        if (a->sample_normals == "none") {
+          // As a scan without normals: the fit gets the points alone; the peers and the points'
+          // discs the bench's own estimate (as for a file without normals).
+          d.cloud.normals = estimate_normals(d.cloud.points, {.neighbours = SlimFitOptions{}.normal_neighbours}).normals;
+          d.normals = "estimated (PCA + MST) for points drawn from the faces";
+          d.normals_estimated = true;
+          d.name += "_no_normals";
+        }
         d.sampled = true;
       }
     }
@@ -288,6 +306,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                            {"diagonal", d.diagonal},
                            {"mesh_triangles", nullptr},
                            {"sampled_from_faces", d.sampled},
+                           {"sample_seed", d.sampled ? nlohmann::json(a->sample_seed) : nlohmann::json()},
                            {"runs", nlohmann::json::array()}};
       std::optional<Row> poisson;
       // The data's surface for the surface side: the mesh, else the points' tangent discs. With a
@@ -299,7 +318,13 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       std::optional<DataSurface> discs;
       if (d.sampled) {
         discs = DataSurface::from_points(d.cloud.points, d.cloud.normals);
-        if (a->keep_models) write_points_xyz(d.cloud, out_dir / fmt::format("{}.xyz", d.name));
+        if (a->keep_models) {
+          // Points alone where the normals were the bench's estimate (--sample-normals none), as
+          // the fit saw them.
+          PointCloud kept = d.cloud;
+          if (d.normals_estimated) kept.normals.clear();
+          write_points_xyz(kept, out_dir / fmt::format("{}.xyz", d.name));
+        }
       }
       const PolygonMesh* fit_mesh = d.mesh && !d.sampled ? &*d.mesh : nullptr;
       Box3 data_box;

@@ -462,6 +462,60 @@ TEST(Cli, BenchFitLetsTheFitEstimateTheNormalsOfACloudWithout) {
   EXPECT_EQ(slim.at("points_beyond_bound").get<int>(), 0);
 }
 
+// bench fit --sample draws points from a mesh's faces with the faces' normals; with
+// --sample-normals none they come without, as a scan's, and the fit estimates and orients them
+// itself (the case of a cloud without normals, measured against the mesh it came from);
+// --sample-seed draws another sampling.
+TEST(Cli, BenchFitSamplesAMeshWithOrWithoutNormals) {
+  ScratchDir dir("cli-bench-fit-sample");
+  {
+    std::ofstream f(dir / "cube.off");
+    f << "OFF\n8 12 0\n";
+    for (int v = 0; v < 8; ++v) f << (v & 1) << " " << ((v >> 1) & 1) << " " << ((v >> 2) & 1) << "\n";
+    // Outward, counter-clockwise: two triangles per face.
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) f << "3 " << q[0] << " " << q[1] << " " << q[2] << "\n3 " << q[0] << " " << q[2] << " " << q[3] << "\n";
+  }
+  const auto run_bench = [&](const std::string& extra, const std::string& out) {
+    const CmdResult r = quadrix_run("bench fit --no-peers --errors 0.02 --view-resolution 32 --sample 1500 --keep-models --models " +
+                                    q(dir / "cube.off") + " --out " + q(dir / out) + " --quiet " + extra);
+    EXPECT_EQ(r.code, 0) << r.out;
+    std::ifstream in(dir / out / "bench_fit.json");
+    return nlohmann::json::parse(in).at("models");
+  };
+  const nlohmann::json faces = run_bench("", "faces");
+  const nlohmann::json& f = faces.at("cube_1500pts");
+  EXPECT_EQ(f.at("normals"), "the faces the points were drawn from");
+  EXPECT_FALSE(f.at("runs").at(0).at("slim").at("normals_estimated").get<bool>());
+  const nlohmann::json none = run_bench("--sample-normals none", "none");
+  const nlohmann::json& n = none.at("cube_1500pts_no_normals");
+  EXPECT_EQ(n.at("normals").get<std::string>().rfind("estimated", 0), 0u) << n.at("normals");
+  EXPECT_EQ(n.at("sample_seed").get<int>(), 1);
+  const nlohmann::json& slim = n.at("runs").at(0).at("slim");
+  EXPECT_TRUE(slim.at("normals_estimated").get<bool>()) << slim.dump();
+  EXPECT_EQ(slim.at("points_beyond_bound").get<int>(), 0);
+  // Another sampling: other points.
+  const nlohmann::json other = run_bench("--sample-normals none --sample-seed 2", "seed2");
+  EXPECT_TRUE(other.contains("cube_1500pts_seed2_no_normals")) << other.dump();
+  std::ifstream a(dir / "none" / "cube_1500pts_no_normals.xyz"), b(dir / "seed2" / "cube_1500pts_seed2_no_normals.xyz");
+  std::string la, lb;
+  ASSERT_TRUE(std::getline(a, la) && std::getline(b, lb));
+  EXPECT_NE(la, lb);
+  // The kept cloud is what the fit saw: three columns without normals, six with the faces'.
+  const auto columns = [](const std::string& line) {
+    std::istringstream in(line);
+    int c = 0;
+    for (double v; in >> v;) ++c;
+    return c;
+  };
+  EXPECT_EQ(columns(la), 3) << la;
+  std::ifstream fk(dir / "faces" / "cube_1500pts.xyz");
+  std::string lf;
+  ASSERT_TRUE(std::getline(fk, lf));
+  EXPECT_EQ(columns(lf), 6) << lf;
+  EXPECT_NE(quadrix_run("bench fit --sample 100 --sample-normals smooth --models " + q(dir / "cube.off")).code, 0);
+}
+
 // CGAL's Poisson on a sparse cloud: its surface mesher may find no facet, and CGAL's convenience
 // function then converted the empty complex anyway (bench fit on 800 points of a sphere
 // segfaulted in 5 of 8 runs, before any row). Now the failure is recorded and the SLIM rows go
