@@ -251,6 +251,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->check(CLI::IsMember({"faces", "none"}))
       ->capture_default_str();
   app->add_option("--sample-seed", a->sample_seed, "With --sample: the seed of the points drawn (other samplings)")
+      ->check(non_negative())
       ->capture_default_str();
   app->add_flag("!--no-fill-point-holes", a->fill_point_holes, "Fit as `fit --no-fill-point-holes` does (for comparison)");
   app->add_option("--cover-fraction", a->cover_fraction, "Fit as `fit --cover-fraction` does (for comparison)")
