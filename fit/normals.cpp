@@ -44,7 +44,11 @@ constexpr int kMaxCrossings = 24;
 constexpr std::size_t kMaxVoters = 8000, kMinComponentVoters = 64;
 constexpr double kSmooth = 0.25;
 constexpr std::size_t kConfirm = 8, kAlike = 4;
-constexpr double kMinorityShare = 0.02, kClosedShare = 0.5;
+constexpr double kMinorityShare = 0.02, kClosedShare = 0.75;
+// ... or, where only kPlateClosedShare decided (a plate under two spacings thick), its standing
+// votes split nearly evenly (kPlateSplit each way: a whole side inside out) among at least
+// kMinComponentVoters smooth voters.
+constexpr double kPlateClosedShare = 0.5, kPlateSplit = 0.25;
 // A voter's rays start this many of its spacings out, past its own sheet's discs.
 constexpr double kOwnSheet = 0.75;
 // A side of a knife edge needs this many of a rim point's neighbours for its plane, and the
@@ -255,13 +259,15 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
     });
   }
   // A closed surface decides most smooth voters' parity (kitten 91 %, lenses 89–96 %, meshes
-  // sampled by 20,000 points 53–80 %, a plate 1.8 spacings thick 57–67 %: CGAL's turbine blade,
-  // whose one side the propagation had turned inside out, 49.6 % of its normals, and whose fit at
-  // 3e-3 left 38 % of its pixels open, and a 1 × 4 slab; the gate was 3/4 and turned neither); an
-  // open scan few, as its rays escape both ways, and those by what it happens to hide
-  // (bun000_rawscan 3.5 %, radar.xyz 28 %: body points behind an ear vote "in", and bun000 had
-  // 31,833 normals turned before this gate): a component turns only where kClosedShare of them
-  // decided.
+  // sampled by 20,000 points 53–80 %); an open scan few, as its rays escape both ways, and those
+  // by what it happens to hide (bun000_rawscan 3.5 %, radar.xyz 28 %: body points behind an ear
+  // vote "in", and bun000 had 31,833 normals turned before this gate): a component turns only
+  // where kClosedShare of them decided. A closed plate 1.6–1.9 spacings thick decides 57–67 %,
+  // and the propagation had turned one whole side of it inside out (CGAL's turbine blade: 49.6 %
+  // of its normals, and its fit at 3e-3 left 38 % of its pixels open; a 1 × 4 slab), so its
+  // standing votes split about evenly (751 "in" against 759): from kPlateClosedShare decided, a
+  // component turns where they split so (kPlateSplit each way), which a few clusters of votes an
+  // open scan's occlusions cast do not.
   std::vector<std::size_t> smooth_in(g.members.size(), 0), decided_in(g.members.size(), 0);
   for (std::size_t j = 0; j < nv; ++j) smooth_in[g.comp[voter[j]]] += smooth[j], decided_in[g.comp[voter[j]]] += vote[j] != 0;
   const PointIndex voters_index(vp);
@@ -281,9 +287,12 @@ std::size_t orient_by_parity(std::span<const Eigen::Vector3d> points, std::vecto
   std::vector<std::uint32_t> seeds;
   std::vector<std::uint32_t> rim;  // points of turned components near their rim
   for (std::size_t c = 0; c < g.members.size(); ++c) {
-    if (ins[c] == 0 || double(std::min(ins[c], outs[c])) < kMinorityShare * double(ins[c] + outs[c]) ||
-        double(decided_in[c]) < kClosedShare * double(smooth_in[c]))
-      continue;
+    const double minority = double(std::min(ins[c], outs[c])), standing = double(ins[c] + outs[c]);
+    const double decided = double(decided_in[c]), smooth_voters = double(smooth_in[c]);
+    const bool closed = decided >= kClosedShare * smooth_voters;
+    const bool plate = decided >= kPlateClosedShare * smooth_voters && minority >= kPlateSplit * standing &&
+                       smooth_in[c] >= kMinComponentVoters;
+    if (ins[c] == 0 || minority < kMinorityShare * standing || !(closed || plate)) continue;
     seeds.clear();
     for (auto v : g.members[c])
       if (stands[v] != 0) {

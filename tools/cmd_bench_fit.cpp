@@ -240,7 +240,7 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
       ->capture_default_str();
   app->add_flag("!--no-face-prisms", a->face_prisms, "Fit as `fit --no-face-prisms` does (for comparison)");
   app->add_flag("!--no-view-holes", a->view_holes, "Fit as `fit --no-view-holes` does (for comparison)");
-  app->add_option("--sample", a->sample,
+  auto* sample = app->add_option("--sample", a->sample,
                   "Fit each mesh model from this many points drawn uniformly over its faces (points only, with "
                   "the faces' normals unless --sample-normals none) and measure the surface side against the mesh they came from; 0: the mesh itself")
       ->check(number({.lo = 0, .hi = 1e8}))
@@ -249,9 +249,11 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
                   "With --sample: the points carry their faces' normals (faces), or none, so the fit estimates "
                   "and orients them as for a scan without normals (none)")
       ->check(CLI::IsMember({"faces", "none"}))
+      ->needs(sample)
       ->capture_default_str();
   app->add_option("--sample-seed", a->sample_seed, "With --sample: the seed of the points drawn (other samplings)")
       ->check(non_negative())
+      ->needs(sample)
       ->capture_default_str();
   app->add_flag("!--no-fill-point-holes", a->fill_point_holes, "Fit as `fit --no-fill-point-holes` does (for comparison)");
   app->add_option("--cover-fraction", a->cover_fraction, "Fit as `fit --cover-fraction` does (for comparison)")

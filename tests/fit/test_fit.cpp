@@ -652,9 +652,10 @@ TEST(EstimateNormals, BothSidesOfAKnifeEdgeFaceOut) {
 // A closed plate 1.76 sample spacings thick (a 1 × 4 × 0.036 slab, 20,000 points on its faces):
 // its sides' points share neighbourhoods, the propagation turned one whole side inside out (50 %
 // of the normals outward), and ray parity, which reads the plate as closed, decided only 60–67 %
-// of its smooth voters, below the closedness gate of 3/4 it had then. At 1/2 it turns the side
-// back. (Below about 1.6 spacings parity decides under half and the side stays turned.)
-TEST(EstimateNormals, BothSidesOfAPlateUnderTwoSpacingsThickFaceOut) {
+// of its smooth voters, below the closedness gate of 3/4. From 1/2 decided, with the standing
+// votes split about evenly (a whole side turned), it turns the side back. (Below about 1.6
+// spacings parity decides under half and the side stays turned.)
+TEST(EstimateNormals, BothSidesOfAPlateNearlyTwoSpacingsThickFaceOut) {
   for (const std::uint64_t seed : {1, 2}) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> U(0.0, 1.0);

@@ -513,7 +513,10 @@ TEST(Cli, BenchFitSamplesAMeshWithOrWithoutNormals) {
   std::string lf;
   ASSERT_TRUE(std::getline(fk, lf));
   EXPECT_EQ(columns(lf), 6) << lf;
-  EXPECT_NE(quadrix_run("bench fit --sample 100 --sample-normals smooth --models " + q(dir / "cube.off")).code, 0);
+  EXPECT_EQ(quadrix_run("bench fit --sample 100 --sample-normals smooth --models " + q(dir / "cube.off")).code, 2);
+  // Without --sample they would do nothing: refused.
+  EXPECT_EQ(quadrix_run("bench fit --sample-normals none --models " + q(dir / "cube.off")).code, 2);
+  EXPECT_EQ(quadrix_run("bench fit --sample-seed 3 --models " + q(dir / "cube.off")).code, 2);
 }
 
 // CGAL's Poisson on a sparse cloud: its surface mesher may find no facet, and CGAL's convenience
