@@ -82,6 +82,15 @@ std::vector<Eigen::Vector3d> mesh_normals(const PolygonMesh& mesh, std::size_t& 
   return n;
 }
 
+// A cloud without normals (a file's, or --sample-normals none): the bench's own estimate, the
+// fit's call and options, for the peers and the points' discs; the SLIM fit gets the points alone
+// (Dataset::normals_estimated). `what` says so in the JSON.
+void estimate_for_peers(Dataset& d, std::string what) {
+  d.cloud.normals = estimate_normals(d.cloud.points, {.neighbours = SlimFitOptions{}.normal_neighbours}).normals;
+  d.normals = std::move(what);
+  d.normals_estimated = true;
+}
+
 Dataset load_dataset(const std::string& name, const fs::path& dir) {
   Dataset d;
   d.name = name;
@@ -110,9 +119,7 @@ Dataset load_dataset(const std::string& name, const fs::path& dir) {
     if (d.cloud.has_normals()) {
       d.normals = "file";
     } else {
-      d.cloud.normals = estimate_normals(d.cloud.points, {.neighbours = SlimFitOptions{}.normal_neighbours}).normals;
-      d.normals = "estimated (PCA + MST)";
-      d.normals_estimated = true;
+      estimate_for_peers(d, "estimated (PCA + MST)");
     }
   }
   Box3 box;
@@ -277,12 +284,8 @@ void add_bench_fit(CLI::App& bench, Commands& commands) {
         d.name += fmt::format("_{}pts", a->sample);
         if (a->sample_seed != 1) d.name += fmt::format("_seed{}", a->sample_seed);
         d.normals = "the faces the points were drawn from";
-        if (a->sample_normals == "none") {
-          // As a scan without normals: the fit gets the points alone; the peers and the points'
-          // discs the bench's own estimate (as for a file without normals).
-          d.cloud.normals = estimate_normals(d.cloud.points, {.neighbours = SlimFitOptions{}.normal_neighbours}).normals;
-          d.normals = "estimated (PCA + MST) for points drawn from the faces";
-          d.normals_estimated = true;
+        if (a->sample_normals == "none") {  // as a scan without normals
+          estimate_for_peers(d, "estimated (PCA + MST) for points drawn from the faces");
           d.name += "_no_normals";
         }
         d.sampled = true;
